@@ -1,0 +1,160 @@
+// vdbwrap: the command-line client. A thin layer over the core API: parse options, read,
+// call wrap() or diagnose(), write, report. Exit codes: 0 ok, 2 bad arguments, 3 unreadable
+// or invalid input, 4 no valid surface produced, 5 output not written, 1 internal error.
+#include <CLI/CLI.hpp>
+
+#include <cstdio>
+#include <fstream>
+#include <iostream>
+
+#include "cli_progress.h"
+#include "io/mesh_io.h"
+#include "vdbwrap/wrap.h"
+
+namespace {
+
+using namespace vdbwrap;
+
+void write_text(const std::string& path, const std::string& text) {
+  const std::string tmp = path + ".tmp";
+  {
+    std::ofstream out(tmp, std::ios::binary);
+    if (!out) throw Error(ErrorKind::OutputFailed, path + ": cannot write the report");
+    out << text << '\n';
+    if (!out) throw Error(ErrorKind::OutputFailed, path + ": cannot write the report");
+  }
+  if (std::rename(tmp.c_str(), path.c_str()) != 0) throw Error(ErrorKind::OutputFailed, path + ": cannot write the report");
+}
+
+std::string percent(double v, double diag) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.4f%%", diag > 0 ? 100.0 * v / diag : 0.0);
+  return buf;
+}
+
+void print_diagnostics(const std::string& name, const MeshDiagnostics& d) {
+  std::printf("%s\n", name.c_str());
+  std::printf("  triangles %zu, vertices %zu, parts %zu, connected components %zu\n", d.triangles, d.vertices, d.parts,
+              d.components);
+  std::printf("  border edges %zu, non-manifold edges %zu, non-manifold vertices %zu, misoriented edges %zu\n",
+              d.border_edges, d.nonmanifold_edges, d.nonmanifold_vertices, d.misoriented_edges);
+  std::printf("  degenerate triangles %zu, intersecting triangles %zu (%zu pairs)\n", d.degenerate_triangles,
+              d.intersecting_triangles, d.intersecting_pairs);
+  std::printf("  closed %s, manifold %s, oriented %s, outward %s, self-intersecting %s\n", d.closed ? "yes" : "no",
+              d.manifold ? "yes" : "no", d.oriented ? "yes" : "no", d.outward ? "yes" : "no",
+              d.self_intersecting ? "yes" : "no");
+  std::printf("  bounding-box diagonal %.6g, area %.6g, volume %.6g\n", d.diagonal, d.area, d.volume);
+  std::printf("  verdict: %s\n", d.valid_closed_surface() ? "valid closed surface (watertight)" : "NOT a valid closed surface");
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"vdbwrap: shrink-wraps dirty triangle surfaces into closed, 2-manifold, self-intersection-free ones.\n"
+               "Reads and writes STL (binary/ASCII), OBJ, OFF and PLY (ASCII/binary)."};
+  app.require_subcommand(1);
+  app.set_version_flag("--version", "vdbwrap 0.1.0");
+
+  // wrap
+  auto* wrap_cmd = app.add_subcommand("wrap", "Wrap INPUT into a closed, valid surface written to OUTPUT");
+  std::string input, output, report_path, base_size = "1%", volume = "outside";
+  WrapParams params;
+  bool quiet = false;
+  wrap_cmd->add_option("input", input, "Input mesh (.stl .obj .off .ply)")->required();
+  wrap_cmd->add_option("-o,--output", output, "Output mesh; the format follows the extension")->required();
+  wrap_cmd->add_option("--base-size", base_size,
+                       "Level-0 cell edge: model units (0.5) or percent of the bounding-box diagonal (1%)")
+      ->capture_default_str();
+  wrap_cmd->add_option("--levels", params.levels, "Most 2x2x2 refinement levels below the base size (0-6)")
+      ->capture_default_str()
+      ->check(CLI::Range(0, 6));
+  wrap_cmd->add_option("--feature-angle", params.feature_angle_deg,
+                       "Angle in degrees between adjacent triangles' normals that makes their edge sharp")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 180.0));
+  wrap_cmd->add_option("--volume", volume, "Volume to wrap: outside (around the input) or inside (largest enclosed volume)")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"outside", "inside"}));
+  wrap_cmd->add_option("--threads", params.threads, "Worker threads (0: all cores)")->capture_default_str()->check(CLI::NonNegativeNumber);
+  wrap_cmd->add_option("--refine-triangles", params.refine_max_triangles,
+                       "Refine a cell holding more input triangles than this")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
+  wrap_cmd->add_option("--refine-normal-spread", params.refine_normal_spread_deg,
+                       "Refine a cell whose input normals spread more than this many degrees")
+      ->capture_default_str();
+  wrap_cmd->add_option("--report", report_path, "Write a JSON report (diagnostics, parameters, validity, distances, timings)");
+  wrap_cmd->add_flag("-q,--quiet", quiet, "No progress on stderr");
+
+  // check
+  auto* check_cmd = app.add_subcommand("check", "Diagnose a mesh: watertight? manifold? self-intersecting?");
+  std::string check_input, against, check_report;
+  check_cmd->add_option("input", check_input, "Mesh to check")->required();
+  check_cmd->add_option("--against", against, "Reference mesh: also report the two-sided (Metro-style) distance");
+  check_cmd->add_option("--report", check_report, "Write the diagnostics as JSON");
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    int code = app.exit(e);
+    return code == 0 ? 0 : exit_code(ErrorKind::InvalidArgument);
+  }
+
+  std::string current_file;
+  try {
+    if (*wrap_cmd) {
+      params.base_size = Length::parse(base_size);
+      params.volume = volume == "inside" ? VolumeChoice::Inside : VolumeChoice::Outside;
+      if (io::format_from_extension(output) == io::Format::Unknown)
+        throw Error(ErrorKind::InvalidArgument, output + ": unknown output format (use .stl, .obj, .off or .ply)");
+      cli::StderrProgress progress(quiet);
+      progress.progress("read", 0.0, input);
+      Mesh mesh = io::read_mesh(input);
+      progress.progress("read", 1.0, std::to_string(mesh.triangles.size()) + " triangles");
+      WrapResult result = wrap(mesh, params, &progress);
+      progress.progress("write", 0.0, output);
+      io::write_mesh(result.surface, output);
+      if (!report_path.empty()) write_text(report_path, to_json(result.report));
+      const auto& r = result.report;
+      if (!quiet)
+        std::fprintf(stderr,
+                     "wrote %s: %zu triangles, closed, manifold, outward, no self-intersections; distance to input mean %s, "
+                     "p95 %s of the diagonal; %.2fs%s%s\n",
+                     output.c_str(), result.surface.triangles.size(), percent(r.output_to_input.mean, r.diagonal).c_str(),
+                     percent(r.output_to_input.p95, r.diagonal).c_str(), r.total_seconds,
+                     report_path.empty() ? "" : "; report ", report_path.c_str());
+      return 0;
+    }
+    if (*check_cmd) {
+      Mesh mesh = io::read_mesh(check_input);
+      MeshDiagnostics d = diagnose(mesh, true);
+      print_diagnostics(check_input, d);
+      std::string json = "{\"diagnostics\": " + to_json(d);
+      if (!against.empty()) {
+        Mesh ref = io::read_mesh(against);
+        DistanceStats ab = sampled_distance(mesh, ref), ba = sampled_distance(ref, mesh);
+        double diag = ab.diagonal;
+        std::printf("distance to %s (percent of its diagonal %.6g):\n", against.c_str(), diag);
+        std::printf("  mesh -> reference: mean %s, p95 %s, max %s\n", percent(ab.mean, diag).c_str(),
+                    percent(ab.p95, diag).c_str(), percent(ab.max, diag).c_str());
+        std::printf("  reference -> mesh: mean %s, p95 %s, max %s\n", percent(ba.mean, diag).c_str(),
+                    percent(ba.p95, diag).c_str(), percent(ba.max, diag).c_str());
+        std::printf("  two-sided (Hausdorff) max %s\n", percent(std::max(ab.max, ba.max), diag).c_str());
+        json += ", \"to_reference\": " + to_json(ab) + ", \"from_reference\": " + to_json(ba);
+      }
+      json += "}";
+      if (!check_report.empty()) write_text(check_report, json);
+      return 0;
+    }
+  } catch (const Error& e) {
+    std::fprintf(stderr, "vdbwrap: error: %s\n", e.what());
+    return exit_code(e.kind());
+  } catch (const std::bad_alloc&) {
+    std::fprintf(stderr, "vdbwrap: error: out of memory\n");
+    return exit_code(ErrorKind::Internal);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "vdbwrap: internal error: %s\n", e.what());
+    return exit_code(ErrorKind::Internal);
+  }
+  return 0;
+}

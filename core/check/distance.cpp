@@ -1,0 +1,53 @@
+// Metro-style sampled distance between two surfaces.
+#include <algorithm>
+#include <cmath>
+#include <random>
+
+#include <tbb/parallel_for.h>
+
+#include "common/vec.h"
+#include "fit/surface_index.h"
+#include "vdbwrap/wrap.h"
+
+namespace vdbwrap {
+
+DistanceStats sampled_distance(const Mesh& from, const Mesh& to, double samples_per_diagonal) {
+  DistanceStats s;
+  Box3 box;
+  for (const auto& p : to.points) box.add(p);
+  s.diagonal = box.diagonal();
+  if (from.triangles.empty() || to.triangles.empty()) return s;
+  // Samples: every vertex, plus points spread by area (a stratified count per triangle).
+  const double spacing = s.diagonal / samples_per_diagonal;
+  std::vector<Vec3> samples(from.points.begin(), from.points.end());
+  std::mt19937_64 rng(12345);
+  std::uniform_real_distribution<double> uni(0.0, 1.0);
+  for (const Tri& t : from.triangles) {
+    const Vec3 &a = from.points[t[0]], &b = from.points[t[1]], &c = from.points[t[2]];
+    double area = 0.5 * norm(area_vector(a, b, c));
+    double expected = area / (spacing * spacing);
+    size_t k = size_t(expected);
+    if (uni(rng) < expected - double(k)) ++k;
+    for (size_t i = 0; i < k; ++i) {
+      double u = uni(rng), v = uni(rng);
+      if (u + v > 1) u = 1 - u, v = 1 - v;
+      samples.push_back(a + (b - a) * u + (c - a) * v);
+    }
+  }
+  fit::SurfaceIndex index(to.points, to.triangles);
+  std::vector<double> dist(samples.size());
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, samples.size(), 1024), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t i = r.begin(); i != r.end(); ++i) dist[i] = std::sqrt(index.squared_distance(samples[i]));
+  });
+  s.samples = dist.size();
+  double sum = 0;
+  for (double d : dist) sum += d;
+  s.mean = sum / double(dist.size());
+  size_t k95 = std::min(dist.size() - 1, size_t(0.95 * double(dist.size())));
+  std::nth_element(dist.begin(), dist.begin() + k95, dist.end());
+  s.p95 = dist[k95];
+  s.max = *std::max_element(dist.begin(), dist.end());
+  return s;
+}
+
+}  // namespace vdbwrap

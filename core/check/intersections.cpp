@@ -1,0 +1,160 @@
+// One of the few translation units that include CGAL's heavy headers.
+#include "check/intersections.h"
+
+#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+#include <CGAL/Polygon_mesh_processing/orientation.h>
+#include <CGAL/Polygon_mesh_processing/self_intersections.h>
+#include <CGAL/Surface_mesh.h>
+#include <CGAL/box_intersection_d.h>
+#include <CGAL/intersections.h>
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <mutex>
+
+namespace vdbwrap::check {
+namespace {
+
+using K = CGAL::Exact_predicates_inexact_constructions_kernel;
+using P3 = K::Point_3;
+using T3 = K::Triangle_3;
+using S3 = K::Segment_3;
+using Box = CGAL::Box_intersection_d::Box_with_handle_d<double, 3, size_t, CGAL::Box_intersection_d::ID_EXPLICIT>;
+
+P3 to_point(const Vec3& v) { return P3(v[0], v[1], v[2]); }
+
+bool is_degenerate(const std::vector<P3>& p, const Tri& t) {
+  return t[0] == t[1] || t[1] == t[2] || t[0] == t[2] || CGAL::collinear(p[t[0]], p[t[1]], p[t[2]]);
+}
+
+// Triangles intersect when they share points other than their common vertices/edge.
+bool triangles_intersect(const std::vector<P3>& p, const Tri& x, const Tri& y) {
+  int shared = 0;
+  int xi[3], yi[3];  // positions of shared vertices
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j)
+      if (x[i] == y[j]) {
+        xi[shared] = i;
+        yi[shared] = j;
+        ++shared;
+      }
+  if (shared == 0) return CGAL::do_intersect(T3(p[x[0]], p[x[1]], p[x[2]]), T3(p[y[0]], p[y[1]], p[y[2]]));
+  if (shared == 3) return true;  // the same triangle twice
+  if (shared == 1) {
+    // A crossing that starts at the common vertex leaves one triangle through its opposite edge.
+    int i = xi[0], j = yi[0];
+    S3 opp_x(p[x[(i + 1) % 3]], p[x[(i + 2) % 3]]);
+    S3 opp_y(p[y[(j + 1) % 3]], p[y[(j + 2) % 3]]);
+    return CGAL::do_intersect(opp_x, T3(p[y[0]], p[y[1]], p[y[2]])) ||
+           CGAL::do_intersect(opp_y, T3(p[x[0]], p[x[1]], p[x[2]]));
+  }
+  // Common edge: they intersect only when folded flat onto the same side of it.
+  const P3& s = p[x[xi[0]]];
+  const P3& t = p[x[xi[1]]];
+  const P3& a = p[x[3 - xi[0] - xi[1]]];
+  const P3& b = p[y[3 - yi[0] - yi[1]]];
+  if (!CGAL::coplanar(s, t, a, b)) return false;
+  return CGAL::coplanar_orientation(s, t, a, b) == CGAL::POSITIVE;
+}
+
+}  // namespace
+
+std::vector<TrianglePair> find_intersecting_pairs(const std::vector<Vec3>& points, const std::vector<Tri>& triangles) {
+  std::vector<P3> p(points.size());
+  for (size_t i = 0; i < points.size(); ++i) p[i] = to_point(points[i]);
+  std::vector<Box> boxes;
+  boxes.reserve(triangles.size());
+  for (size_t t = 0; t < triangles.size(); ++t) {
+    const Tri& tri = triangles[t];
+    if (is_degenerate(p, tri)) continue;
+    auto bb = p[tri[0]].bbox() + p[tri[1]].bbox() + p[tri[2]].bbox();
+    boxes.emplace_back(bb, t);
+  }
+  std::vector<std::pair<uint32_t, uint32_t>> candidates;
+  CGAL::box_self_intersection_d(boxes.begin(), boxes.end(), [&](const Box& a, const Box& b) {
+    candidates.emplace_back(uint32_t(a.handle()), uint32_t(b.handle()));
+  });
+  std::vector<uint8_t> hit(candidates.size(), 0);
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, candidates.size(), 256), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t i = r.begin(); i != r.end(); ++i)
+      hit[i] = triangles_intersect(p, triangles[candidates[i].first], triangles[candidates[i].second]) ? 1 : 0;
+  });
+  std::vector<TrianglePair> out;
+  for (size_t i = 0; i < candidates.size(); ++i)
+    if (hit[i]) out.push_back({std::min(candidates[i].first, candidates[i].second), std::max(candidates[i].first, candidates[i].second)});
+  std::sort(out.begin(), out.end(), [](const TrianglePair& u, const TrianglePair& v) { return u.a != v.a ? u.a < v.a : u.b < v.b; });
+  return out;
+}
+
+std::vector<Segment> intersection_segments(const std::vector<Vec3>& points, const std::vector<Tri>& triangles,
+                                           const std::vector<TrianglePair>& pairs) {
+  std::vector<Segment> out;
+  std::mutex lock;
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, pairs.size(), 64), [&](const tbb::blocked_range<size_t>& r) {
+    std::vector<Segment> local;
+    for (size_t i = r.begin(); i != r.end(); ++i) {
+      const Tri& x = triangles[pairs[i].a];
+      const Tri& y = triangles[pairs[i].b];
+      T3 tx(to_point(points[x[0]]), to_point(points[x[1]]), to_point(points[x[2]]));
+      T3 ty(to_point(points[y[0]]), to_point(points[y[1]]), to_point(points[y[2]]));
+      auto result = CGAL::intersection(tx, ty);
+      if (!result) continue;
+      if (const S3* s = boost::get<S3>(&*result)) {
+        if (s->squared_length() <= 0) continue;
+        local.push_back({{s->source().x(), s->source().y(), s->source().z()},
+                         {s->target().x(), s->target().y(), s->target().z()},
+                         pairs[i].a,
+                         pairs[i].b});
+      }
+    }
+    std::lock_guard<std::mutex> g(lock);
+    out.insert(out.end(), local.begin(), local.end());
+  });
+  std::sort(out.begin(), out.end(), [](const Segment& u, const Segment& v) {
+    return u.tri_a != v.tri_a ? u.tri_a < v.tri_a : u.tri_b < v.tri_b;
+  });
+  return out;
+}
+
+namespace {
+using SurfaceMesh = CGAL::Surface_mesh<P3>;
+
+bool build_surface_mesh(const std::vector<Vec3>& points, const std::vector<Tri>& triangles, SurfaceMesh& mesh) {
+  std::vector<SurfaceMesh::Vertex_index> v(points.size());
+  for (size_t i = 0; i < points.size(); ++i) v[i] = mesh.add_vertex(to_point(points[i]));
+  for (const Tri& t : triangles)
+    if (mesh.add_face(v[t[0]], v[t[1]], v[t[2]]) == SurfaceMesh::null_face()) return false;
+  return true;
+}
+}  // namespace
+
+std::vector<uint32_t> mesh_self_intersecting_faces(const std::vector<Vec3>& points, const std::vector<Tri>& triangles) {
+  SurfaceMesh mesh;
+  if (!build_surface_mesh(points, triangles, mesh)) throw std::logic_error("mesh_self_intersecting_faces: not a manifold mesh");
+  std::vector<std::pair<SurfaceMesh::Face_index, SurfaceMesh::Face_index>> pairs;
+  CGAL::Polygon_mesh_processing::self_intersections<CGAL::Parallel_if_available_tag>(mesh, std::back_inserter(pairs));
+  std::vector<uint32_t> out;
+  out.reserve(pairs.size() * 2);
+  for (const auto& [f, g] : pairs) {
+    out.push_back(uint32_t(f.idx()));
+    out.push_back(uint32_t(g.idx()));
+  }
+  std::sort(out.begin(), out.end());
+  out.erase(std::unique(out.begin(), out.end()), out.end());
+  return out;
+}
+
+CgalVerdict cgal_verdict(const std::vector<Vec3>& points, const std::vector<Tri>& triangles) {
+  CgalVerdict verdict;
+  SurfaceMesh mesh;
+  if (!build_surface_mesh(points, triangles, mesh)) return verdict;
+  verdict.valid_polygon_mesh = CGAL::is_valid_polygon_mesh(mesh);
+  verdict.closed = CGAL::is_closed(mesh);
+  if (!verdict.valid_polygon_mesh || !verdict.closed) return verdict;
+  verdict.self_intersects = CGAL::Polygon_mesh_processing::does_self_intersect<CGAL::Parallel_if_available_tag>(mesh);
+  if (!verdict.self_intersects) verdict.outward = CGAL::Polygon_mesh_processing::is_outward_oriented(mesh);
+  return verdict;
+}
+
+}  // namespace vdbwrap::check

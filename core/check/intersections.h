@@ -1,0 +1,40 @@
+// Intersection tests on triangle sets, on CGAL's exact predicates.
+#pragma once
+#include <cstdint>
+#include <vector>
+
+#include "vdbwrap/mesh.h"
+
+namespace vdbwrap::check {
+
+struct TrianglePair {
+  uint32_t a, b;
+};
+
+// Pairs of triangles of an indexed soup that share points other than their common
+// vertices and edge (crossing, overlapping, folded onto each other). Triangles with
+// repeated or collinear vertices are skipped (count those separately).
+std::vector<TrianglePair> find_intersecting_pairs(const std::vector<Vec3>& points, const std::vector<Tri>& triangles);
+
+struct Segment {
+  Vec3 a, b;
+  uint32_t tri_a, tri_b;
+};
+
+// The segments along which the given pairs cross (pairs that meet in a point or overlap
+// in a plane give no segment).
+std::vector<Segment> intersection_segments(const std::vector<Vec3>& points, const std::vector<Tri>& triangles,
+                                           const std::vector<TrianglePair>& pairs);
+
+// Faces of a closed 2-manifold triangle mesh that intersect another face or are
+// degenerate, by CGAL::Polygon_mesh_processing::self_intersections (parallel).
+// Precondition: the triangles form a valid polygon mesh (manifold).
+std::vector<uint32_t> mesh_self_intersecting_faces(const std::vector<Vec3>& points, const std::vector<Tri>& triangles);
+
+// CGAL's own verdicts on a closed manifold mesh: does_self_intersect and is_outward_oriented.
+struct CgalVerdict {
+  bool valid_polygon_mesh = false, closed = false, self_intersects = true, outward = false;
+};
+CgalVerdict cgal_verdict(const std::vector<Vec3>& points, const std::vector<Tri>& triangles);
+
+}  // namespace vdbwrap::check

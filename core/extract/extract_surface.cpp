@@ -1,0 +1,273 @@
+#include "extract/extract_surface.h"
+
+#include <algorithm>
+#include <set>
+#include <unordered_map>
+
+#include "grid/flood_fill.h"
+#include "vdbwrap/errors.h"
+
+namespace vdbwrap::extract {
+namespace {
+
+using grid::AdaptiveGrid;
+using grid::LeafRef;
+
+uint64_t pack(const Coord& c) {
+  // 21 bits per axis; lattice coordinates are non-negative and below 2^21 (checked by caller).
+  return (uint64_t(uint32_t(c.x())) << 42) | (uint64_t(uint32_t(c.y())) << 21) | uint64_t(uint32_t(c.z()));
+}
+
+bool in_volume(const LeafRef& r, int32_t label, VolumeChoice choice) {
+  if (r.outside_box) return choice == VolumeChoice::Outside;
+  return r.value == label;
+}
+
+struct Quad {
+  Coord corner[4];
+  int32_t size;
+};
+
+// Quad on the plane `axis` = plane, spanning [u0,u0+s] x [v0,v0+s] in the two other axes,
+// ordered so its normal points along `normal_dir` * axis.
+Quad make_quad(int axis, int32_t plane, int32_t u0, int32_t v0, int32_t s, int normal_dir) {
+  const int b = (axis + 1) % 3, c = (axis + 2) % 3;
+  auto at = [&](int32_t u, int32_t v) {
+    Coord p;
+    p[axis] = plane;
+    p[b] = u;
+    p[c] = v;
+    return p;
+  };
+  Quad q;
+  q.size = s;
+  q.corner[0] = at(u0, v0);
+  q.corner[1] = at(u0 + s, v0);
+  q.corner[2] = at(u0 + s, v0 + s);
+  q.corner[3] = at(u0, v0 + s);
+  if (normal_dir < 0) std::swap(q.corner[1], q.corner[3]);
+  return q;
+}
+
+}  // namespace
+
+LatticeSurface extract_faces(const AdaptiveGrid& g, int32_t label, VolumeChoice choice) {
+  std::vector<Quad> quads;
+  // The wrap's outward normal points into the outside volume, or out of an inside volume.
+  const int orient = choice == VolumeChoice::Outside ? -1 : 1;
+  g.for_each_leaf([&](int level, const Coord& c, int32_t value) {
+    if (value != label) return;
+    const int32_t s = g.fine_units(level);
+    const Coord C(c.x() * s, c.y() * s, c.z() * s);
+    for (int axis = 0; axis < 3; ++axis)
+      for (int dir = -1; dir <= 1; dir += 2) {
+        const int32_t plane = C[axis] + (dir > 0 ? s : 0);
+        const int b = (axis + 1) % 3, cc = (axis + 2) % 3;
+        g.for_each_face_neighbour(level, c, axis, dir, [&](const LeafRef& n) {
+          if (in_volume(n, label, choice)) return;
+          if (n.outside_box || n.level <= level) {
+            quads.push_back(make_quad(axis, plane, C[b], C[cc], s, orient * dir));
+          } else {
+            const int32_t sn = g.fine_units(n.level);
+            quads.push_back(make_quad(axis, plane, n.ijk[b] * sn, n.ijk[cc] * sn, sn, orient * dir));
+          }
+        });
+      }
+  });
+
+  LatticeSurface surf;
+  std::unordered_map<uint64_t, uint32_t> node_of;
+  node_of.reserve(quads.size() * 2);
+  auto node = [&](const Coord& p, int32_t size) {
+    auto [it, added] = node_of.emplace(pack(p), uint32_t(surf.nodes.size()));
+    if (added) {
+      surf.nodes.push_back(p);
+      surf.node_size.push_back(size);
+    } else {
+      surf.node_size[it->second] = std::min(surf.node_size[it->second], size);
+    }
+    return it->second;
+  };
+  for (const Quad& q : quads)
+    for (const Coord& p : q.corner) node(p, q.size);
+
+  // Conforming polygons: every surface node on a quad's edge becomes a polygon vertex.
+  surf.polygons.reserve(quads.size());
+  for (const Quad& q : quads) {
+    std::vector<uint32_t> poly;
+    for (int e = 0; e < 4; ++e) {
+      const Coord& a = q.corner[e];
+      const Coord& b = q.corner[(e + 1) % 4];
+      poly.push_back(node_of[pack(a)]);
+      if (q.size > 1) {
+        Coord step((b.x() - a.x()) / q.size, (b.y() - a.y()) / q.size, (b.z() - a.z()) / q.size);
+        for (int32_t k = 1; k < q.size; ++k) {
+          Coord p(a.x() + step.x() * k, a.y() + step.y() * k, a.z() + step.z() * k);
+          auto it = node_of.find(pack(p));
+          if (it != node_of.end()) poly.push_back(it->second);
+        }
+      }
+    }
+    surf.polygons.push_back(std::move(poly));
+  }
+  return surf;
+}
+
+namespace {
+
+// Face-connected groups among the 8 octants around a node that share a membership
+// (octants one bit apart share a face). Returns the number of groups on each side.
+void octant_groups(const bool in[8], int group[8], int& groups_in, int& groups_out) {
+  std::fill(group, group + 8, -1);
+  groups_in = groups_out = 0;
+  for (int o = 0; o < 8; ++o) {
+    if (group[o] >= 0) continue;
+    int id = in[o] ? groups_in++ : 8 + groups_out++;
+    int stack[8], top = 0;
+    stack[top++] = o;
+    group[o] = id;
+    while (top) {
+      int cur = stack[--top];
+      for (int k = 0; k < 3; ++k) {
+        int nb = cur ^ (1 << k);
+        if (group[nb] < 0 && in[nb] == in[o]) {
+          group[nb] = id;
+          stack[top++] = nb;
+        }
+      }
+    }
+  }
+}
+
+}  // namespace
+
+size_t exclude_nonmanifold_cells(AdaptiveGrid& g, int32_t label, VolumeChoice choice, const LatticeSurface& surf) {
+  const int L = g.max_level();
+  struct LeafKey {
+    int level;
+    Coord c;
+    bool operator<(const LeafKey& o) const { return level != o.level ? level < o.level : c < o.c; }
+  };
+  std::set<LeafKey> to_exclude;
+  auto excludable = [&](const LeafRef& r) {
+    if (r.outside_box) return false;
+    if (r.level > 0) return true;
+    // The outermost layer of the padded box stays in the outside volume, so the wrap never reaches it.
+    const Coord& d = g.dims0();
+    return r.ijk.x() > 0 && r.ijk.y() > 0 && r.ijk.z() > 0 && r.ijk.x() < d.x() - 1 && r.ijk.y() < d.y() - 1 &&
+           r.ijk.z() < d.z() - 1;
+  };
+  for (const Coord& p : surf.nodes) {
+    // The 8 finest cells around node p; octant bit k set means the +side along axis k.
+    LeafRef leaf[8];
+    bool in[8];
+    for (int o = 0; o < 8; ++o) {
+      Coord cell(p.x() - 1 + (o & 1), p.y() - 1 + ((o >> 1) & 1), p.z() - 1 + ((o >> 2) & 1));
+      leaf[o] = g.leaf_at(L, cell);
+      LeafKey key{leaf[o].level, leaf[o].ijk};
+      in[o] = in_volume(leaf[o], label, choice) && !to_exclude.count(key);
+    }
+    // Take chosen cells out one at a time, finest first, until both the chosen octants and
+    // the others are each face-connected around the node: a manifold disc there.
+    for (int step = 0; step < 8; ++step) {
+      int group[8], groups_in, groups_out;
+      octant_groups(in, group, groups_in, groups_out);
+      if (groups_in <= 1 && groups_out <= 1) break;
+      int victim = -1;
+      auto consider = [&](int o) {
+        if (!in[o] || !excludable(leaf[o])) return;
+        if (victim < 0 || leaf[o].level > leaf[victim].level) victim = o;
+      };
+      if (groups_in > 1) {
+        // Chosen cells meeting along an edge or at a corner: drop those outside the largest group.
+        int count[8] = {0};
+        for (int o = 0; o < 8; ++o)
+          if (in[o]) ++count[group[o]];
+        int keep = 0;
+        for (int k = 1; k < groups_in; ++k)
+          if (count[k] > count[keep]) keep = k;
+        for (int o = 0; o < 8; ++o)
+          if (in[o] && group[o] != keep) consider(o);
+      } else {
+        // Other cells meeting along an edge or at a corner: join them through a chosen octant,
+        // best one that touches two of their groups.
+        for (int o = 0; o < 8 && victim < 0; ++o) {
+          if (!in[o]) continue;
+          int touching = 0, first = -1;
+          for (int k = 0; k < 3; ++k) {
+            int nb = o ^ (1 << k);
+            if (!in[nb] && group[nb] != first) ++touching, first = first < 0 ? group[nb] : first;
+          }
+          if (touching >= 2) consider(o);
+        }
+        if (victim < 0)
+          for (int o = 0; o < 8; ++o) {
+            bool next_to_other = false;
+            for (int k = 0; k < 3; ++k) next_to_other |= !in[o ^ (1 << k)];
+            if (next_to_other) consider(o);
+          }
+      }
+      if (victim < 0) break;  // nothing may be taken out here; the caller gives up after its rounds
+      LeafKey key{leaf[victim].level, leaf[victim].ijk};
+      to_exclude.insert(key);
+      for (int o = 0; o < 8; ++o)
+        if (leaf[o].level == key.level && leaf[o].ijk == key.c) in[o] = false;
+    }
+  }
+  for (const LeafKey& k : to_exclude) g.set(k.level, k.c, grid::kExcluded);
+  return to_exclude.size();
+}
+
+LatticeSurface extract_manifold_surface(AdaptiveGrid& g, int32_t& label, VolumeChoice choice, ExtractStats& stats,
+                                        ProgressSink* progress) {
+  for (int k = 0; k < 3; ++k)
+    if (int64_t(g.dims0()[k]) * g.fine_units(0) >= (1 << 21) - 2)
+      throw Error(ErrorKind::InvalidArgument, "too many cells across the model at this base size and number of levels");
+  // New labels must not collide with the labels of other free components.
+  int32_t next_label = label + 1;
+  g.for_each_leaf([&](int, const Coord&, int32_t v) { next_label = std::max(next_label, v + 1); });
+  const int max_rounds = 64;
+  for (int round = 0; round < max_rounds; ++round) {
+    if (progress) {
+      if (progress->cancelled()) throw Error(ErrorKind::Cancelled, "cancelled");
+      progress->progress("extract", std::min(0.9, round * 0.1), "extracting cell faces, round " + std::to_string(round + 1));
+    }
+    LatticeSurface surf = extract_faces(g, label, choice);
+    if (surf.polygons.empty()) throw Error(ErrorKind::WrapFailed, "the chosen volume has no boundary: nothing to wrap");
+    size_t excluded = exclude_nonmanifold_cells(g, label, choice, surf);
+    stats.rounds = round + 1;
+    if (excluded == 0) {
+      if (progress)
+        progress->progress("extract", 1.0, std::to_string(surf.polygons.size()) + " faces, " + std::to_string(surf.nodes.size()) + " nodes");
+      return surf;
+    }
+    stats.excluded_cells += excluded;
+    // Taking cells out may cut small pockets off the volume: keep its main piece only.
+    const int32_t old = label;
+    grid::Components comps = grid::label_components(g, [old](int32_t v) { return v == old; }, next_label, progress);
+    next_label += int32_t(comps.count());
+    int32_t keep = -1;
+    double best = -1;
+    for (size_t i = 0; i < comps.count(); ++i) {
+      bool better = choice == VolumeChoice::Outside ? comps.touches_outside[i] != 0 && comps.volume[i] > best
+                                                    : comps.volume[i] > best;
+      if (better) {
+        best = comps.volume[i];
+        keep = comps.first_label + int32_t(i);
+      }
+    }
+    if (keep < 0) throw Error(ErrorKind::WrapFailed, "the chosen volume vanished while making the surface manifold");
+    stats.dropped_pieces += comps.count() - 1;
+    if (comps.count() > 1) {
+      std::vector<std::pair<int, Coord>> drop;
+      g.for_each_leaf([&](int level, const Coord& c, int32_t v) {
+        if (v >= comps.first_label && v != keep) drop.emplace_back(level, c);
+      });
+      for (auto& [level, c] : drop) g.set(level, c, grid::kExcluded);
+    }
+    label = keep;
+  }
+  throw Error(ErrorKind::WrapFailed, "could not make the voxel surface manifold after " + std::to_string(max_rounds) + " rounds");
+}
+
+}  // namespace vdbwrap::extract

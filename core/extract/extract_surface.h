@@ -1,0 +1,39 @@
+// Stage 2c: the closed, mostly-quad polygon surface made of the cell faces between the
+// chosen volume and the rest (the faces nearest the input that do not cross it).
+#pragma once
+#include <cstdint>
+#include <vector>
+
+#include "grid/adaptive_grid.h"
+#include "vdbwrap/wrap.h"
+
+namespace vdbwrap::extract {
+
+using grid::Coord;
+
+struct LatticeSurface {
+  std::vector<Coord> nodes;                      // positions on the finest node lattice
+  std::vector<int32_t> node_size;                // smallest incident face edge, in fine units
+  std::vector<std::vector<uint32_t>> polygons;   // counter-clockwise seen from outside the wrap
+};
+
+// Faces between leaves with value `label` (the chosen volume; outside the box counts as
+// chosen for VolumeChoice::Outside) and every other leaf. Nodes that lie on a polygon's
+// edges (level transitions) are inserted into it, so the result is conforming.
+LatticeSurface extract_faces(const grid::AdaptiveGrid& grid, int32_t label, VolumeChoice choice);
+
+// Lattice nodes of the surface where the chosen cells around the node, or the others, are
+// not face-connected (edge or corner contacts: non-manifold). Takes chosen cells out of
+// the volume there; returns how many.
+size_t exclude_nonmanifold_cells(grid::AdaptiveGrid& grid, int32_t label, VolumeChoice choice, const LatticeSurface& surface);
+
+struct ExtractStats {
+  size_t excluded_cells = 0, rounds = 0, dropped_pieces = 0;
+};
+
+// Extract, repair and repeat until the surface is a closed 2-manifold; keeps only the main
+// piece of the volume (the outside one, or the largest inside one). `label` may change.
+LatticeSurface extract_manifold_surface(grid::AdaptiveGrid& grid, int32_t& label, VolumeChoice choice, ExtractStats& stats,
+                                        ProgressSink* progress);
+
+}  // namespace vdbwrap::extract

@@ -1,0 +1,177 @@
+#include "fit/fit_surface.h"
+
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cmath>
+#include <unordered_map>
+
+#include "check/intersections.h"
+#include "common/vec.h"
+#include "vdbwrap/errors.h"
+
+namespace vdbwrap::fit {
+using grid::Coord;
+
+std::vector<uint32_t> invalid_triangles(const std::vector<Vec3>& points, const std::vector<Tri>& triangles, double min_area2) {
+  std::vector<uint32_t> bad;
+  for (uint32_t t = 0; t < triangles.size(); ++t) {
+    const Tri& tri = triangles[t];
+    if (norm(area_vector(points[tri[0]], points[tri[1]], points[tri[2]])) < min_area2) bad.push_back(t);
+  }
+  if (!bad.empty()) return bad;  // CGAL's test wants non-degenerate faces first
+  return check::mesh_self_intersecting_faces(points, triangles);
+}
+
+namespace {
+
+// Nodes closer than min_separation to another node: coincident or nearly coincident
+// vertices break meshers and hide intersections, so they count as invalid.
+void mark_crowded_nodes(const std::vector<Vec3>& p, double min_separation, std::vector<uint8_t>& flag) {
+  struct Key {
+    int64_t x, y, z;
+    bool operator==(const Key& o) const { return x == o.x && y == o.y && z == o.z; }
+  };
+  struct KeyHash {
+    size_t operator()(const Key& k) const { return size_t(k.x * 73856093LL ^ k.y * 19349663LL ^ k.z * 83492791LL); }
+  };
+  std::unordered_map<Key, std::vector<uint32_t>, KeyHash> cells;
+  cells.reserve(p.size());
+  const double inv = 1.0 / min_separation, sep2 = min_separation * min_separation;
+  for (uint32_t i = 0; i < p.size(); ++i)
+    cells[{int64_t(std::floor(p[i][0] * inv)), int64_t(std::floor(p[i][1] * inv)), int64_t(std::floor(p[i][2] * inv))}].push_back(i);
+  for (const auto& [key, ids] : cells)
+    for (uint32_t i : ids)
+      for (int dx = -1; dx <= 1; ++dx)
+        for (int dy = -1; dy <= 1; ++dy)
+          for (int dz = -1; dz <= 1; ++dz) {
+            auto it = cells.find({key.x + dx, key.y + dy, key.z + dz});
+            if (it == cells.end()) continue;
+            for (uint32_t j : it->second)
+              if (j != i && norm2(p[i] - p[j]) < sep2) flag[i] = 1;
+          }
+}
+
+// Diagonal (0-2 or 1-3) of a quad whose midpoint lies nearer the input: the split that
+// deviates least from it. A split that makes a degenerate triangle is never chosen.
+bool split_along_02(const std::array<uint32_t, 4>& q, const std::vector<Vec3>& p, const SurfaceIndex& input, double min_area2) {
+  auto area2 = [&](uint32_t a, uint32_t b, uint32_t c) { return norm(area_vector(p[a], p[b], p[c])); };
+  double min02 = std::min(area2(q[0], q[1], q[2]), area2(q[0], q[2], q[3]));
+  double min13 = std::min(area2(q[0], q[1], q[3]), area2(q[1], q[2], q[3]));
+  if (min02 < min_area2 && min13 >= min_area2) return false;
+  if (min13 < min_area2 && min02 >= min_area2) return true;
+  double d02 = input.squared_distance((p[q[0]] + p[q[2]]) * 0.5);
+  double d13 = input.squared_distance((p[q[1]] + p[q[3]]) * 0.5);
+  if (std::fabs(d02 - d13) <= 1e-12 * (d02 + d13)) return min02 >= min13;
+  return d02 < d13;
+}
+
+}  // namespace
+
+FittedSurface fit_to_input(const extract::LatticeSurface& surf, const grid::AdaptiveGrid& g, const SurfaceIndex& input,
+                           const Vec3& origin, const WrapParams& params, ProgressSink* progress) {
+  const double hf = g.fine_size();
+  // Nodes: lattice nodes, then one centre node per polygon with more than four nodes.
+  std::vector<Vec3> lattice;
+  std::vector<double> node_cell;  // local cell size (model units) per node
+  lattice.reserve(surf.nodes.size());
+  for (size_t i = 0; i < surf.nodes.size(); ++i) {
+    lattice.push_back(g.node_position(surf.nodes[i]));
+    node_cell.push_back(surf.node_size[i] * hf);
+  }
+  std::vector<std::array<uint32_t, 4>> quads;
+  std::vector<Tri> fans;
+  for (const auto& poly : surf.polygons) {
+    if (poly.size() == 4) {
+      quads.push_back({poly[0], poly[1], poly[2], poly[3]});
+      continue;
+    }
+    // An axis-aligned square with extra nodes on its edges: fan around its centre.
+    Coord lo = surf.nodes[poly[0]], hi = lo;
+    for (uint32_t v : poly) {
+      lo = Coord::minComponent(lo, surf.nodes[v]);
+      hi = Coord::maxComponent(hi, surf.nodes[v]);
+    }
+    Coord mid((lo.x() + hi.x()) / 2, (lo.y() + hi.y()) / 2, (lo.z() + hi.z()) / 2);
+    uint32_t centre = uint32_t(lattice.size());
+    lattice.push_back(g.node_position(mid));
+    int32_t side = std::max({hi.x() - lo.x(), hi.y() - lo.y(), hi.z() - lo.z()});
+    node_cell.push_back(side * hf);
+    for (size_t k = 0; k < poly.size(); ++k) fans.push_back({centre, poly[k], poly[(k + 1) % poly.size()]});
+  }
+  const size_t n = lattice.size();
+
+  // Projection targets: the nearest input point, stopped a small offset short of it on the
+  // node's own side, so sheets wrapped around a zero-thickness input never coincide.
+  if (progress) progress->progress("project", 0.0, "projecting " + std::to_string(n) + " nodes onto the input");
+  const double offset = params.surface_offset * hf;
+  std::vector<Vec3> target(n);
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 256), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t i = r.begin(); i != r.end(); ++i) {
+      auto hit = input.closest(lattice[i]);
+      double d = std::sqrt(hit.squared_distance);
+      if (d <= offset || d > 3.0 * node_cell[i]) {
+        target[i] = lattice[i];
+        continue;
+      }
+      target[i] = hit.point + (lattice[i] - hit.point) * (offset / d);
+    }
+  });
+  if (progress && progress->cancelled()) throw Error(ErrorKind::Cancelled, "cancelled");
+
+  const double min_area2 = 1e-6 * hf * hf;
+  FittedSurface out;
+  out.triangles = fans;
+  out.triangles.reserve(fans.size() + 2 * quads.size());
+  for (const auto& q : quads) {
+    if (split_along_02(q, target, input, min_area2)) {
+      out.triangles.push_back({q[0], q[1], q[2]});
+      out.triangles.push_back({q[0], q[2], q[3]});
+    } else {
+      out.triangles.push_back({q[0], q[1], q[3]});
+      out.triangles.push_back({q[1], q[2], q[3]});
+    }
+  }
+
+  // Validity loop: every node starts at its target; nodes of offending triangles move half
+  // way back toward the lattice, where the surface is valid by construction.
+  // Checked in output (world) coordinates: the translation back from the local frame rounds,
+  // and only what is written counts.
+  std::vector<double> t(n, 1.0);
+  std::vector<Vec3>& p = out.points;
+  auto world = [&](const Vec3& local) { return local + origin; };
+  p.resize(n);
+  for (size_t i = 0; i < n; ++i) p[i] = world(target[i]);
+
+  const int max_rounds = 40;
+  int round = 0;
+  for (; round < max_rounds; ++round) {
+    if (progress) {
+      if (progress->cancelled()) throw Error(ErrorKind::Cancelled, "cancelled");
+    }
+    std::vector<uint8_t> touched(n, 0);
+    mark_crowded_nodes(p, 1e-3 * hf, touched);
+    size_t crowded = size_t(std::count(touched.begin(), touched.end(), 1));
+    std::vector<uint32_t> bad = invalid_triangles(p, out.triangles, min_area2);
+    if (progress)
+      progress->progress("project", std::min(0.95, 0.1 + round * 0.05),
+                         "validity round " + std::to_string(round + 1) + ": " + std::to_string(bad.size()) +
+                             " triangles and " + std::to_string(crowded) + " crowded nodes to fix");
+    if (bad.empty() && crowded == 0) break;
+    for (uint32_t f : bad)
+      for (uint32_t v : out.triangles[f]) touched[v] = 1;
+    for (size_t i = 0; i < n; ++i) {
+      if (!touched[i]) continue;
+      t[i] = (t[i] < 1.0 / 64 || round >= max_rounds / 2) ? 0.0 : t[i] * 0.5;
+      p[i] = world(lerp(lattice[i], target[i], t[i]));
+    }
+  }
+  out.validity_rounds = round;
+  if (round == max_rounds) throw Error(ErrorKind::WrapFailed, "projection could not be made valid");
+  for (size_t i = 0; i < n; ++i)
+    if (t[i] < 1.0 && norm2(target[i] - lattice[i]) > 0) ++out.held_back;
+  if (progress) progress->progress("project", 1.0, std::to_string(out.held_back) + " nodes held back to stay valid");
+  return out;
+}
+
+}  // namespace vdbwrap::fit

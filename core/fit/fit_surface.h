@@ -1,0 +1,31 @@
+// Stage 3 and the triangulation of stage 4: move every node of the lattice surface to the
+// nearest point of the input (a small offset off it), triangulate each polygon choosing the
+// diagonal nearest the input, and keep the surface valid at every step by pulling
+// offending nodes back toward their lattice positions.
+#pragma once
+#include <vector>
+
+#include "extract/extract_surface.h"
+#include "fit/surface_index.h"
+#include "grid/adaptive_grid.h"
+#include "vdbwrap/wrap.h"
+
+namespace vdbwrap::fit {
+
+struct FittedSurface {
+  std::vector<Vec3> points;   // output (world) frame: local + origin
+  std::vector<Tri> triangles;
+  size_t held_back = 0;       // nodes that could not go all the way to the input
+  size_t validity_rounds = 0;
+};
+
+
+// Offending triangles: CGAL self-intersections, degenerate faces, and triangles whose
+// doubled area is below min_area2.
+std::vector<uint32_t> invalid_triangles(const std::vector<Vec3>& points, const std::vector<Tri>& triangles, double min_area2);
+
+// `origin` turns the local frame of the grid and the index into output coordinates.
+FittedSurface fit_to_input(const extract::LatticeSurface& surface, const grid::AdaptiveGrid& grid, const SurfaceIndex& input,
+                           const Vec3& origin, const WrapParams& params, ProgressSink* progress);
+
+}  // namespace vdbwrap::fit

@@ -1,0 +1,47 @@
+// CGAL AABB tree behind a small interface, so its headers stay in this file.
+#include "fit/surface_index.h"
+
+#include <CGAL/AABB_traits.h>
+#include <CGAL/AABB_tree.h>
+#include <CGAL/AABB_triangle_primitive.h>
+#include <CGAL/Simple_cartesian.h>
+
+namespace vdbwrap::fit {
+namespace {
+// Closest-point constructions need no exactness; Simple_cartesian<double> is the fast choice.
+using K = CGAL::Simple_cartesian<double>;
+using Triangle = K::Triangle_3;
+using Iterator = std::vector<Triangle>::const_iterator;
+using Primitive = CGAL::AABB_triangle_primitive<K, Iterator>;
+using Tree = CGAL::AABB_tree<CGAL::AABB_traits<K, Primitive>>;
+}  // namespace
+
+struct SurfaceIndex::Impl {
+  std::vector<Triangle> triangles;
+  Tree tree;
+};
+
+SurfaceIndex::SurfaceIndex(const std::vector<Vec3>& points, const std::vector<Tri>& triangles) : impl_(new Impl) {
+  impl_->triangles.reserve(triangles.size());
+  for (const Tri& t : triangles) {
+    const Vec3 &a = points[t[0]], &b = points[t[1]], &c = points[t[2]];
+    impl_->triangles.emplace_back(K::Point_3(a[0], a[1], a[2]), K::Point_3(b[0], b[1], b[2]), K::Point_3(c[0], c[1], c[2]));
+  }
+  impl_->tree.insert(impl_->triangles.cbegin(), impl_->triangles.cend());
+  impl_->tree.build();
+  impl_->tree.accelerate_distance_queries();
+}
+
+SurfaceIndex::~SurfaceIndex() = default;
+
+SurfaceIndex::Hit SurfaceIndex::closest(const Vec3& q) const {
+  K::Point_3 query(q[0], q[1], q[2]);
+  auto [point, it] = impl_->tree.closest_point_and_primitive(query);
+  Hit hit;
+  hit.point = {point.x(), point.y(), point.z()};
+  hit.triangle = uint32_t(it - impl_->triangles.cbegin());
+  hit.squared_distance = CGAL::squared_distance(query, point);
+  return hit;
+}
+
+}  // namespace vdbwrap::fit

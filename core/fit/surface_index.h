@@ -1,0 +1,31 @@
+// Nearest-point queries on a triangle set (CGAL AABB tree). Thread-safe queries once built.
+#pragma once
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+#include "vdbwrap/mesh.h"
+
+namespace vdbwrap::fit {
+
+class SurfaceIndex {
+ public:
+  SurfaceIndex(const std::vector<Vec3>& points, const std::vector<Tri>& triangles);
+  ~SurfaceIndex();
+  SurfaceIndex(const SurfaceIndex&) = delete;
+  SurfaceIndex& operator=(const SurfaceIndex&) = delete;
+
+  struct Hit {
+    Vec3 point;
+    uint32_t triangle;
+    double squared_distance;
+  };
+  Hit closest(const Vec3& query) const;
+  double squared_distance(const Vec3& query) const { return closest(query).squared_distance; }
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace vdbwrap::fit

@@ -1,0 +1,40 @@
+#include "grid/adaptive_grid.h"
+
+#include <mutex>
+
+namespace vdbwrap::grid {
+
+namespace {
+std::once_flag vdb_init;
+}
+
+AdaptiveGrid::AdaptiveGrid(const Vec3& origin, double base_size, int levels, const Coord& dims0)
+    : origin_(origin), base_size_(base_size), levels_(levels), dims0_(dims0) {
+  std::call_once(vdb_init, [] { openvdb::initialize(); });
+  for (int l = 0; l <= levels; ++l) grids_.push_back(openvdb::Int32Grid::create(l == 0 ? int32_t(kFree) : int32_t(kAbsent)));
+}
+
+int32_t AdaptiveGrid::get(int level, const Coord& c) const { return grids_[level]->tree().getValue(c); }
+
+void AdaptiveGrid::set(int level, const Coord& c, int32_t value) { grids_[level]->tree().setValue(c, value); }
+
+LeafRef AdaptiveGrid::leaf_at(int level, const Coord& c) const {
+  Coord c0(c.x() >> level, c.y() >> level, c.z() >> level);  // arithmetic shift = floor division
+  if (!in_box0(c0)) return LeafRef{0, c0, 1, true};
+  for (int l = 0; l <= level; ++l) {
+    int s = level - l;
+    Coord cl(c.x() >> s, c.y() >> s, c.z() >> s);
+    int32_t v = get(l, cl);
+    if (v != kRefined) return LeafRef{l, cl, v, false};
+  }
+  return LeafRef{level, c, kRefined, false};
+}
+
+size_t AdaptiveGrid::count(int level, int32_t value) const {
+  size_t n = 0;
+  for (auto it = grids_[level]->cbeginValueOn(); it; ++it)
+    if (*it == value) ++n;
+  return n;
+}
+
+}  // namespace vdbwrap::grid

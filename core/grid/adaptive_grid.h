@@ -1,0 +1,123 @@
+// Stage 2 data: the structured 2x2x2 cell hierarchy of the spec, one OpenVDB Int32Grid per
+// level. Level l has cells of size base/2^l; cell (i,j,k) at level l has the children
+// (2i+a, 2j+b, 2k+c) at level l+1, so neighbours and parents are integer arithmetic.
+// Positions are also given on the finest level's node lattice ("fine units").
+#pragma once
+#include <openvdb/openvdb.h>
+
+#include <cstdint>
+#include <vector>
+
+#include "vdbwrap/mesh.h"
+
+namespace vdbwrap::grid {
+
+using openvdb::Coord;
+
+// Cell values. Non-negative values >= 1 are component labels of free cells after the flood fill.
+enum CellState : int32_t {
+  kAbsent = 0,     // no cell at this level here (an ancestor is a leaf)
+  kRefined = -1,   // split into 8 children one level down
+  kTouched = -2,   // a leaf the input passes through
+  kFree = -3,      // a leaf the input does not touch, not yet labelled
+  kExcluded = -4,  // a free leaf taken out of the chosen volume (manifold repair)
+};
+
+struct LeafRef {
+  int level = 0;
+  Coord ijk;
+  int32_t value = kAbsent;
+  bool outside_box = false;  // beyond the padded level-0 box (always free, always outside)
+};
+
+class AdaptiveGrid {
+ public:
+  // origin: world position of lattice node (0,0,0); dims0: level-0 cells per axis.
+  AdaptiveGrid(const Vec3& origin, double base_size, int levels, const Coord& dims0);
+
+  int max_level() const { return levels_; }
+  double base_size() const { return base_size_; }
+  double cell_size(int level) const { return base_size_ / double(1 << level); }
+  double fine_size() const { return cell_size(levels_); }
+  int32_t fine_units(int level) const { return 1 << (levels_ - level); }
+  const Coord& dims0() const { return dims0_; }
+  const Vec3& origin() const { return origin_; }
+
+  bool in_box0(const Coord& c) const {
+    return c.x() >= 0 && c.y() >= 0 && c.z() >= 0 && c.x() < dims0_.x() && c.y() < dims0_.y() && c.z() < dims0_.z();
+  }
+  // Value stored for cell c of `level` (level 0 reads kFree where nothing is stored).
+  int32_t get(int level, const Coord& c) const;
+  void set(int level, const Coord& c, int32_t value);
+
+  // The leaf that contains cell c of `level` (c itself, or an ancestor). If c is refined,
+  // returns c with value kRefined.
+  LeafRef leaf_at(int level, const Coord& c) const;
+
+  // Calls f(LeafRef) for each leaf across face (axis, dir) of cell c: the same-or-coarser
+  // neighbour, or all finer leaves of a refined neighbour that touch the face.
+  template <typename F>
+  void for_each_face_neighbour(int level, const Coord& c, int axis, int dir, F&& f) const {
+    Coord n = c;
+    n[axis] += dir;
+    LeafRef r = leaf_at(level, n);
+    if (r.value != kRefined) {
+      f(r);
+      return;
+    }
+    descend_face(level, n, axis, dir, f);
+  }
+
+  // Calls f(level, coord, value) for every leaf cell stored in the box (level 0 densely).
+  template <typename F>
+  void for_each_leaf(F&& f) const {
+    const Coord& d = dims0_;
+    for (int z = 0; z < d.z(); ++z)
+      for (int y = 0; y < d.y(); ++y)
+        for (int x = 0; x < d.x(); ++x) {
+          Coord c(x, y, z);
+          int32_t v = get(0, c);
+          if (v != kRefined) f(0, c, v);
+        }
+    for (int l = 1; l <= levels_; ++l)
+      for (auto it = grids_[l]->cbeginValueOn(); it; ++it)
+        if (*it != kRefined && *it != kAbsent) f(l, it.getCoord(), *it);
+  }
+
+  // World position of a fine-lattice node.
+  Vec3 node_position(const Coord& fine) const {
+    double h = fine_size();
+    return {origin_[0] + fine.x() * h, origin_[1] + fine.y() * h, origin_[2] + fine.z() * h};
+  }
+
+  openvdb::Int32Grid::Ptr level_grid(int level) const { return grids_[level]; }
+  size_t count(int level, int32_t value) const;
+
+ private:
+  template <typename F>
+  void descend_face(int level, const Coord& n, int axis, int dir, F& f) const {
+    // Children of n on the side facing the cell we came from (dir>0: low side of n).
+    int side = dir > 0 ? 0 : 1;
+    for (int a = 0; a < 2; ++a)
+      for (int b = 0; b < 2; ++b) {
+        int bits[3];
+        bits[axis] = side;
+        bits[(axis + 1) % 3] = a;
+        bits[(axis + 2) % 3] = b;
+        Coord child(2 * n.x() + bits[0], 2 * n.y() + bits[1], 2 * n.z() + bits[2]);
+        int32_t v = get(level + 1, child);
+        if (v == kRefined)
+          descend_face(level + 1, child, axis, dir, f);
+        else
+          f(LeafRef{level + 1, child, v, false});
+      }
+  }
+
+  Vec3 origin_;
+  double base_size_;
+  int levels_;
+  Coord dims0_;
+  std::vector<openvdb::Int32Grid::Ptr> grids_;
+};
+
+}  // namespace vdbwrap::grid

@@ -1,0 +1,243 @@
+#include "grid/refine.h"
+
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_sort.h>
+
+#include <algorithm>
+#include <cmath>
+#include <unordered_map>
+
+#include "common/vec.h"
+#include "vdbwrap/errors.h"
+
+namespace vdbwrap::grid {
+
+bool triangle_overlaps_box(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& center, const Vec3& h) {
+  // Akenine-Moller's separating axis test: 3 box axes, the triangle normal, 9 edge crosses.
+  const Vec3 v0 = a - center, v1 = b - center, v2 = c - center;
+  for (int k = 0; k < 3; ++k) {
+    double lo = std::min({v0[k], v1[k], v2[k]}), hi = std::max({v0[k], v1[k], v2[k]});
+    if (lo > h[k] || hi < -h[k]) return false;
+  }
+  const Vec3 e[3] = {v1 - v0, v2 - v1, v0 - v2};
+  const Vec3 v[3] = {v0, v1, v2};
+  for (int i = 0; i < 3; ++i)
+    for (int k = 0; k < 3; ++k) {
+      Vec3 axis{0, 0, 0};
+      Vec3 unit{0, 0, 0};
+      unit[k] = 1;
+      axis = cross(unit, e[i]);
+      double p0 = dot(v[0], axis), p1 = dot(v[1], axis), p2 = dot(v[2], axis);
+      double r = h[0] * std::fabs(axis[0]) + h[1] * std::fabs(axis[1]) + h[2] * std::fabs(axis[2]);
+      if (std::min({p0, p1, p2}) > r || std::max({p0, p1, p2}) < -r) return false;
+    }
+  Vec3 n = cross(e[0], e[1]);
+  double d = dot(n, v0);
+  double r = h[0] * std::fabs(n[0]) + h[1] * std::fabs(n[1]) + h[2] * std::fabs(n[2]);
+  return std::fabs(d) <= r;
+}
+
+bool segment_overlaps_box(const Vec3& a, const Vec3& b, const Vec3& lo, const Vec3& hi) {
+  double t0 = 0, t1 = 1;
+  for (int k = 0; k < 3; ++k) {
+    double d = b[k] - a[k];
+    if (std::fabs(d) < 1e-300) {
+      if (a[k] < lo[k] || a[k] > hi[k]) return false;
+      continue;
+    }
+    double u = (lo[k] - a[k]) / d, w = (hi[k] - a[k]) / d;
+    if (u > w) std::swap(u, w);
+    t0 = std::max(t0, u);
+    t1 = std::min(t1, w);
+    if (t0 > t1) return false;
+  }
+  return true;
+}
+
+namespace {
+
+struct CellTris {
+  Coord c;
+  std::vector<uint32_t> tris;
+};
+
+struct FeatureSegments {
+  // per triangle: indices into segments (feature edges and intersection segments it carries)
+  std::vector<std::vector<uint32_t>> of_triangle;
+  std::vector<std::array<Vec3, 2>> segments;
+};
+
+FeatureSegments collect_features(const prep::PreparedInput& in) {
+  FeatureSegments fs;
+  fs.of_triangle.resize(in.mesh.triangles.size());
+  // Feature edges belong to the triangles that carry them.
+  std::unordered_map<uint64_t, uint32_t> edge_index;
+  for (const auto& fe : in.feature_edges) {
+    uint32_t id = uint32_t(fs.segments.size());
+    fs.segments.push_back({in.mesh.points[fe.a], in.mesh.points[fe.b]});
+    uint32_t a = std::min(fe.a, fe.b), b = std::max(fe.a, fe.b);
+    edge_index[(uint64_t(a) << 32) | b] = id;
+  }
+  for (uint32_t t = 0; t < in.mesh.triangles.size(); ++t) {
+    const Tri& tri = in.mesh.triangles[t];
+    for (int e = 0; e < 3; ++e) {
+      uint32_t a = std::min(tri[e], tri[(e + 1) % 3]), b = std::max(tri[e], tri[(e + 1) % 3]);
+      auto it = edge_index.find((uint64_t(a) << 32) | b);
+      if (it != edge_index.end()) fs.of_triangle[t].push_back(it->second);
+    }
+  }
+  for (const auto& s : in.intersections) {
+    uint32_t id = uint32_t(fs.segments.size());
+    fs.segments.push_back({s.a, s.b});
+    fs.of_triangle[s.tri_a].push_back(id);
+    fs.of_triangle[s.tri_b].push_back(id);
+  }
+  return fs;
+}
+
+}  // namespace
+
+RefineResult build_refined_grid(const prep::PreparedInput& in, const WrapParams& params, double base, ProgressSink* progress,
+                                int padding) {
+  const auto& pts = in.mesh.points;
+  const auto& tris = in.mesh.triangles;
+  Box3 box;
+  for (const auto& p : pts) box.add(p);
+  const int levels = params.levels;
+  Vec3 origin = box.lo - Vec3{padding * base, padding * base, padding * base};
+  Coord dims0;
+  for (int k = 0; k < 3; ++k) {
+    double cells = std::ceil((box.hi[k] - box.lo[k]) / base) + 2 * padding;
+    if (cells > 1 << 20) throw Error(ErrorKind::InvalidArgument, "base size too small for the model: over a million cells per axis");
+    dims0[k] = int(cells);
+  }
+  RefineResult result;
+  result.grid = std::make_unique<AdaptiveGrid>(origin, base, levels, dims0);
+  AdaptiveGrid& g = *result.grid;
+
+  // A cell counts as touched when the input meets it grown by a small margin, so that the
+  // faces of free cells stay strictly off the input.
+  const double margin_fraction = 1e-3;
+
+  // Level 0: every triangle against the cells of its bounding box, in parallel.
+  tbb::enumerable_thread_specific<std::vector<std::pair<Coord, uint32_t>>> hits_tls;
+  const double h0 = base;
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, tris.size(), 512), [&](const tbb::blocked_range<size_t>& r) {
+    auto& hits = hits_tls.local();
+    for (size_t t = r.begin(); t != r.end(); ++t) {
+      const Vec3 &a = pts[tris[t][0]], &b = pts[tris[t][1]], &c = pts[tris[t][2]];
+      Box3 tb;
+      tb.add(a), tb.add(b), tb.add(c);
+      Coord lo, hi;
+      for (int k = 0; k < 3; ++k) {
+        lo[k] = int(std::floor((tb.lo[k] - origin[k]) / h0 - margin_fraction));
+        hi[k] = int(std::floor((tb.hi[k] - origin[k]) / h0 + margin_fraction));
+      }
+      Vec3 half{h0 * (0.5 + margin_fraction), h0 * (0.5 + margin_fraction), h0 * (0.5 + margin_fraction)};
+      for (int z = lo.z(); z <= hi.z(); ++z)
+        for (int y = lo.y(); y <= hi.y(); ++y)
+          for (int x = lo.x(); x <= hi.x(); ++x) {
+            Vec3 center{origin[0] + (x + 0.5) * h0, origin[1] + (y + 0.5) * h0, origin[2] + (z + 0.5) * h0};
+            if (triangle_overlaps_box(a, b, c, center, half)) hits.emplace_back(Coord(x, y, z), uint32_t(t));
+          }
+    }
+  });
+  std::vector<std::pair<Coord, uint32_t>> hits;
+  for (auto& h : hits_tls) hits.insert(hits.end(), h.begin(), h.end());
+  tbb::parallel_sort(hits.begin(), hits.end(), [](const auto& u, const auto& v) {
+    return u.first != v.first ? u.first < v.first : u.second < v.second;
+  });
+  std::vector<CellTris> level_cells;
+  for (size_t i = 0; i < hits.size();) {
+    CellTris ct{hits[i].first, {}};
+    size_t j = i;
+    for (; j < hits.size() && hits[j].first == hits[i].first; ++j) ct.tris.push_back(hits[j].second);
+    level_cells.push_back(std::move(ct));
+    i = j;
+  }
+  hits.clear();
+  hits.shrink_to_fit();
+
+  const FeatureSegments features = collect_features(in);
+  const double cos_spread = std::cos(params.refine_normal_spread_deg * M_PI / 180.0);
+
+  for (int level = 0; level <= levels; ++level) {
+    if (progress) {
+      if (progress->cancelled()) throw Error(ErrorKind::Cancelled, "cancelled");
+      progress->progress("refine", double(level) / (levels + 1),
+                         "level " + std::to_string(level) + ": " + std::to_string(level_cells.size()) + " cells on the input");
+    }
+    result.touched_per_level.push_back(level_cells.size());
+    const double h = g.cell_size(level);
+    // Decide refinement per cell, in parallel; a refined cell's children are tested against
+    // the parent's triangles only.
+    std::vector<uint8_t> refine(level_cells.size(), 0);
+    std::vector<std::array<std::vector<uint32_t>, 8>> children(level < levels ? level_cells.size() : 0);
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, level_cells.size(), 64), [&](const tbb::blocked_range<size_t>& r) {
+      for (size_t i = r.begin(); i != r.end(); ++i) {
+        if (level >= levels) continue;
+        const CellTris& ct = level_cells[i];
+        Vec3 lo{origin[0] + ct.c.x() * h, origin[1] + ct.c.y() * h, origin[2] + ct.c.z() * h};
+        bool split = int(ct.tris.size()) > params.refine_max_triangles;
+        if (!split) {
+          const Vec3& n0 = in.normals[ct.tris[0]];
+          for (uint32_t t : ct.tris)
+            if (dot(in.normals[t], n0) < cos_spread) {
+              split = true;
+              break;
+            }
+        }
+        if (!split && params.refine_at_features) {
+          Vec3 glo = lo - Vec3{h * margin_fraction, h * margin_fraction, h * margin_fraction};
+          Vec3 ghi = lo + Vec3{h * (1 + margin_fraction), h * (1 + margin_fraction), h * (1 + margin_fraction)};
+          for (uint32_t t : ct.tris) {
+            for (uint32_t s : features.of_triangle[t])
+              if (segment_overlaps_box(features.segments[s][0], features.segments[s][1], glo, ghi)) {
+                split = true;
+                break;
+              }
+            if (split) break;
+          }
+        }
+        if (!split) continue;
+        refine[i] = 1;
+        const double hc = h * 0.5;
+        Vec3 half{hc * (0.5 + margin_fraction), hc * (0.5 + margin_fraction), hc * (0.5 + margin_fraction)};
+        for (int k = 0; k < 8; ++k) {
+          Vec3 center = lo + Vec3{((k & 1) + 0.5) * hc, (((k >> 1) & 1) + 0.5) * hc, (((k >> 2) & 1) + 0.5) * hc};
+          for (uint32_t t : ct.tris)
+            if (triangle_overlaps_box(pts[tris[t][0]], pts[tris[t][1]], pts[tris[t][2]], center, half))
+              children[i][k].push_back(t);
+        }
+      }
+    });
+    std::vector<CellTris> next;
+    size_t refined = 0;
+    for (size_t i = 0; i < level_cells.size(); ++i) {
+      const Coord& c = level_cells[i].c;
+      if (!refine[i]) {
+        g.set(level, c, kTouched);
+        continue;
+      }
+      ++refined;
+      g.set(level, c, kRefined);
+      for (int k = 0; k < 8; ++k) {
+        Coord child(2 * c.x() + (k & 1), 2 * c.y() + ((k >> 1) & 1), 2 * c.z() + ((k >> 2) & 1));
+        if (children[i][k].empty()) {
+          g.set(level + 1, child, kFree);
+        } else {
+          next.push_back({child, std::move(children[i][k])});
+        }
+      }
+    }
+    result.refined_per_level.push_back(refined);
+    std::sort(next.begin(), next.end(), [](const CellTris& u, const CellTris& v) { return u.c < v.c; });
+    level_cells = std::move(next);
+    if (level_cells.empty()) break;
+  }
+  if (progress) progress->progress("refine", 1.0, "done");
+  return result;
+}
+
+}  // namespace vdbwrap::grid

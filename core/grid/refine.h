@@ -1,0 +1,27 @@
+// Stage 2a: mark the cells the input passes through and refine them 2x2x2 per level by the
+// spec's criteria (triangles per cell, normal spread, features).
+#pragma once
+#include <memory>
+
+#include "grid/adaptive_grid.h"
+#include "prep/prepare.h"
+#include "vdbwrap/wrap.h"
+
+namespace vdbwrap::grid {
+
+struct RefineResult {
+  std::unique_ptr<AdaptiveGrid> grid;
+  std::vector<size_t> touched_per_level;
+  std::vector<size_t> refined_per_level;
+};
+
+// base_size in model units. The grid pads the input's bounding box by `padding` level-0
+// cells on every side so the outside volume wraps around everything.
+RefineResult build_refined_grid(const prep::PreparedInput& input, const WrapParams& params, double base_size,
+                                ProgressSink* progress, int padding = 2);
+
+// Exact-enough separating-axis test of a triangle against an axis-aligned box.
+bool triangle_overlaps_box(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& box_center, const Vec3& half);
+bool segment_overlaps_box(const Vec3& a, const Vec3& b, const Vec3& lo, const Vec3& hi);
+
+}  // namespace vdbwrap::grid

@@ -1,0 +1,126 @@
+// The one public API of the vdbwrap core: wrap a dirty triangle mesh into a closed,
+// 2-manifold, outward-oriented, self-intersection-free surface, and diagnose meshes.
+// The CLI and the gRPC server are thin layers over these functions.
+#pragma once
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "vdbwrap/errors.h"
+#include "vdbwrap/mesh.h"
+
+namespace vdbwrap {
+
+// A length given either in model units or as a percentage of the input's
+// bounding-box diagonal ("0.5" or "1%").
+struct Length {
+  double value = 1.0;
+  bool percent_of_diagonal = true;
+
+  double resolve(double diagonal) const { return percent_of_diagonal ? value * 0.01 * diagonal : value; }
+  static Length parse(const std::string& text);  // throws Error(InvalidArgument)
+  std::string to_string() const;
+};
+
+enum class VolumeChoice { Outside, Inside };
+
+struct WrapParams {
+  Length base_size{1.0, true};     // edge of a level-0 cell
+  int levels = 2;                  // most 2x2x2 refinements below the base size
+  double feature_angle_deg = 30;   // dihedral angle (between normals) that makes an edge sharp
+  VolumeChoice volume = VolumeChoice::Outside;
+  int threads = 0;                 // 0: all cores
+
+  // Refinement criteria of a cell the input passes through (spec stage 2).
+  int refine_max_triangles = 64;        // more triangles than this in a cell: refine
+  double refine_normal_spread_deg = 20; // normals spread more than this: refine
+  bool refine_at_features = true;       // sharp, boundary or intersection edges: refine
+
+  // Projection (spec stage 3).
+  double weld_tolerance = 1e-7;    // fraction of the diagonal under which vertices merge
+  double surface_offset = 0.02;    // nodes stop this fraction of the finest cell off the input
+  int smoothing_passes = 2;        // local smoothing + re-projection passes
+
+  bool compute_distances = true;   // sample output-to-input distances for the report
+};
+
+// Progress and cancellation, passed in by the caller. Methods may be called from any thread.
+class ProgressSink {
+ public:
+  virtual ~ProgressSink() = default;
+  // stage: short stage name; fraction: 0..1 within the stage.
+  virtual void progress(const std::string& stage, double fraction, const std::string& message) = 0;
+  // Polled often; returning true makes wrap() throw Error(Cancelled) within moments.
+  virtual bool cancelled() { return false; }
+};
+
+struct StageStats {
+  std::string name;
+  double seconds = 0;
+  double peak_memory_mb = 0;  // peak resident memory while the stage ran
+};
+
+// Distances from samples on one surface to another, in model units and as fractions of
+// the reference diagonal.
+struct DistanceStats {
+  size_t samples = 0;
+  double mean = 0, p95 = 0, max = 0;
+  double diagonal = 0;
+};
+
+struct MeshDiagnostics {
+  size_t vertices = 0, triangles = 0, parts = 0, components = 0;
+  size_t border_edges = 0, nonmanifold_edges = 0, nonmanifold_vertices = 0;
+  size_t misoriented_edges = 0, degenerate_triangles = 0;
+  size_t intersecting_triangles = 0, intersecting_pairs = 0;
+  bool closed = false, manifold = false, oriented = false, outward = false;
+  bool self_intersecting = false;
+  double area = 0, volume = 0, diagonal = 0;
+  Vec3 bbox_min{0, 0, 0}, bbox_max{0, 0, 0};
+
+  // closed, manifold, consistently and outward oriented, no self-intersections
+  bool valid_closed_surface() const {
+    return closed && manifold && oriented && outward && !self_intersecting && degenerate_triangles == 0;
+  }
+};
+
+struct FeatureStats {
+  size_t sharp_edges = 0, boundary_edges = 0, intersection_segments = 0;
+};
+
+struct WrapReport {
+  MeshDiagnostics input;
+  FeatureStats features;
+  WrapParams params;
+  double base_size = 0, finest_size = 0, diagonal = 0;
+  std::vector<size_t> cells_per_level;  // cells the input passes through, per level
+  size_t manifold_fixes = 0;            // cells taken out of the volume to keep it manifold
+  size_t nodes_held_back = 0;           // nodes kept off the input to stay valid
+  MeshDiagnostics output;
+  DistanceStats output_to_input, input_to_output;
+  std::vector<StageStats> stages;
+  double total_seconds = 0;
+};
+
+struct WrapResult {
+  Mesh surface;
+  WrapReport report;
+};
+
+// Runs the whole pipeline. Throws Error: InvalidArgument (parameters), InvalidInput
+// (mesh unusable, e.g. no triangles left), WrapFailed (no valid surface), Cancelled.
+WrapResult wrap(const Mesh& input, const WrapParams& params, ProgressSink* progress = nullptr);
+
+// Diagnostics of any mesh, welded exactly (exactly equal coordinates) first.
+MeshDiagnostics diagnose(const Mesh& mesh, bool find_intersections = true);
+
+// Metro-style one-sided distance: samples on `from` (about `samples_per_diagonal`^2
+// spread by area, plus every vertex), distances to `to`.
+DistanceStats sampled_distance(const Mesh& from, const Mesh& to, double samples_per_diagonal = 1000);
+
+std::string to_json(const WrapReport& report, int indent = 2);
+std::string to_json(const MeshDiagnostics& diagnostics, int indent = 2);
+std::string to_json(const DistanceStats& distance, int indent = 2);
+
+}  // namespace vdbwrap

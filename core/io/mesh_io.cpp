@@ -1,0 +1,247 @@
+// Public entry points of the mesh I/O layer: format detection, whole-file reading, final
+// checks, and atomic writing. The formats themselves live in stl/obj/off/ply.cpp.
+#include "io/mesh_io.h"
+
+#include <algorithm>
+#include <cerrno>
+#include <cstdio>
+#include <filesystem>
+#include <new>
+#include <system_error>
+
+#include "io/readers.h"
+
+namespace vdbwrap::io {
+namespace detail {
+
+void fail(const std::string& name, const std::string& what) {
+  throw Error(ErrorKind::InvalidInput, name + ": " + what);
+}
+
+void fail_line(const std::string& name, size_t line, const std::string& what) {
+  fail(name, "line " + std::to_string(line) + ": " + what);
+}
+
+std::string quoted(std::string_view token) {
+  constexpr size_t kMax = 40;
+  std::string out = "'";
+  for (char c : token.substr(0, kMax)) {
+    unsigned char u = static_cast<unsigned char>(c);
+    out += (u < 32 || u >= 127) ? '?' : c;  // printable ASCII: messages go to logs and RPCs
+  }
+  return out + (token.size() > kMax ? "...'" : "'");
+}
+
+std::string file_stem(const std::string& path) {
+  size_t slash = path.find_last_of("/\\");
+  std::string base = slash == std::string::npos ? path : path.substr(slash + 1);
+  size_t dot = base.rfind('.');
+  if (dot != std::string::npos && dot > 0) base.resize(dot);
+  return base;
+}
+
+std::string one_line(const std::string& name) {
+  std::string out = name;
+  for (char& c : out)
+    if (c == '\n' || c == '\r') c = ' ';
+  return out;
+}
+
+void check_point_count(const std::string& name, uint64_t count) {
+  if (count > uint64_t(UINT32_MAX))
+    fail(name, "has " + std::to_string(count) + " vertices, more than 32-bit indices can address");
+}
+
+}  // namespace detail
+
+namespace {
+
+using detail::fail;
+
+// Format from the content, for names without a known extension.
+Format sniff_format(std::string_view bytes) {
+  std::string_view head = detail::trim(bytes.substr(0, 4096));
+  if (head.substr(0, 3) == "ply" && head.size() > 3 && (head[3] == '\n' || head[3] == '\r'))
+    return Format::Ply;
+  if (detail::is_binary_stl_size(bytes) || detail::looks_like_ascii_stl(bytes)) return Format::Stl;
+  if (std::memchr(head.data(), '\0', head.size())) return Format::Unknown;
+  detail::LineReader lines(head);
+  std::string_view line;
+  while (lines.next(line)) {
+    detail::Tokens tokens(line);
+    std::string_view first;
+    if (!tokens.next(first) || first[0] == '#') continue;
+    if (first.size() >= 3 && first.substr(first.size() - 3) == "OFF") return Format::Off;
+    static const char* const kObjKeywords[] = {"v", "vt",     "vn",     "f", "o",
+                                               "g", "mtllib", "usemtl", "s"};
+    for (const char* k : kObjKeywords)
+      if (first == k) return Format::Obj;
+    return Format::Unknown;
+  }
+  return Format::Unknown;
+}
+
+// Text formats with NUL bytes are binary files with the wrong name; say so rather than
+// reporting "no triangles" after skipping every line as unknown.
+void reject_binary_text(std::string_view bytes, const std::string& name, const char* format) {
+  const void* nul = std::memchr(bytes.data(), '\0', bytes.size());
+  if (nul)
+    fail(name, std::string("contains binary data (a NUL byte at offset ") +
+                   std::to_string(static_cast<const char*>(nul) - bytes.data()) + "), not " +
+                   format + " text");
+}
+
+Mesh parse(std::string_view bytes, Format format, const std::string& name) {
+  switch (format) {
+    case Format::Stl: return detail::read_stl(bytes, name);
+    case Format::Obj: reject_binary_text(bytes, name, "OBJ"); return detail::read_obj(bytes, name);
+    case Format::Off: reject_binary_text(bytes, name, "OFF"); return detail::read_off(bytes, name);
+    case Format::Ply: return detail::read_ply(bytes, name);
+    case Format::Unknown: break;
+  }
+  fail(name, "unknown format (expected STL, OBJ, OFF or PLY)");
+}
+
+std::string read_whole_file(const std::string& path) {
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec)) fail(path, "cannot open: is a directory");
+  std::FILE* f = std::fopen(path.c_str(), "rb");
+  if (!f) fail(path, std::string("cannot open file (") + std::strerror(errno) + ")");
+  // Read straight into a buffer of the expected size; keep reading in case the file grew.
+  std::string bytes;
+  uintmax_t size = std::filesystem::file_size(path, ec);
+  size_t used = 0;
+  bytes.resize(ec ? size_t(1) << 16 : size_t(size) + 1);
+  for (;;) {
+    used += std::fread(&bytes[used], 1, bytes.size() - used, f);
+    if (used < bytes.size()) break;  // end of file or error
+    bytes.resize(bytes.size() * 2);
+  }
+  bytes.resize(used);
+  bool failed = std::ferror(f);
+  std::fclose(f);
+  if (failed) fail(path, "read error");
+  return bytes;
+}
+
+// Writers index points and parts blindly; an inconsistent mesh must not make them read
+// out of bounds.
+void check_writable(const Mesh& mesh, const std::string& path) {
+  auto bad = [&](const std::string& what) {
+    throw Error(ErrorKind::OutputFailed, path + ": cannot write: " + what);
+  };
+  if (mesh.triangles.size() > UINT32_MAX) bad("more than 2^32-1 triangles");
+  for (size_t t = 0; t < mesh.triangles.size(); ++t)
+    for (uint32_t v : mesh.triangles[t])
+      if (v >= mesh.points.size())
+        bad("triangle " + std::to_string(t) + " refers to vertex " + std::to_string(v) +
+            " but the mesh has " + std::to_string(mesh.points.size()));
+  if (!mesh.triangle_part.empty() && mesh.triangle_part.size() != mesh.triangles.size())
+    bad("triangle_part has " + std::to_string(mesh.triangle_part.size()) + " entries for " +
+        std::to_string(mesh.triangles.size()) + " triangles");
+  const size_t parts = std::max<size_t>(mesh.part_names.size(), 1);
+  for (size_t t = 0; t < mesh.triangle_part.size(); ++t)
+    if (mesh.triangle_part[t] < 0 || size_t(mesh.triangle_part[t]) >= parts)
+      bad("triangle " + std::to_string(t) + " has part " + std::to_string(mesh.triangle_part[t]) +
+          " but the mesh has " + std::to_string(mesh.part_names.size()) + " part names");
+}
+
+void write_to(const Mesh& mesh, Format format, detail::Sink& out) {
+  switch (format) {
+    case Format::Stl: return detail::write_stl(mesh, out);
+    case Format::Obj: return detail::write_obj(mesh, out);
+    case Format::Off: return detail::write_off(mesh, out);
+    case Format::Ply: return detail::write_ply(mesh, out);
+    case Format::Unknown: break;
+  }
+}
+
+}  // namespace
+
+Format format_from_extension(std::string_view path) {
+  size_t dot = path.rfind('.');
+  size_t slash = path.find_last_of("/\\");
+  if (dot == std::string_view::npos || (slash != std::string_view::npos && dot < slash))
+    return Format::Unknown;
+  std::string_view ext = path.substr(dot + 1);
+  if (detail::iequals(ext, "stl")) return Format::Stl;
+  if (detail::iequals(ext, "obj")) return Format::Obj;
+  if (detail::iequals(ext, "off")) return Format::Off;
+  if (detail::iequals(ext, "ply")) return Format::Ply;
+  return Format::Unknown;
+}
+
+Mesh read_mesh(const std::string& path) {
+  std::string bytes;
+  try {
+    bytes = read_whole_file(path);
+  } catch (const std::bad_alloc&) {
+    fail(path, "too large to load into memory");
+  }
+  return read_mesh_from_bytes(bytes, format_from_extension(path), path);
+}
+
+Mesh read_mesh_from_bytes(std::string_view bytes, Format format, const std::string& display_name) {
+  if (bytes.empty()) fail(display_name, "file is empty");
+  if (format == Format::Unknown) format = sniff_format(bytes);
+  Mesh mesh;
+  try {
+    mesh = parse(bytes, format, display_name);
+  } catch (const std::bad_alloc&) {
+    fail(display_name, "not enough memory to load this mesh");
+  }
+  if (mesh.triangles.empty()) fail(display_name, "contains no triangles");
+  // A single part needs no per-triangle list ("empty means everything is part 0").
+  if (mesh.part_names.size() <= 1) mesh.triangle_part.clear();
+  return mesh;
+}
+
+std::string write_mesh_to_bytes(const Mesh& mesh, Format format) {
+  if (format == Format::Unknown) throw Error(ErrorKind::OutputFailed, "unknown output format");
+  check_writable(mesh, "output");
+  detail::Sink sink;
+  write_to(mesh, format, sink);
+  return sink.take();
+}
+
+void write_mesh(const Mesh& mesh, const std::string& path) {
+  auto failed = [&](const std::string& what) {
+    throw Error(ErrorKind::OutputFailed, path + ": " + what);
+  };
+  Format format = format_from_extension(path);
+  if (format == Format::Unknown) failed("unknown output format (use .stl, .obj, .off or .ply)");
+  check_writable(mesh, path);
+
+  // Write beside the target, then rename: readers never see a half-written file.
+  const std::string tmp = path + ".tmp";
+  std::FILE* f = std::fopen(tmp.c_str(), "wb");
+  if (!f) failed(std::string("cannot create ") + tmp + " (" + std::strerror(errno) + ")");
+  bool ok = false;
+  try {
+    detail::Sink sink(f);
+    write_to(mesh, format, sink);
+    sink.flush();
+    ok = !sink.failed();
+  } catch (...) {
+    std::fclose(f);
+    std::remove(tmp.c_str());
+    throw;
+  }
+  int saved_errno = ok ? 0 : errno;  // from the failed fwrite
+  if (std::fclose(f) != 0 && ok) {
+    ok = false;
+    saved_errno = errno;
+  }
+  if (!ok) {
+    std::remove(tmp.c_str());
+    failed(std::string("write failed (") + std::strerror(saved_errno) + ")");
+  }
+  if (std::rename(tmp.c_str(), path.c_str()) != 0) {
+    saved_errno = errno;
+    std::remove(tmp.c_str());
+    failed(std::string("cannot rename ") + tmp + " to the target (" + std::strerror(saved_errno) +
+           ")");
+  }
+}
+
+}  // namespace vdbwrap::io

@@ -1,0 +1,42 @@
+// Reading and writing STL (binary and ASCII), OBJ, OFF and PLY (ASCII and binary).
+#pragma once
+#include <string>
+#include <string_view>
+
+#include "vdbwrap/mesh.h"
+
+namespace vdbwrap::io {
+
+enum class Format { Unknown, Stl, Obj, Off, Ply };
+
+// Format from a file name's extension (case-insensitive); Unknown when none matches.
+Format format_from_extension(std::string_view path);
+
+// Reads a mesh: format by extension, by content when the extension is unknown.
+// Throws vdbwrap::Error(InvalidInput) with a message naming the file and, where it applies,
+// the line (text formats) or the triangle / element index (binary), for: missing or empty
+// file, unknown format, truncated data, counts that do not match the file size, NaN or
+// infinite coordinates, out-of-range face indices, zero triangles.
+// Line numbers count from 1; element and triangle indices of binary data count from 0.
+// STL points are not welded (3 per facet); OBJ/OFF/PLY keep their indexing and polygons are
+// triangulated (ear clipping). Parts: one per ASCII STL solid, one named after the file for
+// binary STL, one per OBJ o/g group ("default" before any), one per distinct PLY face "part"
+// value; OFF and PLY without "part" have none. Parts are in order of first appearance and only
+// parts with triangles exist. With at most one part, triangle_part is left empty.
+Mesh read_mesh(const std::string& path);
+
+// The same from bytes already in memory (the server receives uploads this way).
+// display_name is used in error messages.
+Mesh read_mesh_from_bytes(std::string_view bytes, Format format, const std::string& display_name);
+
+// Writes by the path's extension (.stl binary, .obj, .off, .ply binary little-endian).
+// Part names are kept as STL solids (ASCII STL when there are several parts), OBJ groups,
+// and a per-face "part" property in PLY. Throws vdbwrap::Error(OutputFailed).
+// The file is written to PATH.tmp, then renamed to PATH.
+void write_mesh(const Mesh& mesh, const std::string& path);
+
+// The same into memory (the server sends results this way). Throws Error(OutputFailed) for
+// Format::Unknown or an inconsistent mesh.
+std::string write_mesh_to_bytes(const Mesh& mesh, Format format);
+
+}  // namespace vdbwrap::io

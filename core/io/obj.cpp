@@ -1,0 +1,125 @@
+// Wavefront OBJ: positions, faces (any polygon) and o/g groups as parts.
+#include <unordered_map>
+
+#include "io/readers.h"
+
+namespace vdbwrap::io::detail {
+namespace {
+
+class ObjReader {
+ public:
+  ObjReader(std::string_view text, const std::string& name) : lines_(text), name_(name) {}
+
+  Mesh read() {
+    std::string_view line;
+    while (lines_.next(line)) handle(line);
+    return std::move(mesh_);
+  }
+
+ private:
+  [[noreturn]] void error(const std::string& what) { fail_line(name_, lines_.line_number(), what); }
+
+  void handle(std::string_view line) {
+    Tokens tokens(line);
+    std::string_view keyword;
+    if (!tokens.next(keyword)) return;
+    if (keyword == "v") return add_vertex(tokens);
+    if (keyword == "f") return add_face(tokens);
+    if (keyword == "g" || keyword == "o") return begin_group(tokens.rest());
+    // Everything else (vt, vn, usemtl, mtllib, s, l, comments...) carries no geometry we use.
+  }
+
+  void add_vertex(Tokens& tokens) {
+    Vec3 p;
+    std::string_view token;
+    for (int c = 0; c < 3; ++c) {
+      if (!tokens.next(token)) error("vertex needs 3 coordinates");
+      if (!parse_double(token, p[c])) error("malformed number " + quoted(token));
+    }
+    // Extra values (w, or r g b vertex colours) are ignored.
+    if (!is_finite(p))
+      error("vertex " + std::to_string(mesh_.points.size() + 1) + " has a non-finite coordinate");
+    check_point_count(name_, mesh_.points.size() + 1);
+    mesh_.points.push_back(p);
+  }
+
+  // "12", "12/3", "12//7", "12/3/7" or negative (relative to the vertices read so far).
+  uint32_t face_index(std::string_view token) {
+    std::string_view number = token.substr(0, token.find('/'));
+    int64_t value = 0;
+    if (!parse_int(number, value)) error("malformed face index " + quoted(token));
+    const int64_t count = int64_t(mesh_.points.size());
+    int64_t index = value > 0 ? value - 1 : count + value;
+    if (value == 0 || index < 0 || index >= count)
+      error("face index " + std::to_string(value) + " is out of range (" + std::to_string(count) +
+            " vertices defined so far)");
+    return uint32_t(index);
+  }
+
+  void add_face(Tokens& tokens) {
+    polygon_.clear();
+    std::string_view token;
+    while (tokens.next(token)) polygon_.push_back(face_index(token));
+    if (polygon_.size() < 3)
+      error("face has " + std::to_string(polygon_.size()) + " vertices (needs at least 3)");
+    if (part_ < 0) part_ = part_for(group_);
+    triangulator_.run(mesh_.points, polygon_.data(), polygon_.size(), mesh_.triangles);
+    mesh_.triangle_part.resize(mesh_.triangles.size(), part_);
+  }
+
+  void begin_group(std::string_view group) {
+    group_ = group.empty() ? "default" : std::string(group);
+    part_ = -1;  // the part is created by the group's first face
+  }
+
+  // Same name, same part: a group may be reopened later in the file.
+  int32_t part_for(const std::string& group) {
+    auto [it, inserted] = part_index_.emplace(group, int32_t(mesh_.part_names.size()));
+    if (inserted) mesh_.part_names.push_back(group);
+    return it->second;
+  }
+
+  LineReader lines_;
+  const std::string& name_;
+  Mesh mesh_;
+  std::string group_ = "default";
+  int32_t part_ = -1;
+  std::unordered_map<std::string, int32_t> part_index_;
+  std::vector<uint32_t> polygon_;
+  PolygonTriangulator triangulator_;
+};
+
+}  // namespace
+
+Mesh read_obj(std::string_view bytes, const std::string& name) {
+  return ObjReader(bytes, name).read();
+}
+
+// Vertices, then faces; a "g" line wherever the part changes, so triangle order is kept.
+void write_obj(const Mesh& mesh, Sink& out) {
+  out.put("# written by vdbwrap\n");
+  for (const Vec3& p : mesh.points) {
+    out.put('v');
+    for (double c : p) {
+      out.put(' ');
+      out.put_real(c);
+    }
+    out.put('\n');
+  }
+  int32_t current = -1;
+  for (size_t t = 0; t < mesh.triangles.size(); ++t) {
+    if (!mesh.part_names.empty() && mesh.part_of(t) != current) {
+      current = mesh.part_of(t);
+      std::string group = one_line(mesh.part_names[size_t(current)]);
+      out.put("g " + (group.empty() ? std::string("default") : group) + "\n");
+    }
+    out.put('f');
+    for (uint32_t v : mesh.triangles[t]) {
+      out.put(' ');
+      out.put_uint(uint64_t(v) + 1);
+    }
+    out.put('\n');
+  }
+}
+
+}  // namespace vdbwrap::io::detail

@@ -1,0 +1,225 @@
+#include "prep/prepare.h"
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+#include <unordered_map>
+
+#include "check/intersections.h"
+#include "common/vec.h"
+#include "vdbwrap/errors.h"
+
+namespace vdbwrap::prep {
+namespace {
+
+struct CellKey {
+  int64_t x, y, z;
+  bool operator==(const CellKey& o) const { return x == o.x && y == o.y && z == o.z; }
+};
+struct CellKeyHash {
+  size_t operator()(const CellKey& k) const {
+    return size_t(k.x * 73856093LL) ^ size_t(k.y * 19349663LL) ^ size_t(k.z * 83492791LL);
+  }
+};
+
+uint64_t edge_key(uint32_t a, uint32_t b) {
+  if (a > b) std::swap(a, b);
+  return (uint64_t(a) << 32) | b;
+}
+
+}  // namespace
+
+std::vector<uint32_t> weld_points(const std::vector<Vec3>& points, double tolerance, std::vector<Vec3>& welded) {
+  // Hash grid with cells of the tolerance: a match can only be in the 27 cells around.
+  const double inv = tolerance > 0 ? 1.0 / tolerance : 0;
+  std::unordered_map<CellKey, std::vector<uint32_t>, CellKeyHash> buckets;
+  buckets.reserve(points.size());
+  std::vector<uint32_t> remap(points.size());
+  welded.clear();
+  const double tol2 = tolerance * tolerance;
+  for (size_t i = 0; i < points.size(); ++i) {
+    const Vec3& p = points[i];
+    CellKey key{int64_t(std::floor(p[0] * inv)), int64_t(std::floor(p[1] * inv)), int64_t(std::floor(p[2] * inv))};
+    uint32_t found = UINT32_MAX;
+    for (int dx = -1; dx <= 1 && found == UINT32_MAX; ++dx)
+      for (int dy = -1; dy <= 1 && found == UINT32_MAX; ++dy)
+        for (int dz = -1; dz <= 1 && found == UINT32_MAX; ++dz) {
+          auto it = buckets.find({key.x + dx, key.y + dy, key.z + dz});
+          if (it == buckets.end()) continue;
+          for (uint32_t w : it->second)
+            if (norm2(welded[w] - p) <= tol2) {
+              found = w;
+              break;
+            }
+        }
+    if (found == UINT32_MAX) {
+      found = uint32_t(welded.size());
+      welded.push_back(p);
+      buckets[key].push_back(found);
+    }
+    remap[i] = found;
+  }
+  return remap;
+}
+
+size_t orient_pieces(const std::vector<Vec3>& points, std::vector<Tri>& triangles) {
+  // Triangles meeting at an edge used by exactly two of them must traverse it in opposite
+  // directions; a breadth-first walk flips neighbours that disagree.
+  std::unordered_map<uint64_t, std::vector<uint32_t>> edge_tris;
+  edge_tris.reserve(triangles.size() * 2);
+  for (uint32_t t = 0; t < triangles.size(); ++t)
+    for (int e = 0; e < 3; ++e) edge_tris[edge_key(triangles[t][e], triangles[t][(e + 1) % 3])].push_back(t);
+
+  auto has_directed = [](const Tri& t, uint32_t a, uint32_t b) {
+    for (int e = 0; e < 3; ++e)
+      if (t[e] == a && t[(e + 1) % 3] == b) return true;
+    return false;
+  };
+
+  std::vector<int32_t> piece(triangles.size(), -1);
+  std::vector<uint8_t> flip(triangles.size(), 0);
+  std::vector<uint32_t> queue;
+  int32_t pieces = 0;
+  for (uint32_t seed = 0; seed < triangles.size(); ++seed) {
+    if (piece[seed] >= 0) continue;
+    piece[seed] = pieces;
+    queue.assign(1, seed);
+    for (size_t q = 0; q < queue.size(); ++q) {
+      uint32_t t = queue[q];
+      Tri cur = triangles[t];
+      if (flip[t]) std::swap(cur[1], cur[2]);
+      for (int e = 0; e < 3; ++e) {
+        uint32_t a = cur[e], b = cur[(e + 1) % 3];
+        const auto& nb = edge_tris[edge_key(a, b)];
+        if (nb.size() != 2) continue;
+        uint32_t n = nb[0] == t ? nb[1] : nb[0];
+        if (piece[n] >= 0) continue;
+        piece[n] = pieces;
+        // neighbour must contain b->a; if it contains a->b it disagrees and is flipped
+        flip[n] = has_directed(triangles[n], a, b) ? 1 : 0;
+        queue.push_back(n);
+      }
+    }
+    ++pieces;
+  }
+  // Outward: a piece whose signed volume is negative is turned over as a whole.
+  std::vector<double> volume(pieces, 0.0);
+  for (uint32_t t = 0; t < triangles.size(); ++t) {
+    Tri cur = triangles[t];
+    if (flip[t]) std::swap(cur[1], cur[2]);
+    volume[piece[t]] += dot(points[cur[0]], cross(points[cur[1]], points[cur[2]]));
+  }
+  size_t flipped = 0;
+  for (uint32_t t = 0; t < triangles.size(); ++t) {
+    bool f = flip[t] != (volume[piece[t]] < 0 ? 1 : 0);
+    if (f) {
+      std::swap(triangles[t][1], triangles[t][2]);
+      ++flipped;
+    }
+  }
+  return flipped;
+}
+
+std::vector<FeatureEdge> find_feature_edges(const std::vector<Vec3>& points, const std::vector<Tri>& triangles,
+                                            const std::vector<Vec3>& normals, double feature_angle_deg) {
+  (void)points;
+  std::unordered_map<uint64_t, std::vector<uint32_t>> edge_tris;
+  edge_tris.reserve(triangles.size() * 2);
+  for (uint32_t t = 0; t < triangles.size(); ++t)
+    for (int e = 0; e < 3; ++e) edge_tris[edge_key(triangles[t][e], triangles[t][(e + 1) % 3])].push_back(t);
+  const double cos_limit = std::cos(feature_angle_deg * M_PI / 180.0);
+  std::vector<FeatureEdge> out;
+  for (const auto& [key, tris] : edge_tris) {
+    uint32_t a = uint32_t(key >> 32), b = uint32_t(key & 0xffffffffu);
+    if (tris.size() == 1) {
+      out.push_back({a, b, FeatureKind::Boundary});
+    } else if (tris.size() > 2) {
+      out.push_back({a, b, FeatureKind::NonManifold});
+    } else if (dot(normals[tris[0]], normals[tris[1]]) < cos_limit) {
+      out.push_back({a, b, FeatureKind::Sharp});
+    }
+  }
+  // Deterministic order regardless of hash iteration.
+  std::sort(out.begin(), out.end(), [](const FeatureEdge& x, const FeatureEdge& y) {
+    return x.a != y.a ? x.a < y.a : x.b < y.b;
+  });
+  return out;
+}
+
+PreparedInput prepare(const Mesh& input, const WrapParams& params, ProgressSink* progress) {
+  PreparedInput out;
+  if (input.triangles.empty()) throw Error(ErrorKind::InvalidInput, "input contains no triangles");
+  Box3 box;
+  for (const Vec3& p : input.points) {
+    if (!std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2]))
+      throw Error(ErrorKind::InvalidInput, "input has a vertex with a non-finite coordinate");
+    box.add(p);
+  }
+  out.origin = box.center();
+  out.diagonal = box.diagonal();
+  if (!(out.diagonal > 0)) throw Error(ErrorKind::InvalidInput, "input has zero extent (all vertices coincide)");
+
+  if (progress) progress->progress("prepare", 0.0, "welding vertices");
+  std::vector<Vec3> local(input.points.size());
+  for (size_t i = 0; i < local.size(); ++i) local[i] = input.points[i] - out.origin;
+  std::vector<Vec3> welded;
+  std::vector<uint32_t> remap = weld_points(local, params.weld_tolerance * out.diagonal, welded);
+  out.welded_vertices = local.size() - welded.size();
+
+  // Drop triangles with repeated or collinear vertices (normal undefined) and exact duplicates.
+  Mesh& m = out.mesh;
+  m.points = std::move(welded);
+  m.part_names = input.part_names;
+  if (m.part_names.empty()) m.part_names.push_back("part0");
+  std::unordered_map<uint64_t, std::vector<uint32_t>> seen;  // keyed by sorted triple hash
+  for (size_t t = 0; t < input.triangles.size(); ++t) {
+    Tri tri{remap[input.triangles[t][0]], remap[input.triangles[t][1]], remap[input.triangles[t][2]]};
+    const Vec3 &a = m.points[tri[0]], &b = m.points[tri[1]], &c = m.points[tri[2]];
+    double longest2 = std::max({norm2(b - a), norm2(c - b), norm2(a - c)});
+    if (tri[0] == tri[1] || tri[1] == tri[2] || tri[0] == tri[2] || norm2(area_vector(a, b, c)) <= 1e-24 * longest2 * longest2) {
+      ++out.dropped_degenerate;
+      continue;
+    }
+    Tri sorted = tri;
+    std::sort(sorted.begin(), sorted.end());
+    uint64_t h = (uint64_t(sorted[0]) * 0x9E3779B97F4A7C15ULL) ^ (uint64_t(sorted[1]) * 0xC2B2AE3D27D4EB4FULL) ^ sorted[2];
+    auto& bucket = seen[h];
+    bool duplicate = false;
+    for (uint32_t other : bucket) {
+      Tri o = m.triangles[other];
+      std::sort(o.begin(), o.end());
+      if (o == sorted) duplicate = true;
+    }
+    if (duplicate) {
+      ++out.dropped_duplicate;
+      continue;
+    }
+    bucket.push_back(uint32_t(m.triangles.size()));
+    m.triangles.push_back(tri);
+    m.triangle_part.push_back(input.part_of(t));
+  }
+  if (m.triangles.empty())
+    throw Error(ErrorKind::InvalidInput, "input has no usable triangles: all " + std::to_string(input.triangles.size()) +
+                                             " are degenerate");
+  if (progress && progress->cancelled()) throw Error(ErrorKind::Cancelled, "cancelled");
+
+  if (progress) progress->progress("prepare", 0.3, "orienting connected pieces");
+  out.flipped_triangles = orient_pieces(m.points, m.triangles);
+
+  out.normals.resize(m.triangles.size());
+  for (size_t t = 0; t < m.triangles.size(); ++t) {
+    const Tri& tri = m.triangles[t];
+    out.normals[t] = normalized(area_vector(m.points[tri[0]], m.points[tri[1]], m.points[tri[2]]));
+  }
+  if (progress) progress->progress("prepare", 0.5, "finding feature edges");
+  out.feature_edges = find_feature_edges(m.points, m.triangles, out.normals, params.feature_angle_deg);
+
+  if (progress) progress->progress("prepare", 0.7, "finding self-intersection lines");
+  auto pairs = check::find_intersecting_pairs(m.points, m.triangles);
+  for (const auto& seg : check::intersection_segments(m.points, m.triangles, pairs))
+    out.intersections.push_back({seg.a, seg.b, seg.tri_a, seg.tri_b});
+  if (progress) progress->progress("prepare", 1.0, "done");
+  return out;
+}
+
+}  // namespace vdbwrap::prep

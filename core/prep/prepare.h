@@ -1,0 +1,50 @@
+// Stage 1: pre-processing of the input (spec: weld, orient, drop degenerate triangles,
+// find feature curves). Works in a local frame centred on the bounding box for precision.
+#pragma once
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include "vdbwrap/mesh.h"
+#include "vdbwrap/wrap.h"
+
+namespace vdbwrap::prep {
+
+enum class FeatureKind : uint8_t { Sharp = 1, Boundary = 2, NonManifold = 3 };
+
+struct FeatureEdge {
+  uint32_t a, b;  // vertex indices into PreparedInput::mesh.points
+  FeatureKind kind;
+};
+
+// A segment where two input triangles pierce each other (an assembly's junction line).
+struct IntersectionSegment {
+  Vec3 a, b;
+  uint32_t tri_a, tri_b;
+};
+
+struct PreparedInput {
+  Mesh mesh;                     // welded, degenerate-free, oriented, in the local frame
+  Vec3 origin{0, 0, 0};          // world = local + origin
+  double diagonal = 0;
+  std::vector<Vec3> normals;     // unit normal per triangle
+  std::vector<FeatureEdge> feature_edges;
+  std::vector<IntersectionSegment> intersections;
+  size_t dropped_degenerate = 0, dropped_duplicate = 0, welded_vertices = 0, flipped_triangles = 0;
+};
+
+// Merges vertices closer than `tolerance` (model units). Returns the new index of each old point.
+std::vector<uint32_t> weld_points(const std::vector<Vec3>& points, double tolerance, std::vector<Vec3>& welded);
+
+// Makes the orientation consistent across every manifold edge of each connected piece and
+// turns closed-looking pieces outward (positive signed volume). Returns triangles flipped.
+size_t orient_pieces(const std::vector<Vec3>& points, std::vector<Tri>& triangles);
+
+// Sharp (dihedral angle over feature_angle_deg), boundary and non-manifold edges.
+std::vector<FeatureEdge> find_feature_edges(const std::vector<Vec3>& points, const std::vector<Tri>& triangles,
+                                            const std::vector<Vec3>& normals, double feature_angle_deg);
+
+// The whole stage. Throws Error(InvalidInput) when nothing usable is left.
+PreparedInput prepare(const Mesh& input, const WrapParams& params, ProgressSink* progress);
+
+}  // namespace vdbwrap::prep

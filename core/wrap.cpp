@@ -1,0 +1,155 @@
+// The pipeline: stage 1 (prepare), stage 2 (refine, flood fill, extract), stage 3 and the
+// triangulation (fit), final validation and the report.
+#include <tbb/global_control.h>
+#include <tbb/parallel_for.h>
+
+#include <chrono>
+#include <cmath>
+#include <memory>
+
+#include "check/intersections.h"
+#include "common/stage_timer.h"
+#include "common/vec.h"
+#include "io/mesh_io.h"
+#include <cstdlib>
+#include "extract/extract_surface.h"
+#include "fit/fit_surface.h"
+#include "fit/surface_index.h"
+#include "grid/flood_fill.h"
+#include "grid/refine.h"
+#include "prep/prepare.h"
+#include "vdbwrap/wrap.h"
+
+namespace vdbwrap {
+namespace {
+
+void check_params(const WrapParams& p) {
+  auto bad = [](const std::string& m) { throw Error(ErrorKind::InvalidArgument, m); };
+  if (!(p.base_size.value > 0) || !std::isfinite(p.base_size.value)) bad("base size must be positive");
+  if (p.levels < 0 || p.levels > 6) bad("levels must be between 0 and 6");
+  if (!(p.feature_angle_deg > 0 && p.feature_angle_deg < 180)) bad("feature angle must be between 0 and 180 degrees");
+  if (p.threads < 0) bad("threads must be 0 (all cores) or more");
+  if (p.refine_max_triangles < 1) bad("refine_max_triangles must be at least 1");
+  if (!(p.surface_offset >= 0 && p.surface_offset < 0.5)) bad("surface offset must be in [0, 0.5) of the finest cell");
+  if (!(p.weld_tolerance >= 0 && p.weld_tolerance < 0.01)) bad("weld tolerance must be in [0, 0.01) of the diagonal");
+}
+
+void check_cancel(ProgressSink* progress) {
+  if (progress && progress->cancelled()) throw Error(ErrorKind::Cancelled, "cancelled");
+}
+
+}  // namespace
+
+WrapResult wrap(const Mesh& input, const WrapParams& params, ProgressSink* progress) {
+  check_params(params);
+  std::unique_ptr<tbb::global_control> threads;
+  if (params.threads > 0)
+    threads = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, size_t(params.threads));
+  const auto t0 = std::chrono::steady_clock::now();
+  WrapResult result;
+  WrapReport& report = result.report;
+  report.params = params;
+
+  {
+    StageTimer timer("diagnose input", report.stages);
+    if (progress) progress->progress("diagnose input", 0.0, "checking the input for defects");
+    report.input = diagnose(input, true);
+  }
+  check_cancel(progress);
+
+  prep::PreparedInput prepared;
+  {
+    StageTimer timer("prepare", report.stages);
+    prepared = prep::prepare(input, params, progress);
+  }
+  for (const auto& f : prepared.feature_edges)
+    (f.kind == prep::FeatureKind::Sharp ? report.features.sharp_edges : report.features.boundary_edges)++;
+  report.features.intersection_segments = prepared.intersections.size();
+  report.diagonal = prepared.diagonal;
+  const double base = params.base_size.resolve(prepared.diagonal);
+  report.base_size = base;
+  report.finest_size = base / double(1 << params.levels);
+  if (prepared.diagonal / base > 20000)
+    throw Error(ErrorKind::InvalidArgument, "base size " + params.base_size.to_string() +
+                                                " is too small for this model (over 20000 cells across its diagonal)");
+  check_cancel(progress);
+
+  grid::RefineResult refined;
+  {
+    StageTimer timer("refine", report.stages);
+    refined = grid::build_refined_grid(prepared, params, base, progress);
+  }
+  report.cells_per_level = refined.touched_per_level;
+  grid::AdaptiveGrid& g = *refined.grid;
+  check_cancel(progress);
+
+  int32_t label;
+  {
+    StageTimer timer("flood fill", report.stages);
+    grid::Components comps;
+    label = grid::choose_volume(g, params.volume, comps, progress);
+  }
+  check_cancel(progress);
+
+  extract::LatticeSurface lattice;
+  {
+    StageTimer timer("extract", report.stages);
+    extract::ExtractStats stats;
+    lattice = extract::extract_manifold_surface(g, label, params.volume, stats, progress);
+    report.manifold_fixes = stats.excluded_cells;
+  }
+  check_cancel(progress);
+
+  fit::FittedSurface fitted;
+  {
+    StageTimer timer("project", report.stages);
+    fit::SurfaceIndex index(prepared.mesh.points, prepared.mesh.triangles);
+    fitted = fit::fit_to_input(lattice, g, index, prepared.origin, params, progress);
+    report.nodes_held_back = fitted.held_back;
+
+    // Every output triangle carries the part of the input triangle nearest its centroid.
+    Mesh& out = result.surface;
+    out.points = fitted.points;
+    out.triangles = fitted.triangles;
+    out.part_names = prepared.mesh.part_names;
+    out.triangle_part.resize(out.triangles.size());
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, out.triangles.size(), 1024), [&](const tbb::blocked_range<size_t>& r) {
+      for (size_t t = r.begin(); t != r.end(); ++t) {
+        const Tri& tri = fitted.triangles[t];
+        Vec3 c = (fitted.points[tri[0]] + fitted.points[tri[1]] + fitted.points[tri[2]]) * (1.0 / 3.0) - prepared.origin;
+        out.triangle_part[t] = prepared.mesh.part_of(index.closest(c).triangle);
+      }
+    });
+  }
+  check_cancel(progress);
+
+  {
+    StageTimer timer("validate", report.stages);
+    if (progress) progress->progress("validate", 0.0, "checking the wrap");
+    report.output = diagnose(result.surface, false);
+    // The authoritative self-intersection verdict is CGAL's own on the closed mesh.
+    check::CgalVerdict verdict = check::cgal_verdict(result.surface.points, result.surface.triangles);
+    report.output.self_intersecting = verdict.self_intersects;
+    if (!report.output.valid_closed_surface() || !verdict.valid_polygon_mesh || !verdict.outward) {
+      // For diagnosis only: VDBWRAP_DUMP_INVALID=FILE keeps the rejected surface.
+      if (const char* dump = std::getenv("VDBWRAP_DUMP_INVALID")) io::write_mesh(result.surface, dump);
+      throw Error(ErrorKind::WrapFailed,
+                  "the wrap failed validation: closed=" + std::to_string(report.output.closed) +
+                      " manifold=" + std::to_string(report.output.manifold) +
+                      " outward=" + std::to_string(verdict.outward) +
+                      " self-intersecting=" + std::to_string(verdict.self_intersects));
+    }
+    if (progress) progress->progress("validate", 1.0, "closed, manifold, outward, no self-intersections");
+  }
+
+  if (params.compute_distances) {
+    StageTimer timer("distances", report.stages);
+    if (progress) progress->progress("distances", 0.0, "sampling distances between the wrap and the input");
+    report.output_to_input = sampled_distance(result.surface, input);
+    report.input_to_output = sampled_distance(input, result.surface);
+  }
+  report.total_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return result;
+}
+
+}  // namespace vdbwrap

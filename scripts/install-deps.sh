@@ -1,0 +1,27 @@
+#!/usr/bin/env bash
+# Installs every build and test dependency of vdbwrap from Debian's packages.
+# Used by the README, .ci/run and docker/Dockerfile: keep it the only install path.
+set -euo pipefail
+SUDO=""
+if [ "$(id -u)" != "0" ]; then SUDO="sudo"; fi
+export DEBIAN_FRONTEND=noninteractive
+PKGS=(
+  build-essential cmake ninja-build ccache pkg-config git
+  libopenvdb-dev libboost-iostreams-dev libtbb-dev libblosc-dev zlib1g-dev
+  libeigen3-dev libcgal-dev libgmp-dev libmpfr-dev
+  libgrpc++-dev libprotobuf-dev protobuf-compiler protobuf-compiler-grpc
+  libgtest-dev libgmock-dev
+  libcli11-dev nlohmann-json3-dev
+  python3 python3-grpcio python3-protobuf
+)
+missing=()
+for p in "${PKGS[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if [ ${#missing[@]} -gt 0 ]; then
+  echo "install-deps: installing ${missing[*]}" >&2
+  $SUDO apt-get update -qq
+  $SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}"
+else
+  echo "install-deps: all packages present" >&2
+fi
