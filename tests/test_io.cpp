@@ -102,7 +102,9 @@ Vec3 tri_normal(const Mesh& m, size_t t) {  // twice the vector area
 }
 
 Vec3 as_float(const Vec3& p) {
-  return {double(float(p[0])), double(float(p[1])), double(float(p[2]))};
+  // volatile: keeps the compiler from folding the double->float->double round trip away.
+  volatile float x = float(p[0]), y = float(p[1]), z = float(p[2]);
+  return {double(x), double(y), double(z)};
 }
 
 // Two parts with awkward coordinates: a tetrahedron ("alpha") and a square ("beta").

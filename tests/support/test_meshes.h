@@ -1,0 +1,79 @@
+// Meshes built in code for the tests, and helpers that check surfaces with CGAL.
+#pragma once
+#include <cmath>
+#include <string>
+
+#include "check/intersections.h"
+#include "vdbwrap/mesh.h"
+#include "vdbwrap/wrap.h"
+
+#ifndef VDBWRAP_TEST_DATA_DIR
+#define VDBWRAP_TEST_DATA_DIR "tests/data"
+#endif
+
+namespace vdbwrap::testing {
+
+inline std::string data_path(const std::string& name) { return std::string(VDBWRAP_TEST_DATA_DIR) + "/" + name; }
+
+// Axis-aligned box, 12 outward triangles, as part `part`.
+inline void add_box(Mesh& m, const Vec3& lo, const Vec3& hi, int32_t part = 0) {
+  uint32_t base = uint32_t(m.points.size());
+  for (int i = 0; i < 8; ++i) m.points.push_back({(i & 1) ? hi[0] : lo[0], (i & 2) ? hi[1] : lo[1], (i & 4) ? hi[2] : lo[2]});
+  const uint32_t f[12][3] = {{0, 2, 1}, {1, 2, 3}, {4, 5, 6}, {5, 7, 6}, {0, 1, 4}, {1, 5, 4},
+                             {2, 6, 3}, {3, 6, 7}, {0, 4, 2}, {2, 4, 6}, {1, 3, 5}, {3, 7, 5}};
+  for (auto& t : f) {
+    m.triangles.push_back({base + t[0], base + t[1], base + t[2]});
+    m.triangle_part.push_back(part);
+  }
+  while (int32_t(m.part_names.size()) <= part) m.part_names.push_back("part" + std::to_string(m.part_names.size()));
+}
+
+inline Mesh box_mesh(const Vec3& lo, const Vec3& hi) {
+  Mesh m;
+  add_box(m, lo, hi);
+  return m;
+}
+
+// UV sphere.
+inline Mesh sphere_mesh(double r, int rings = 24, int segments = 48) {
+  Mesh m;
+  m.points.push_back({0, 0, r});
+  for (int i = 1; i < rings; ++i) {
+    double th = M_PI * i / rings;
+    for (int j = 0; j < segments; ++j) {
+      double ph = 2 * M_PI * j / segments;
+      m.points.push_back({r * std::sin(th) * std::cos(ph), r * std::sin(th) * std::sin(ph), r * std::cos(th)});
+    }
+  }
+  m.points.push_back({0, 0, -r});
+  auto ring = [&](int i, int j) { return uint32_t(1 + (i - 1) * segments + (j % segments)); };
+  for (int j = 0; j < segments; ++j) m.triangles.push_back({0, ring(1, j), ring(1, j + 1)});
+  for (int i = 1; i + 1 < rings; ++i)
+    for (int j = 0; j < segments; ++j) {
+      m.triangles.push_back({ring(i, j), ring(i + 1, j), ring(i + 1, j + 1)});
+      m.triangles.push_back({ring(i, j), ring(i + 1, j + 1), ring(i, j + 1)});
+    }
+  uint32_t south = uint32_t(m.points.size() - 1);
+  for (int j = 0; j < segments; ++j) m.triangles.push_back({south, ring(rings - 1, j + 1), ring(rings - 1, j)});
+  return m;
+}
+
+// The verdict the product promises, from CGAL's own predicates plus the combinatorial checks.
+struct SurfaceVerdict {
+  bool ok = false;
+  std::string why;
+};
+inline SurfaceVerdict valid_closed_surface(const Mesh& m) {
+  MeshDiagnostics d = diagnose(m, false);
+  check::CgalVerdict v = check::cgal_verdict(m.points, m.triangles);
+  SurfaceVerdict out;
+  out.ok = d.closed && d.manifold && d.oriented && d.degenerate_triangles == 0 && v.valid_polygon_mesh && v.closed &&
+           !v.self_intersects && v.outward;
+  out.why = "closed=" + std::to_string(d.closed) + " manifold=" + std::to_string(d.manifold) +
+            " oriented=" + std::to_string(d.oriented) + " degenerate=" + std::to_string(d.degenerate_triangles) +
+            " cgal_valid=" + std::to_string(v.valid_polygon_mesh) + " cgal_closed=" + std::to_string(v.closed) +
+            " cgal_self_intersects=" + std::to_string(v.self_intersects) + " cgal_outward=" + std::to_string(v.outward);
+  return out;
+}
+
+}  // namespace vdbwrap::testing

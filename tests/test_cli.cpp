@@ -1,0 +1,151 @@
+// The CLI as a user runs it: exit codes and one-line messages for bad input and arguments.
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sys/wait.h>
+
+#include "io/mesh_io.h"
+#include "test_meshes.h"
+
+#ifndef VDBWRAP_CLI
+#define VDBWRAP_CLI "vdbwrap"
+#endif
+
+using namespace vdbwrap;
+namespace fs = std::filesystem;
+
+namespace {
+
+struct CliRun {
+  int code;
+  std::string err;
+};
+
+class Cli : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir = fs::temp_directory_path() / ("vdbwrap_cli_" + std::to_string(::getpid()) + "_" +
+                                       ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::create_directories(dir);
+  }
+  void TearDown() override { fs::remove_all(dir); }
+
+  CliRun run(const std::string& args) {
+    std::string err = (dir / "stderr.txt").string();
+    std::string cmd = std::string(VDBWRAP_CLI) + " " + args + " > /dev/null 2> " + err;
+    int status = std::system(cmd.c_str());
+    std::ifstream in(err);
+    std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, text};
+  }
+  std::string file(const std::string& name, const std::string& bytes) {
+    std::string p = (dir / name).string();
+    std::ofstream(p, std::ios::binary) << bytes;
+    return p;
+  }
+  fs::path dir;
+};
+
+std::string binary_stl(uint32_t declared, size_t triangles, float fill = 0.0f) {
+  std::string s(80, ' ');
+  s.append(reinterpret_cast<const char*>(&declared), 4);
+  for (size_t t = 0; t < triangles; ++t) {
+    float v[12] = {0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1, fill};
+    s.append(reinterpret_cast<const char*>(v), 48);
+    s.append(2, '\0');
+  }
+  return s;
+}
+
+}  // namespace
+
+TEST_F(Cli, WrapsAFileAndWritesAReport) {
+  CliRun r = run("wrap " + vdbwrap::testing::data_path("fuze.obj") + " -o " + (dir / "out.ply").string() + " --base-size 2% --report " +
+              (dir / "report.json").string());
+  ASSERT_EQ(r.code, 0) << r.err;
+  Mesh out = io::read_mesh((dir / "out.ply").string());
+  auto v = vdbwrap::testing::valid_closed_surface(out);
+  EXPECT_TRUE(v.ok) << v.why;
+  std::ifstream rep(dir / "report.json");
+  std::string json((std::istreambuf_iterator<char>(rep)), std::istreambuf_iterator<char>());
+  EXPECT_NE(json.find("\"valid_closed_surface\": true"), std::string::npos);
+  EXPECT_NE(json.find("distance_output_to_input"), std::string::npos);
+  EXPECT_NE(json.find("peak_memory_mb"), std::string::npos);
+}
+
+TEST_F(Cli, CheckReportsWatertightnessAndDistance) {
+  CliRun ok = run("check " + vdbwrap::testing::data_path("unit_sphere.STL") + " --against " + vdbwrap::testing::data_path("unit_sphere.STL"));
+  EXPECT_EQ(ok.code, 0) << ok.err;
+}
+
+TEST_F(Cli, EmptyFileIsInvalidInput) {
+  CliRun r = run("wrap " + file("empty.stl", "") + " -o " + (dir / "o.stl").string());
+  EXPECT_EQ(r.code, 3);
+  EXPECT_NE(r.err.find("empty.stl"), std::string::npos) << r.err;
+}
+
+TEST_F(Cli, TruncatedBinaryStlIsInvalidInput) {
+  std::string bytes = binary_stl(10, 10);
+  bytes.resize(bytes.size() - 30);
+  CliRun r = run("wrap " + file("truncated.stl", bytes) + " -o " + (dir / "o.stl").string());
+  EXPECT_EQ(r.code, 3);
+  EXPECT_NE(r.err.find("truncated.stl"), std::string::npos) << r.err;
+}
+
+TEST_F(Cli, TriangleCountNotMatchingTheSizeIsInvalidInput) {
+  CliRun r = run("wrap " + file("count.stl", binary_stl(1000, 3)) + " -o " + (dir / "o.stl").string());
+  EXPECT_EQ(r.code, 3);
+  EXPECT_NE(r.err.find("1000"), std::string::npos) << r.err;
+}
+
+TEST_F(Cli, NanCoordinatesAreInvalidInput) {
+  CliRun r = run("wrap " + file("nan.stl", binary_stl(2, 2, std::nanf(""))) + " -o " + (dir / "o.stl").string());
+  EXPECT_EQ(r.code, 3);
+  std::string ascii = "solid x\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex inf 0 0\nvertex 0 1 0\nendloop\nendfacet\nendsolid x\n";
+  CliRun a = run("wrap " + file("inf.stl", ascii) + " -o " + (dir / "o.stl").string());
+  EXPECT_EQ(a.code, 3);
+  EXPECT_NE(a.err.find("line 5"), std::string::npos) << a.err;
+}
+
+TEST_F(Cli, ZeroTrianglesIsInvalidInput) {
+  CliRun r = run("wrap " + file("zero.stl", binary_stl(0, 0)) + " -o " + (dir / "o.stl").string());
+  EXPECT_EQ(r.code, 3);
+  EXPECT_NE(r.err.find("no triangles"), std::string::npos) << r.err;
+}
+
+TEST_F(Cli, ObjIndexOutOfRangeNamesTheLine) {
+  CliRun r = run("wrap " + file("bad.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 7\n") + " -o " + (dir / "o.stl").string());
+  EXPECT_EQ(r.code, 3);
+  EXPECT_NE(r.err.find("line 4"), std::string::npos) << r.err;
+}
+
+TEST_F(Cli, MissingFileIsInvalidInput) {
+  CliRun r = run("wrap " + (dir / "nope.stl").string() + " -o " + (dir / "o.stl").string());
+  EXPECT_EQ(r.code, 3);
+  EXPECT_NE(r.err.find("nope.stl"), std::string::npos);
+}
+
+TEST_F(Cli, BadArgumentsAreExitCodeTwo) {
+  std::string in = vdbwrap::testing::data_path("fuze.obj");
+  EXPECT_EQ(run("wrap " + in + " -o " + (dir / "o.xyz").string()).code, 2);
+  EXPECT_EQ(run("wrap " + in + " -o " + (dir / "o.stl").string() + " --base-size -3").code, 2);
+  EXPECT_EQ(run("wrap " + in + " -o " + (dir / "o.stl").string() + " --levels 12").code, 2);
+  EXPECT_EQ(run("wrap " + in + " -o " + (dir / "o.stl").string() + " --volume sideways").code, 2);
+  EXPECT_EQ(run("wrap").code, 2);
+  EXPECT_EQ(run("frobnicate").code, 2);
+}
+
+TEST_F(Cli, UnwritableOutputIsExitCodeFive) {
+  CliRun r = run("wrap " + vdbwrap::testing::data_path("fuze.obj") + " -o /nonexistent-dir/o.stl --base-size 5%");
+  EXPECT_EQ(r.code, 5);
+}
+
+TEST_F(Cli, InsideOfAnOpenSurfaceFailsClearly) {
+  // A single triangle encloses nothing: --volume inside cannot produce a surface.
+  CliRun r = run("wrap " + file("tri.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n") + " -o " + (dir / "o.stl").string() +
+              " --volume inside");
+  EXPECT_EQ(r.code, 4);
+  EXPECT_NE(r.err.find("encloses no volume"), std::string::npos) << r.err;
+}

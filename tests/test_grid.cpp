@@ -1,0 +1,192 @@
+// Stage 2: triangle/box overlap, refinement, flood fill, and the extracted surface's topology.
+#include <gtest/gtest.h>
+
+#include <random>
+
+#include "extract/extract_surface.h"
+#include "grid/flood_fill.h"
+#include "grid/refine.h"
+#include "prep/prepare.h"
+#include "test_meshes.h"
+
+using namespace vdbwrap;
+using namespace vdbwrap::testing;
+using openvdb::Coord;
+
+namespace {
+
+// The lattice surface as a triangle mesh (polygons fanned from their first node) for the
+// combinatorial checks: closed, manifold, consistently oriented.
+Mesh lattice_mesh(const extract::LatticeSurface& s) {
+  Mesh m;
+  for (const Coord& c : s.nodes) m.points.push_back({double(c.x()), double(c.y()), double(c.z())});
+  for (const auto& p : s.polygons)
+    for (size_t k = 1; k + 1 < p.size(); ++k) m.triangles.push_back({p[0], p[k], p[k + 1]});
+  return m;
+}
+
+void expect_closed_manifold(const extract::LatticeSurface& s, VolumeChoice choice) {
+  Mesh m = lattice_mesh(s);
+  MeshDiagnostics d = diagnose(m, false);
+  EXPECT_TRUE(d.closed) << "border " << d.border_edges << " nm-edges " << d.nonmanifold_edges;
+  EXPECT_TRUE(d.manifold) << "nm-vertices " << d.nonmanifold_vertices;
+  EXPECT_TRUE(d.oriented) << "misoriented " << d.misoriented_edges;
+  EXPECT_GT(d.volume, 0) << "the wrap must face away from what it encloses";
+  (void)choice;
+}
+
+grid::RefineResult refine(const Mesh& m, double base_percent, int levels, WrapParams params = {}) {
+  params.levels = levels;
+  auto prepared = prep::prepare(m, params, nullptr);
+  return grid::build_refined_grid(prepared, params, base_percent * 0.01 * prepared.diagonal, nullptr);
+}
+
+}  // namespace
+
+TEST(TriangleBox, SeparatingAxesDecideOverlap) {
+  const Vec3 c{0, 0, 0}, h{0.5, 0.5, 0.5};
+  EXPECT_TRUE(grid::triangle_overlaps_box({-1, -1, 0}, {1, -1, 0}, {0, 1, 0}, c, h));
+  EXPECT_FALSE(grid::triangle_overlaps_box({2, 2, 2}, {3, 2, 2}, {2, 3, 2}, c, h));
+  // Diagonal triangle that passes near the corner but misses the box (only its bounding box overlaps).
+  EXPECT_FALSE(grid::triangle_overlaps_box({0.9, 0.0, 0.0}, {0.0, 0.9, 0.0}, {0.0, 0.0, 0.9}, {-0.5, -0.5, -0.5}, {0.45, 0.45, 0.45}));
+  EXPECT_TRUE(grid::triangle_overlaps_box({0.6, 0.0, 0.0}, {0.0, 0.6, 0.0}, {0.0, 0.0, 0.6}, {0, 0, 0}, h));
+  EXPECT_TRUE(grid::segment_overlaps_box({-1, 0, 0}, {1, 0, 0}, {-0.5, -0.5, -0.5}, {0.5, 0.5, 0.5}));
+  EXPECT_FALSE(grid::segment_overlaps_box({-1, 1, 0}, {1, 1, 0}, {-0.5, -0.5, -0.5}, {0.5, 0.5, 0.5}));
+}
+
+TEST(Refine, FeaturesRefineAndFlatFacesDoNot) {
+  // Normal spread is switched off (179 degrees) so features alone decide.
+  Mesh box = box_mesh({0, 0, 0}, {1, 1, 1});
+  WrapParams features;
+  features.refine_normal_spread_deg = 179;
+  auto with = refine(box, 5, 2, features);
+  WrapParams no_features = features;
+  no_features.refine_at_features = false;
+  auto without = refine(box, 5, 2, no_features);
+  ASSERT_EQ(with.touched_per_level.size(), 3u);
+  EXPECT_GT(with.touched_per_level[2], 0u);
+  // Without features the box's flat faces (two triangles each, one normal) never refine.
+  ASSERT_GE(without.touched_per_level.size(), 1u);
+  EXPECT_TRUE(without.touched_per_level.size() == 1 || without.touched_per_level[1] == 0);
+  // Refined cells only near the edges: far fewer than refining every touched cell.
+  EXPECT_LT(with.touched_per_level[2], 8 * 8 * with.touched_per_level[0] / 2);
+}
+
+TEST(Refine, CurvedSurfaceRefinesByNormalSpread) {
+  Mesh sphere = sphere_mesh(1.0, 32, 64);
+  WrapParams strict;
+  strict.refine_normal_spread_deg = 2;
+  auto fine = refine(sphere, 10, 1, strict);
+  WrapParams loose;
+  loose.refine_normal_spread_deg = 90;
+  auto coarse = refine(sphere, 10, 1, loose);
+  ASSERT_EQ(fine.touched_per_level.size(), 2u);
+  EXPECT_GT(fine.touched_per_level[1], 0u);
+  EXPECT_TRUE(coarse.touched_per_level.size() == 1 || coarse.touched_per_level[1] < fine.touched_per_level[1]);
+}
+
+TEST(FloodFill, SealedBoxHasAnInsideAndLeakingBoxDoesNot) {
+  Mesh sealed = box_mesh({0, 0, 0}, {1, 1, 1});
+  auto r = refine(sealed, 5, 0);
+  grid::Components comps;
+  int32_t inside = grid::choose_volume(*r.grid, VolumeChoice::Inside, comps, nullptr);
+  EXPECT_NE(inside, 1);
+  EXPECT_EQ(comps.count(), 2u);
+  EXPECT_TRUE(comps.touches_outside[0]);
+  EXPECT_FALSE(comps.touches_outside[1]);
+
+  // Remove the two triangles of the top face: a hole far wider than a cell.
+  Mesh leaking = sealed;
+  leaking.triangles.erase(leaking.triangles.begin() + 2, leaking.triangles.begin() + 4);
+  leaking.triangle_part.resize(leaking.triangles.size());
+  auto l = refine(leaking, 5, 0);
+  grid::Components lc;
+  EXPECT_EQ(grid::choose_volume(*l.grid, VolumeChoice::Outside, lc, nullptr), 1);
+  EXPECT_EQ(lc.count(), 1u);
+  try {
+    grid::choose_volume(*l.grid, VolumeChoice::Inside, lc, nullptr);
+    FAIL() << "a leaking box encloses nothing";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.kind(), ErrorKind::WrapFailed);
+  }
+}
+
+TEST(FloodFill, NestedShellsGiveThreeVolumesAndInsideIsTheLargest) {
+  Mesh m = box_mesh({0, 0, 0}, {4, 4, 4});
+  add_box(m, {1, 1, 1}, {3, 3, 3});
+  auto r = refine(m, 4, 0);
+  grid::Components comps;
+  int32_t inside = grid::choose_volume(*r.grid, VolumeChoice::Inside, comps, nullptr);
+  ASSERT_EQ(comps.count(), 3u);
+  // The inner cube (8 units^3) is smaller than the shell between the boxes (56 units^3).
+  double chosen = comps.volume[inside - comps.first_label];
+  for (size_t i = 0; i < comps.count(); ++i)
+    if (!comps.touches_outside[i]) EXPECT_GE(chosen, comps.volume[i]);
+}
+
+TEST(Extract, HandMadeEdgeAndCornerContactsBecomeManifold) {
+  // Two touched cells meeting only along an edge, two meeting only at a corner, and a
+  // refined cell next to coarse ones: the wrap around them must be a closed 2-manifold.
+  for (VolumeChoice choice : {VolumeChoice::Outside}) {
+    grid::AdaptiveGrid g({0, 0, 0}, 1.0, 1, Coord(10, 10, 10));
+    g.set(0, Coord(3, 3, 3), grid::kTouched);
+    g.set(0, Coord(4, 4, 3), grid::kTouched);  // edge contact
+    g.set(0, Coord(5, 5, 4), grid::kTouched);  // corner contact
+    g.set(0, Coord(6, 3, 3), grid::kRefined);  // level transition
+    for (int k = 0; k < 8; ++k)
+      g.set(1, Coord(12 + (k & 1), 6 + ((k >> 1) & 1), 6 + ((k >> 2) & 1)), k == 0 || k == 7 ? grid::kTouched : grid::kFree);
+    grid::Components comps;
+    int32_t label = grid::choose_volume(g, choice, comps, nullptr);
+    extract::ExtractStats stats;
+    auto surf = extract::extract_manifold_surface(g, label, choice, stats, nullptr);
+    EXPECT_GT(stats.excluded_cells, 0u);
+    expect_closed_manifold(surf, choice);
+  }
+}
+
+TEST(Extract, RandomCellConfigurationsAlwaysGiveClosedManifoldSurfaces) {
+  std::mt19937 rng(7);
+  for (int trial = 0; trial < 40; ++trial) {
+    grid::AdaptiveGrid g({0, 0, 0}, 1.0, 2, Coord(9, 9, 9));
+    std::uniform_real_distribution<double> u(0, 1);
+    for (int z = 2; z < 7; ++z)
+      for (int y = 2; y < 7; ++y)
+        for (int x = 2; x < 7; ++x) {
+          double r = u(rng);
+          if (r < 0.25) {
+            g.set(0, Coord(x, y, z), grid::kTouched);
+          } else if (r < 0.4) {
+            g.set(0, Coord(x, y, z), grid::kRefined);
+            for (int k = 0; k < 8; ++k) {
+              Coord c(2 * x + (k & 1), 2 * y + ((k >> 1) & 1), 2 * z + ((k >> 2) & 1));
+              double s = u(rng);
+              if (s < 0.15) {
+                g.set(1, c, grid::kRefined);
+                for (int j = 0; j < 8; ++j)
+                  g.set(2, Coord(2 * c.x() + (j & 1), 2 * c.y() + ((j >> 1) & 1), 2 * c.z() + ((j >> 2) & 1)),
+                        u(rng) < 0.4 ? grid::kTouched : grid::kFree);
+              } else {
+                g.set(1, c, s < 0.5 ? grid::kTouched : grid::kFree);
+              }
+            }
+          }
+        }
+    for (VolumeChoice choice : {VolumeChoice::Outside, VolumeChoice::Inside}) {
+      // Each level grid is shared by the copy; deep-copy them so choices do not interfere.
+      grid::AdaptiveGrid h({0, 0, 0}, 1.0, 2, Coord(9, 9, 9));
+      for (int l = 0; l <= 2; ++l)
+        for (auto it = g.level_grid(l)->cbeginValueOn(); it; ++it) h.set(l, it.getCoord(), *it);
+      grid::Components comps;
+      int32_t label;
+      try {
+        label = grid::choose_volume(h, choice, comps, nullptr);
+      } catch (const Error&) {
+        continue;  // nothing enclosed in this random configuration
+      }
+      extract::ExtractStats stats;
+      auto surf = extract::extract_manifold_surface(h, label, choice, stats, nullptr);
+      SCOPED_TRACE("trial " + std::to_string(trial) + (choice == VolumeChoice::Inside ? " inside" : " outside"));
+      expect_closed_manifold(surf, choice);
+    }
+  }
+}

@@ -1,0 +1,93 @@
+// Stage 1: weld, degenerate removal, orientation, feature edges.
+#include <gtest/gtest.h>
+
+#include "prep/prepare.h"
+#include "test_meshes.h"
+
+using namespace vdbwrap;
+using namespace vdbwrap::testing;
+
+TEST(Weld, MergesPointsWithinToleranceOnly) {
+  std::vector<Vec3> pts = {{0, 0, 0}, {1e-9, 0, 0}, {1, 0, 0}, {1 + 2e-3, 0, 0}, {0, 0, 1e-9}};
+  std::vector<Vec3> welded;
+  auto remap = prep::weld_points(pts, 1e-6, welded);
+  EXPECT_EQ(welded.size(), 3u);
+  EXPECT_EQ(remap[0], remap[1]);
+  EXPECT_EQ(remap[0], remap[4]);
+  EXPECT_NE(remap[2], remap[3]);
+}
+
+TEST(Orient, FlippedTrianglesOfAClosedBoxComeOutConsistentAndOutward) {
+  Mesh m = box_mesh({0, 0, 0}, {1, 2, 3});
+  std::swap(m.triangles[3][1], m.triangles[3][2]);
+  std::swap(m.triangles[7][1], m.triangles[7][2]);
+  ASSERT_FALSE(diagnose(m, false).oriented);
+  prep::orient_pieces(m.points, m.triangles);
+  MeshDiagnostics d = diagnose(m, false);
+  EXPECT_TRUE(d.oriented);
+  EXPECT_TRUE(d.outward);
+}
+
+TEST(Orient, AnInsideOutBoxIsTurnedOver) {
+  Mesh m = box_mesh({0, 0, 0}, {1, 1, 1});
+  for (auto& t : m.triangles) std::swap(t[1], t[2]);
+  ASSERT_LT(diagnose(m, false).volume, 0);
+  EXPECT_EQ(prep::orient_pieces(m.points, m.triangles), 12u);
+  EXPECT_GT(diagnose(m, false).volume, 0);
+}
+
+TEST(Features, BoxHasTwelveSharpEdgesAndAnOpenSquareFourBoundaryEdges) {
+  Mesh box = box_mesh({0, 0, 0}, {1, 1, 1});
+  std::vector<Vec3> normals;
+  auto prepared = prep::prepare(box, WrapParams{}, nullptr);
+  size_t sharp = 0;
+  for (const auto& f : prepared.feature_edges) sharp += f.kind == prep::FeatureKind::Sharp;
+  EXPECT_EQ(sharp, 12u);
+  EXPECT_EQ(prepared.feature_edges.size(), 12u);
+
+  Mesh square;
+  square.points = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}};
+  square.triangles = {{0, 1, 2}, {0, 2, 3}};
+  auto open = prep::prepare(square, WrapParams{}, nullptr);
+  size_t boundary = 0;
+  for (const auto& f : open.feature_edges) boundary += f.kind == prep::FeatureKind::Boundary;
+  EXPECT_EQ(boundary, 4u);
+}
+
+TEST(Prepare, DropsDegenerateAndDuplicateTrianglesAndWeldsCracks) {
+  Mesh m = box_mesh({0, 0, 0}, {1, 1, 1});
+  m.triangles.push_back({0, 0, 1});        // repeated vertex
+  m.triangles.push_back(m.triangles[0]);   // duplicate
+  m.points.push_back({0.5, 0, 0});         // collinear with 0 and 1
+  m.triangles.push_back({0, 8, 1});
+  m.triangle_part.resize(m.triangles.size(), 0);
+  auto p = prep::prepare(m, WrapParams{}, nullptr);
+  EXPECT_EQ(p.mesh.triangles.size(), 12u);
+  EXPECT_EQ(p.dropped_degenerate, 2u);
+  EXPECT_EQ(p.dropped_duplicate, 1u);
+}
+
+TEST(Prepare, FindsTheJunctionLineOfTwoInterpenetratingBoxes) {
+  Mesh m = box_mesh({0, 0, 0}, {2, 2, 2});
+  add_box(m, {1, 1, 1}, {3, 3, 3}, 1);
+  auto p = prep::prepare(m, WrapParams{}, nullptr);
+  ASSERT_FALSE(p.intersections.empty());
+  double length = 0;
+  for (const auto& s : p.intersections) length += std::sqrt((s.a[0] - s.b[0]) * (s.a[0] - s.b[0]) + (s.a[1] - s.b[1]) * (s.a[1] - s.b[1]) + (s.a[2] - s.b[2]) * (s.a[2] - s.b[2]));
+  // Two unit-offset cubes meet along 6 unit segments; triangle diagonals may split them.
+  EXPECT_NEAR(length, 6.0, 1e-9);
+}
+
+TEST(Prepare, RejectsInputWithNothingUsable) {
+  Mesh empty;
+  try {
+    prep::prepare(empty, WrapParams{}, nullptr);
+    FAIL();
+  } catch (const Error& e) {
+    EXPECT_EQ(e.kind(), ErrorKind::InvalidInput);
+  }
+  Mesh flat;
+  flat.points = {{0, 0, 0}, {1, 0, 0}, {2, 0, 0}};
+  flat.triangles = {{0, 1, 2}};
+  EXPECT_THROW(prep::prepare(flat, WrapParams{}, nullptr), Error);
+}

@@ -1,0 +1,147 @@
+// The whole pipeline through the public API: validity by CGAL, fidelity, errors, cancellation.
+#include <gtest/gtest.h>
+
+#include "io/mesh_io.h"
+#include "test_meshes.h"
+
+using namespace vdbwrap;
+using namespace vdbwrap::testing;
+
+namespace {
+WrapParams at(const std::string& base) {
+  WrapParams p;
+  p.base_size = Length::parse(base);
+  return p;
+}
+}  // namespace
+
+TEST(Wrap, SphereIsWrappedValidAndClose) {
+  Mesh sphere = sphere_mesh(1.0);
+  WrapResult r = wrap(sphere, at("2%"));
+  auto v = valid_closed_surface(r.surface);
+  EXPECT_TRUE(v.ok) << v.why;
+  const double diag = r.report.diagonal;
+  EXPECT_LT(r.report.output_to_input.mean, 0.0005 * diag);
+  EXPECT_LT(r.report.output_to_input.p95, 0.002 * diag);
+  EXPECT_LT(r.report.input_to_output.max, 0.01 * diag);
+  EXPECT_TRUE(r.report.output.valid_closed_surface());
+}
+
+TEST(Wrap, InsideVolumeOfABoxLiesInsideIt) {
+  Mesh box = box_mesh({0, 0, 0}, {1, 1, 1});
+  WrapParams p = at("5%");
+  p.volume = VolumeChoice::Inside;
+  WrapResult r = wrap(box, p);
+  auto v = valid_closed_surface(r.surface);
+  EXPECT_TRUE(v.ok) << v.why;
+  for (const Vec3& q : r.surface.points)
+    for (int k = 0; k < 3; ++k) {
+      EXPECT_GT(q[k], 0.0);
+      EXPECT_LT(q[k], 1.0);
+    }
+  EXPECT_GT(r.report.output.volume, 0.8);
+  EXPECT_LT(r.report.output.volume, 1.0);
+}
+
+TEST(Wrap, OutsideWrapOfInterpenetratingPartsIsOneValidSurface) {
+  Mesh m = box_mesh({0, 0, 0}, {2, 2, 2});
+  add_box(m, {1, 1, 1}, {3, 3, 3}, 1);
+  WrapResult r = wrap(m, at("2%"));
+  auto v = valid_closed_surface(r.surface);
+  EXPECT_TRUE(v.ok) << v.why;
+  EXPECT_EQ(r.report.output.components, 1u);
+  EXPECT_GT(r.report.input.intersecting_triangles, 0u);
+  // Both parts appear among the output's part labels.
+  bool part0 = false, part1 = false;
+  for (int32_t p : r.surface.triangle_part) (p == 0 ? part0 : part1) = true;
+  EXPECT_TRUE(part0 && part1);
+}
+
+TEST(Wrap, FarFromTheOriginAndTinyModelsWorkAlike) {
+  // Precision: a model at 1e4 from the origin and a micro-part of 1e-5 units.
+  for (double scale : {1e-5, 1.0}) {
+    for (double shift : {0.0, 1e4}) {
+      Mesh s = sphere_mesh(scale);
+      for (auto& q : s.points) q = {q[0] + shift, q[1] + shift, q[2] + shift};
+      WrapResult r = wrap(s, at("4%"));
+      auto v = valid_closed_surface(r.surface);
+      EXPECT_TRUE(v.ok) << "scale " << scale << " shift " << shift << ": " << v.why;
+      EXPECT_LT(r.report.output_to_input.mean, 0.001 * r.report.diagonal);
+    }
+  }
+}
+
+TEST(Wrap, BadParametersAreInvalidArguments) {
+  Mesh box = box_mesh({0, 0, 0}, {1, 1, 1});
+  WrapParams p;
+  p.levels = 9;
+  try {
+    wrap(box, p);
+    FAIL();
+  } catch (const Error& e) {
+    EXPECT_EQ(e.kind(), ErrorKind::InvalidArgument);
+  }
+  EXPECT_THROW(Length::parse("-1"), Error);
+  EXPECT_THROW(Length::parse("abc%"), Error);
+  EXPECT_THROW(Length::parse(""), Error);
+  EXPECT_DOUBLE_EQ(Length::parse("1.5%").resolve(200.0), 3.0);
+  EXPECT_DOUBLE_EQ(Length::parse("0.25").resolve(200.0), 0.25);
+}
+
+TEST(Wrap, EmptyInputIsInvalidInput) {
+  try {
+    wrap(Mesh{}, WrapParams{});
+    FAIL();
+  } catch (const Error& e) {
+    EXPECT_EQ(e.kind(), ErrorKind::InvalidInput);
+  }
+}
+
+TEST(Wrap, CancellationStopsTheJob) {
+  struct CancelAfter : ProgressSink {
+    int calls = 0;
+    void progress(const std::string&, double, const std::string&) override { ++calls; }
+    bool cancelled() override { return calls > 3; }
+  } sink;
+  try {
+    wrap(sphere_mesh(1.0), at("1%"), &sink);
+    FAIL() << "expected cancellation";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.kind(), ErrorKind::Cancelled);
+  }
+}
+
+// Every corpus mesh wraps at 1% into a valid surface, checked with CGAL's predicates.
+class CorpusWrap : public ::testing::TestWithParam<const char*> {};
+
+TEST_P(CorpusWrap, ValidSurfaceAtOnePercent) {
+  Mesh input = io::read_mesh(data_path(GetParam()));
+  WrapResult r = wrap(input, at("1%"));
+  auto v = valid_closed_surface(r.surface);
+  EXPECT_TRUE(v.ok) << v.why;
+  EXPECT_TRUE(r.report.output.valid_closed_surface());
+  EXPECT_FALSE(r.report.output.self_intersecting);
+  // The wrap hugs the input: every corpus mesh stays well within one base cell.
+  const double diag = r.report.diagonal;
+  EXPECT_LT(r.report.output_to_input.mean, 0.005 * diag);
+  // Closed inputs (border 0 in CORPUS.md): the fidelity bound this version holds.
+  MeshDiagnostics in = r.report.input;
+  if (in.border_edges == 0 && in.nonmanifold_edges == 0) {
+    EXPECT_LT(r.report.output_to_input.mean, 0.002 * diag) << "mean " << 100 * r.report.output_to_input.mean / diag << "%";
+    EXPECT_LT(r.report.output_to_input.p95, 0.007 * diag) << "p95 " << 100 * r.report.output_to_input.p95 / diag << "%";
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(Corpus, CorpusWrap,
+                         ::testing::Values("1002_tray_bottom.STL", "20mm-xyz-cube.stl", "angle_block.STL", "box.STL",
+                                           "busted.STL", "capsule.obj", "fandisk.obj", "featuretype.STL", "fuze.obj",
+                                           "idler_riser.STL", "multibody.stl", "not_convex.obj", "octagonal_pocket.stl",
+                                           "plate_holes.STL", "quadknot.obj", "round.stl", "soup.stl", "suzanne.ply",
+                                           "teapot.stl", "torus.STL", "tube.obj", "two_objects_mixed_case_names.stl",
+                                           "unit_sphere.STL"),
+                         [](const ::testing::TestParamInfo<const char*>& info) {
+                           std::string n = info.param;
+                           for (char& c : n)
+                             if (!std::isalnum(static_cast<unsigned char>(c))) c = '_';
+                           return n;
+                         });
