@@ -58,7 +58,8 @@ json params_json(const WrapParams& p) {
               {"refine_normal_spread_deg", p.refine_normal_spread_deg},
               {"refine_at_features", p.refine_at_features},
               {"weld_tolerance", p.weld_tolerance},
-              {"surface_offset", p.surface_offset}};
+              {"surface_offset", p.surface_offset},
+              {"presmooth_iterations", p.presmooth_iterations}};
 }
 }  // namespace
 

@@ -87,6 +87,48 @@ std::vector<TrianglePair> find_intersecting_pairs(const std::vector<Vec3>& point
   return out;
 }
 
+std::vector<TrianglePair> find_intersecting_pairs_with(const std::vector<Vec3>& points, const std::vector<Tri>& triangles,
+                                                       const std::vector<uint32_t>& subset) {
+  std::vector<TrianglePair> out;
+  if (subset.empty()) return out;
+  auto point = [&](uint32_t v) { return to_point(points[v]); };
+  auto box_of = [&](uint32_t t) {
+    const Tri& tri = triangles[t];
+    return point(tri[0]).bbox() + point(tri[1]).bbox() + point(tri[2]).bbox();
+  };
+  std::vector<Box> all, some;
+  all.reserve(triangles.size());
+  for (uint32_t t = 0; t < triangles.size(); ++t) all.emplace_back(box_of(t), t);
+  std::vector<P3> p;  // only the points the tests touch are converted, lazily through a copy
+  p.reserve(points.size());
+  for (const Vec3& v : points) p.push_back(to_point(v));
+  for (uint32_t t : subset) {
+    if (is_degenerate(p, triangles[t])) {
+      out.push_back({t, t});
+      continue;
+    }
+    some.emplace_back(box_of(t), t);
+  }
+  std::vector<std::pair<uint32_t, uint32_t>> candidates;
+  CGAL::box_intersection_d(some.begin(), some.end(), all.begin(), all.end(), [&](const Box& a, const Box& b) {
+    if (a.handle() != b.handle()) candidates.emplace_back(uint32_t(a.handle()), uint32_t(b.handle()));
+  });
+  std::vector<uint8_t> hit(candidates.size(), 0);
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, candidates.size(), 256), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t i = r.begin(); i != r.end(); ++i) {
+      const Tri& y = triangles[candidates[i].second];
+      if (is_degenerate(p, y)) continue;
+      hit[i] = triangles_intersect(p, triangles[candidates[i].first], y) ? 1 : 0;
+    }
+  });
+  for (size_t i = 0; i < candidates.size(); ++i)
+    if (hit[i]) out.push_back({std::min(candidates[i].first, candidates[i].second), std::max(candidates[i].first, candidates[i].second)});
+  std::sort(out.begin(), out.end(), [](const TrianglePair& u, const TrianglePair& v) { return u.a != v.a ? u.a < v.a : u.b < v.b; });
+  out.erase(std::unique(out.begin(), out.end(), [](const TrianglePair& u, const TrianglePair& v) { return u.a == v.a && u.b == v.b; }),
+            out.end());
+  return out;
+}
+
 std::vector<Segment> intersection_segments(const std::vector<Vec3>& points, const std::vector<Tri>& triangles,
                                            const std::vector<TrianglePair>& pairs) {
   std::vector<Segment> out;

@@ -16,6 +16,12 @@ struct TrianglePair {
 // repeated or collinear vertices are skipped (count those separately).
 std::vector<TrianglePair> find_intersecting_pairs(const std::vector<Vec3>& points, const std::vector<Tri>& triangles);
 
+// Intersecting pairs with at least one triangle in `subset` (the rest of the mesh is only
+// tested against the subset). Same rules as find_intersecting_pairs; degenerate triangles
+// in the subset are returned as a pair (t, t).
+std::vector<TrianglePair> find_intersecting_pairs_with(const std::vector<Vec3>& points, const std::vector<Tri>& triangles,
+                                                       const std::vector<uint32_t>& subset);
+
 struct Segment {
   Vec3 a, b;
   uint32_t tri_a, tri_b;

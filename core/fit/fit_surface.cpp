@@ -101,20 +101,55 @@ FittedSurface fit_to_input(const extract::LatticeSurface& surf, const grid::Adap
   }
   const size_t n = lattice.size();
 
-  // Projection targets: the nearest input point, stopped a small offset short of it on the
-  // node's own side, so sheets wrapped around a zero-thickness input never coincide.
+  // Untangling before projection: nearest-point projection of a voxel staircase folds at
+  // every step, while projection of a smooth surface near the input does not. So the
+  // lattice surface is smoothed first (umbrella operator over polygon edges), then each
+  // smoothed node goes to its nearest input point, stopped a small offset short of it on
+  // its lattice node's side, so sheets wrapped around a zero-thickness input never coincide.
+  std::vector<std::vector<uint32_t>> neighbours(n);
+  auto link = [&](uint32_t a, uint32_t b) {
+    neighbours[a].push_back(b);
+    neighbours[b].push_back(a);
+  };
+  for (const auto& poly : surf.polygons)
+    for (size_t k = 0; k < poly.size(); ++k)
+      if (poly[k] < poly[(k + 1) % poly.size()] || poly.size() != 4) link(poly[k], poly[(k + 1) % poly.size()]);
+  for (const Tri& f : fans) link(f[0], f[1]);
+  for (auto& nb : neighbours) {
+    std::sort(nb.begin(), nb.end());
+    nb.erase(std::unique(nb.begin(), nb.end()), nb.end());
+  }
+  std::vector<Vec3> smoothed = lattice, next(n);
+  for (int it = 0; it < params.presmooth_iterations; ++it) {
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 1024), [&](const tbb::blocked_range<size_t>& r) {
+      for (size_t i = r.begin(); i != r.end(); ++i) {
+        Vec3 avg{0, 0, 0};
+        for (uint32_t j : neighbours[i]) avg = avg + smoothed[j];
+        avg = avg * (1.0 / double(std::max<size_t>(1, neighbours[i].size())));
+        next[i] = lerp(smoothed[i], avg, 0.5);
+      }
+    });
+    smoothed.swap(next);
+  }
+
   if (progress) progress->progress("project", 0.0, "projecting " + std::to_string(n) + " nodes onto the input");
   const double offset = params.surface_offset * hf;
   std::vector<Vec3> target(n);
   tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 256), [&](const tbb::blocked_range<size_t>& r) {
     for (size_t i = r.begin(); i != r.end(); ++i) {
-      auto hit = input.closest(lattice[i]);
-      double d = std::sqrt(hit.squared_distance);
-      if (d <= offset || d > 3.0 * node_cell[i]) {
+      auto side_hit = input.closest(lattice[i]);
+      double lattice_distance = std::sqrt(side_hit.squared_distance);
+      if (lattice_distance <= offset) {
         target[i] = lattice[i];
         continue;
       }
-      target[i] = hit.point + (lattice[i] - hit.point) * (offset / d);
+      const Vec3 side = (lattice[i] - side_hit.point) * (1.0 / lattice_distance);
+      auto hit = input.closest(smoothed[i]);
+      Vec3 away = smoothed[i] - hit.point;
+      double d = norm(away);
+      Vec3 dir = (d > 1e-3 * offset && dot(away, side) > 0) ? away * (1.0 / d) : side;
+      target[i] = hit.point + dir * offset;
+      if (norm(target[i] - lattice[i]) > 3.0 * node_cell[i]) target[i] = lattice[i];
     }
   });
   if (progress && progress->cancelled()) throw Error(ErrorKind::Cancelled, "cancelled");
@@ -134,7 +169,9 @@ FittedSurface fit_to_input(const extract::LatticeSurface& surf, const grid::Adap
   }
 
   // Validity loop: every node starts at its target; nodes of offending triangles move half
-  // way back toward the lattice, where the surface is valid by construction.
+  // way back toward the lattice, where the surface is valid by construction. After one full
+  // check, only the triangles around moved nodes are tested again (against all others), so
+  // the loop can afford many short rounds; a full CGAL check confirms the end.
   // Checked in output (world) coordinates: the translation back from the local frame rounds,
   // and only what is written counts.
   std::vector<double> t(n, 1.0);
@@ -142,32 +179,65 @@ FittedSurface fit_to_input(const extract::LatticeSurface& surf, const grid::Adap
   auto world = [&](const Vec3& local) { return local + origin; };
   p.resize(n);
   for (size_t i = 0; i < n; ++i) p[i] = world(target[i]);
+  std::vector<std::vector<uint32_t>> vertex_triangles(n);
+  for (uint32_t f = 0; f < out.triangles.size(); ++f)
+    for (uint32_t v : out.triangles[f]) vertex_triangles[v].push_back(f);
 
-  const int max_rounds = 40;
+  auto flag_triangle = [&](uint32_t f, std::vector<uint8_t>& flag) {
+    for (uint32_t v : out.triangles[f]) flag[v] = 1;
+  };
+  auto full_check = [&](std::vector<uint8_t>& flag) {
+    mark_crowded_nodes(p, 1e-3 * hf, flag);
+    for (uint32_t f : invalid_triangles(p, out.triangles, min_area2)) flag_triangle(f, flag);
+  };
+  auto local_check = [&](const std::vector<uint32_t>& moved, std::vector<uint8_t>& flag) {
+    mark_crowded_nodes(p, 1e-3 * hf, flag);
+    std::vector<uint32_t> around;
+    for (uint32_t v : moved) around.insert(around.end(), vertex_triangles[v].begin(), vertex_triangles[v].end());
+    std::sort(around.begin(), around.end());
+    around.erase(std::unique(around.begin(), around.end()), around.end());
+    for (uint32_t f : around) {
+      const Tri& tri = out.triangles[f];
+      if (norm(area_vector(p[tri[0]], p[tri[1]], p[tri[2]])) < min_area2) flag_triangle(f, flag);
+    }
+    for (const auto& pair : check::find_intersecting_pairs_with(p, out.triangles, around)) {
+      flag_triangle(pair.a, flag);
+      flag_triangle(pair.b, flag);
+    }
+  };
+
+  const int max_rounds = 400, give_up_halving = 200;
+  std::vector<uint8_t> flag(n, 0);
+  full_check(flag);
   int round = 0;
+  bool valid = false;
   for (; round < max_rounds; ++round) {
-    if (progress) {
-      if (progress->cancelled()) throw Error(ErrorKind::Cancelled, "cancelled");
+    if (progress && progress->cancelled()) throw Error(ErrorKind::Cancelled, "cancelled");
+    size_t flagged = size_t(std::count(flag.begin(), flag.end(), 1));
+    if (flagged == 0) {
+      full_check(flag);  // confirm with CGAL on the whole surface
+      flagged = size_t(std::count(flag.begin(), flag.end(), 1));
+      if (flagged == 0) {
+        valid = true;
+        break;
+      }
     }
-    std::vector<uint8_t> touched(n, 0);
-    mark_crowded_nodes(p, 1e-3 * hf, touched);
-    size_t crowded = size_t(std::count(touched.begin(), touched.end(), 1));
-    std::vector<uint32_t> bad = invalid_triangles(p, out.triangles, min_area2);
-    if (progress)
-      progress->progress("project", std::min(0.95, 0.1 + round * 0.05),
-                         "validity round " + std::to_string(round + 1) + ": " + std::to_string(bad.size()) +
-                             " triangles and " + std::to_string(crowded) + " crowded nodes to fix");
-    if (bad.empty() && crowded == 0) break;
-    for (uint32_t f : bad)
-      for (uint32_t v : out.triangles[f]) touched[v] = 1;
-    for (size_t i = 0; i < n; ++i) {
-      if (!touched[i]) continue;
-      t[i] = (t[i] < 1.0 / 64 || round >= max_rounds / 2) ? 0.0 : t[i] * 0.5;
+    if (progress && (round < 10 || round % 10 == 0))
+      progress->progress("project", std::min(0.95, 0.1 + round * 0.01),
+                         "untangling round " + std::to_string(round + 1) + ": " + std::to_string(flagged) + " nodes to pull back");
+    std::vector<uint32_t> moved;
+    for (uint32_t i = 0; i < n; ++i) {
+      if (!flag[i]) continue;
+      flag[i] = 0;
+      if (t[i] == 0.0) continue;
+      t[i] = (t[i] < 1.0 / 64 || round >= give_up_halving) ? 0.0 : t[i] * 0.5;
       p[i] = world(lerp(lattice[i], target[i], t[i]));
+      moved.push_back(i);
     }
+    local_check(moved, flag);
   }
   out.validity_rounds = round;
-  if (round == max_rounds) throw Error(ErrorKind::WrapFailed, "projection could not be made valid");
+  if (!valid) throw Error(ErrorKind::WrapFailed, "projection could not be made valid");
   for (size_t i = 0; i < n; ++i)
     if (t[i] < 1.0 && norm2(target[i] - lattice[i]) > 0) ++out.held_back;
   if (progress) progress->progress("project", 1.0, std::to_string(out.held_back) + " nodes held back to stay valid");
