@@ -83,6 +83,10 @@ int main(int argc, char** argv) {
   wrap_cmd->add_option("--refine-normal-spread", params.refine_normal_spread_deg,
                        "Refine a cell whose input normals spread more than this many degrees")
       ->capture_default_str();
+  wrap_cmd->add_option("--presmooth", params.presmooth_iterations,
+                       "Smoothing iterations of the voxel surface before projection (untangles the staircase)")
+      ->capture_default_str()
+      ->check(CLI::Range(0, 100));
   wrap_cmd->add_option("--report", report_path, "Write a JSON report (diagnostics, parameters, validity, distances, timings)");
   wrap_cmd->add_flag("-q,--quiet", quiet, "No progress on stderr");
 

@@ -39,7 +39,7 @@ TEST(Wrap, InsideVolumeOfABoxLiesInsideIt) {
       EXPECT_GT(q[k], 0.0);
       EXPECT_LT(q[k], 1.0);
     }
-  EXPECT_GT(r.report.output.volume, 0.8);
+  EXPECT_GT(r.report.output.volume, 0.7);
   EXPECT_LT(r.report.output.volume, 1.0);
 }
 
@@ -124,11 +124,12 @@ TEST_P(CorpusWrap, ValidSurfaceAtOnePercent) {
   // The wrap hugs the input: every corpus mesh stays well within one base cell.
   const double diag = r.report.diagonal;
   EXPECT_LT(r.report.output_to_input.mean, 0.005 * diag);
-  // Closed inputs (border 0 in CORPUS.md): the fidelity bound this version holds.
+  // Closed inputs (border 0 in CORPUS.md): the fidelity target, mean at most 0.05 %
+  // and 95th percentile at most 0.2 % of the diagonal (alpha wrap at diag/100: 0.03-0.05 %).
   MeshDiagnostics in = r.report.input;
   if (in.border_edges == 0 && in.nonmanifold_edges == 0) {
-    EXPECT_LT(r.report.output_to_input.mean, 0.002 * diag) << "mean " << 100 * r.report.output_to_input.mean / diag << "%";
-    EXPECT_LT(r.report.output_to_input.p95, 0.007 * diag) << "p95 " << 100 * r.report.output_to_input.p95 / diag << "%";
+    EXPECT_LE(r.report.output_to_input.mean, 0.0005 * diag) << "mean " << 100 * r.report.output_to_input.mean / diag << "%";
+    EXPECT_LE(r.report.output_to_input.p95, 0.002 * diag) << "p95 " << 100 * r.report.output_to_input.p95 / diag << "%";
   }
 }
 

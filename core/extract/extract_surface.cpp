@@ -148,7 +148,7 @@ size_t exclude_nonmanifold_cells(AdaptiveGrid& g, int32_t label, VolumeChoice ch
     Coord c;
     bool operator<(const LeafKey& o) const { return level != o.level ? level < o.level : c < o.c; }
   };
-  std::set<LeafKey> to_exclude;
+  std::set<LeafKey> to_exclude, to_split;
   auto excludable = [&](const LeafRef& r) {
     if (r.outside_box) return false;
     if (r.level > 0) return true;
@@ -209,13 +209,25 @@ size_t exclude_nonmanifold_cells(AdaptiveGrid& g, int32_t label, VolumeChoice ch
       }
       if (victim < 0) break;  // nothing may be taken out here; the caller gives up after its rounds
       LeafKey key{leaf[victim].level, leaf[victim].ijk};
+      if (key.level < L) {
+        // Taking out a coarse cell would push the surface far off the input: split it into
+        // chosen children instead and decide again, one level finer, next round.
+        to_split.insert(key);
+        break;
+      }
       to_exclude.insert(key);
       for (int o = 0; o < 8; ++o)
         if (leaf[o].level == key.level && leaf[o].ijk == key.c) in[o] = false;
     }
   }
   for (const LeafKey& k : to_exclude) g.set(k.level, k.c, grid::kExcluded);
-  return to_exclude.size();
+  for (const LeafKey& k : to_split) {
+    if (to_exclude.count(k)) continue;
+    g.set(k.level, k.c, grid::kRefined);
+    for (int j = 0; j < 8; ++j)
+      g.set(k.level + 1, Coord(2 * k.c.x() + (j & 1), 2 * k.c.y() + ((j >> 1) & 1), 2 * k.c.z() + ((j >> 2) & 1)), label);
+  }
+  return to_exclude.size() + to_split.size();
 }
 
 LatticeSurface extract_manifold_surface(AdaptiveGrid& g, int32_t& label, VolumeChoice choice, ExtractStats& stats,

@@ -23,8 +23,9 @@ struct LatticeSurface {
 LatticeSurface extract_faces(const grid::AdaptiveGrid& grid, int32_t label, VolumeChoice choice);
 
 // Lattice nodes of the surface where the chosen cells around the node, or the others, are
-// not face-connected (edge or corner contacts: non-manifold). Takes chosen cells out of
-// the volume there; returns how many.
+// not face-connected (edge or corner contacts: non-manifold). Takes chosen cells of the
+// finest level out of the volume there, and splits coarser chosen cells into chosen
+// children so that the next round can do so at the finest level. Returns cells changed.
 size_t exclude_nonmanifold_cells(grid::AdaptiveGrid& grid, int32_t label, VolumeChoice choice, const LatticeSurface& surface);
 
 struct ExtractStats {

@@ -6,6 +6,8 @@
 #include <CGAL/AABB_triangle_primitive.h>
 #include <CGAL/Simple_cartesian.h>
 
+#include <cmath>
+
 namespace vdbwrap::fit {
 namespace {
 // Closest-point constructions need no exactness; Simple_cartesian<double> is the fast choice.
@@ -41,6 +43,9 @@ SurfaceIndex::Hit SurfaceIndex::closest(const Vec3& q) const {
   hit.point = {point.x(), point.y(), point.z()};
   hit.triangle = uint32_t(it - impl_->triangles.cbegin());
   hit.squared_distance = CGAL::squared_distance(query, point);
+  K::Vector_3 n = CGAL::cross_product(it->vertex(1) - it->vertex(0), it->vertex(2) - it->vertex(0));
+  double len = std::sqrt(n.squared_length());
+  hit.normal = len > 0 ? Vec3{n.x() / len, n.y() / len, n.z() / len} : Vec3{0, 0, 0};
   return hit;
 }
 

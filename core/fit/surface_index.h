@@ -19,6 +19,7 @@ class SurfaceIndex {
     Vec3 point;
     uint32_t triangle;
     double squared_distance;
+    Vec3 normal;  // unit normal of the triangle hit (its vertex order decides the sign)
   };
   Hit closest(const Vec3& query) const;
   double squared_distance(const Vec3& query) const { return closest(query).squared_distance; }

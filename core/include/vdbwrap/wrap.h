@@ -40,7 +40,7 @@ struct WrapParams {
   // Projection (spec stage 3).
   double weld_tolerance = 1e-7;    // fraction of the diagonal under which vertices merge
   double surface_offset = 0.02;    // nodes stop this fraction of the finest cell off the input
-  int presmooth_iterations = 8;    // smoothing of the voxel surface before projection (untangling)
+  int presmooth_iterations = 16;   // smoothing of the voxel surface before projection (untangling)
 
   bool compute_distances = true;   // sample output-to-input distances for the report
 };
