@@ -18,7 +18,10 @@ DistanceStats sampled_distance(const Mesh& from, const Mesh& to, double samples_
   s.diagonal = box.diagonal();
   if (from.triangles.empty() || to.triangles.empty()) return s;
   // Samples: every vertex, plus points spread by area (a stratified count per triangle).
-  const double spacing = s.diagonal / samples_per_diagonal;
+  // Dense sampling, capped near two million points so very large surfaces stay quick.
+  double area = 0;
+  for (const Tri& t : from.triangles) area += 0.5 * norm(area_vector(from.points[t[0]], from.points[t[1]], from.points[t[2]]));
+  const double spacing = std::max(s.diagonal / samples_per_diagonal, std::sqrt(area / 2e6));
   std::vector<Vec3> samples(from.points.begin(), from.points.end());
   std::mt19937_64 rng(12345);
   std::uniform_real_distribution<double> uni(0.0, 1.0);

@@ -11,6 +11,7 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <array>
 #include <mutex>
 
 namespace vdbwrap::check {
@@ -59,6 +60,30 @@ bool triangles_intersect(const std::vector<P3>& p, const Tri& x, const Tri& y) {
 }
 
 }  // namespace
+
+bool triangle_pair_intersects(const std::vector<Vec3>& points, const Tri& a, const Tri& b) {
+  // Only the six points involved are converted; the index map keeps the shared-vertex logic.
+  std::vector<P3> p;
+  p.reserve(6);
+  Tri la, lb;
+  std::array<uint32_t, 6> ids;
+  size_t count = 0;
+  auto local = [&](uint32_t v) {
+    for (size_t i = 0; i < count; ++i)
+      if (ids[i] == v) return uint32_t(i);
+    ids[count] = v;
+    p.push_back(to_point(points[v]));
+    return uint32_t(count++);
+  };
+  for (int k = 0; k < 3; ++k) la[k] = local(a[k]);
+  for (int k = 0; k < 3; ++k) lb[k] = local(b[k]);
+  return triangles_intersect(p, la, lb);
+}
+
+bool triangle_is_degenerate(const std::vector<Vec3>& points, const Tri& t) {
+  return t[0] == t[1] || t[1] == t[2] || t[0] == t[2] ||
+         CGAL::collinear(to_point(points[t[0]]), to_point(points[t[1]]), to_point(points[t[2]]));
+}
 
 std::vector<TrianglePair> find_intersecting_pairs(const std::vector<Vec3>& points, const std::vector<Tri>& triangles) {
   std::vector<P3> p(points.size());

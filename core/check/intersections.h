@@ -22,6 +22,10 @@ std::vector<TrianglePair> find_intersecting_pairs(const std::vector<Vec3>& point
 std::vector<TrianglePair> find_intersecting_pairs_with(const std::vector<Vec3>& points, const std::vector<Tri>& triangles,
                                                        const std::vector<uint32_t>& subset);
 
+// The exact tests behind the functions above, for one pair / one triangle.
+bool triangle_pair_intersects(const std::vector<Vec3>& points, const Tri& a, const Tri& b);
+bool triangle_is_degenerate(const std::vector<Vec3>& points, const Tri& t);
+
 struct Segment {
   Vec3 a, b;
   uint32_t tri_a, tri_b;

@@ -26,8 +26,33 @@ std::vector<uint32_t> invalid_triangles(const std::vector<Vec3>& points, const s
 namespace {
 
 // Nodes closer than min_separation to another node: coincident or nearly coincident
-// vertices break meshers and hide intersections, so they count as invalid.
-void mark_crowded_nodes(const std::vector<Vec3>& p, double min_separation, std::vector<uint8_t>& flag) {
+// vertices break meshers and hide intersections, so they count as invalid. A hash grid with
+// cells of min_separation, updated as nodes move (stale entries are harmless: distances are
+// measured on current positions).
+class NodeBuckets {
+ public:
+  NodeBuckets(const std::vector<Vec3>& p, double min_separation) : p_(p), sep2_(min_separation * min_separation), inv_(1.0 / min_separation) {
+    cells_.reserve(p.size());
+    for (uint32_t i = 0; i < p.size(); ++i) update(i);
+  }
+  void update(uint32_t i) {
+    auto& list = cells_[key(p_[i])];
+    if (std::find(list.begin(), list.end(), i) == list.end()) list.push_back(i);
+  }
+  bool crowded(uint32_t i) const {
+    Key k = key(p_[i]);
+    for (int dx = -1; dx <= 1; ++dx)
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dz = -1; dz <= 1; ++dz) {
+          auto it = cells_.find({k.x + dx, k.y + dy, k.z + dz});
+          if (it == cells_.end()) continue;
+          for (uint32_t j : it->second)
+            if (j != i && norm2(p_[i] - p_[j]) < sep2_) return true;
+        }
+    return false;
+  }
+
+ private:
   struct Key {
     int64_t x, y, z;
     bool operator==(const Key& o) const { return x == o.x && y == o.y && z == o.z; }
@@ -35,22 +60,77 @@ void mark_crowded_nodes(const std::vector<Vec3>& p, double min_separation, std::
   struct KeyHash {
     size_t operator()(const Key& k) const { return size_t(k.x * 73856093LL ^ k.y * 19349663LL ^ k.z * 83492791LL); }
   };
-  std::unordered_map<Key, std::vector<uint32_t>, KeyHash> cells;
-  cells.reserve(p.size());
-  const double inv = 1.0 / min_separation, sep2 = min_separation * min_separation;
-  for (uint32_t i = 0; i < p.size(); ++i)
-    cells[{int64_t(std::floor(p[i][0] * inv)), int64_t(std::floor(p[i][1] * inv)), int64_t(std::floor(p[i][2] * inv))}].push_back(i);
-  for (const auto& [key, ids] : cells)
-    for (uint32_t i : ids)
-      for (int dx = -1; dx <= 1; ++dx)
-        for (int dy = -1; dy <= 1; ++dy)
-          for (int dz = -1; dz <= 1; ++dz) {
-            auto it = cells.find({key.x + dx, key.y + dy, key.z + dz});
-            if (it == cells.end()) continue;
-            for (uint32_t j : it->second)
-              if (j != i && norm2(p[i] - p[j]) < sep2) flag[i] = 1;
-          }
-}
+  Key key(const Vec3& q) const {
+    return {int64_t(std::floor(q[0] * inv_)), int64_t(std::floor(q[1] * inv_)), int64_t(std::floor(q[2] * inv_))};
+  }
+  const std::vector<Vec3>& p_;
+  double sep2_, inv_;
+  std::unordered_map<Key, std::vector<uint32_t>, KeyHash> cells_;
+};
+
+// Triangles bucketed by bounding box on a uniform grid, so that the triangles around a few
+// moved nodes are tested against their neighbours only. Buckets may hold stale entries
+// (a triangle that moved away); bounding boxes are compared before any exact test.
+class TriangleBuckets {
+ public:
+  TriangleBuckets(const std::vector<Vec3>& p, const std::vector<Tri>& tris, double cell) : p_(p), tris_(tris), inv_(1.0 / cell) {
+    boxes_.resize(tris.size());
+    seen_.assign(tris.size(), 0);
+    for (uint32_t f = 0; f < tris.size(); ++f) insert(f);
+  }
+  void update(uint32_t f) { insert(f); }
+  template <typename F>
+  void for_each_candidate(uint32_t f, F&& fn) {
+    ++stamp_;
+    const Box3& b = boxes_[f];
+    for_cells(b, [&](const Key& k) {
+      auto it = cells_.find(k);
+      if (it == cells_.end()) return;
+      for (uint32_t g : it->second) {
+        if (g == f || seen_[g] == stamp_) continue;
+        seen_[g] = stamp_;
+        const Box3& o = boxes_[g];
+        if (o.lo[0] > b.hi[0] || o.hi[0] < b.lo[0] || o.lo[1] > b.hi[1] || o.hi[1] < b.lo[1] || o.lo[2] > b.hi[2] ||
+            o.hi[2] < b.lo[2])
+          continue;
+        fn(g);
+      }
+    });
+  }
+
+ private:
+  struct Key {
+    int64_t x, y, z;
+    bool operator==(const Key& o) const { return x == o.x && y == o.y && z == o.z; }
+  };
+  struct KeyHash {
+    size_t operator()(const Key& k) const { return size_t(k.x * 73856093LL ^ k.y * 19349663LL ^ k.z * 83492791LL); }
+  };
+  template <typename F>
+  void for_cells(const Box3& b, F&& fn) const {
+    int64_t lo[3], hi[3];
+    for (int k = 0; k < 3; ++k) lo[k] = int64_t(std::floor(b.lo[k] * inv_)), hi[k] = int64_t(std::floor(b.hi[k] * inv_));
+    for (int64_t x = lo[0]; x <= hi[0]; ++x)
+      for (int64_t y = lo[1]; y <= hi[1]; ++y)
+        for (int64_t z = lo[2]; z <= hi[2]; ++z) fn(Key{x, y, z});
+  }
+  void insert(uint32_t f) {
+    Box3 b;
+    for (uint32_t v : tris_[f]) b.add(p_[v]);
+    boxes_[f] = b;
+    for_cells(b, [&](const Key& k) {
+      auto& list = cells_[k];
+      if (list.empty() || list.back() != f) list.push_back(f);
+    });
+  }
+  const std::vector<Vec3>& p_;
+  const std::vector<Tri>& tris_;
+  double inv_;
+  std::vector<Box3> boxes_;
+  std::vector<uint32_t> seen_;
+  uint32_t stamp_ = 0;
+  std::unordered_map<Key, std::vector<uint32_t>, KeyHash> cells_;
+};
 
 // Diagonal (0-2 or 1-3) of a quad whose midpoint lies nearer the input: the split that
 // deviates least from it. A split that makes a degenerate triangle is never chosen.
@@ -192,28 +272,42 @@ FittedSurface fit_to_input(const extract::LatticeSurface& surf, const grid::Adap
   auto flag_triangle = [&](uint32_t f, std::vector<uint8_t>& flag) {
     for (uint32_t v : out.triangles[f]) flag[v] = 1;
   };
+  NodeBuckets nodes(p, 1e-3 * hf);
   auto full_check = [&](std::vector<uint8_t>& flag) {
-    mark_crowded_nodes(p, 1e-3 * hf, flag);
+    for (uint32_t i = 0; i < n; ++i)
+      if (nodes.crowded(i)) flag[i] = 1;
     for (uint32_t f : invalid_triangles(p, out.triangles, min_area2)) flag_triangle(f, flag);
   };
+  TriangleBuckets buckets(p, out.triangles, 2.0 * g.base_size());
   auto local_check = [&](const std::vector<uint32_t>& moved, std::vector<uint8_t>& flag) {
-    mark_crowded_nodes(p, 1e-3 * hf, flag);
+    for (uint32_t v : moved) nodes.update(v);
+    for (uint32_t v : moved)
+      if (nodes.crowded(v)) flag[v] = 1;
     std::vector<uint32_t> around;
     for (uint32_t v : moved) around.insert(around.end(), vertex_triangles[v].begin(), vertex_triangles[v].end());
     std::sort(around.begin(), around.end());
     around.erase(std::unique(around.begin(), around.end()), around.end());
+    for (uint32_t f : around) buckets.update(f);
     for (uint32_t f : around) {
       const Tri& tri = out.triangles[f];
-      if (norm(area_vector(p[tri[0]], p[tri[1]], p[tri[2]])) < min_area2) flag_triangle(f, flag);
-    }
-    for (const auto& pair : check::find_intersecting_pairs_with(p, out.triangles, around)) {
-      flag_triangle(pair.a, flag);
-      flag_triangle(pair.b, flag);
+      if (norm(area_vector(p[tri[0]], p[tri[1]], p[tri[2]])) < min_area2 || check::triangle_is_degenerate(p, tri)) {
+        flag_triangle(f, flag);
+        continue;
+      }
+      buckets.for_each_candidate(f, [&](uint32_t other) {
+        if (!check::triangle_is_degenerate(p, out.triangles[other]) &&
+            check::triangle_pair_intersects(p, tri, out.triangles[other])) {
+          flag_triangle(f, flag);
+          flag_triangle(other, flag);
+        }
+      });
     }
   };
 
-  const int max_rounds = 400, give_up_halving = 200;
-  std::vector<uint8_t> flag(n, 0);
+  // A node flagged again and again sits in a tangle that halving resolves only slowly:
+  // after a few strikes it goes straight back to its lattice position.
+  const int max_rounds = 400, give_up_halving = 200, strikes_to_lattice = 4;
+  std::vector<uint8_t> flag(n, 0), strikes(n, 0);
   full_check(flag);
   int round = 0;
   bool valid = false;
@@ -236,7 +330,8 @@ FittedSurface fit_to_input(const extract::LatticeSurface& surf, const grid::Adap
       if (!flag[i]) continue;
       flag[i] = 0;
       if (t[i] == 0.0) continue;
-      t[i] = (t[i] < 1.0 / 64 || round >= give_up_halving) ? 0.0 : t[i] * 0.5;
+      ++strikes[i];
+      t[i] = (t[i] < 1.0 / 64 || round >= give_up_halving || strikes[i] >= strikes_to_lattice) ? 0.0 : t[i] * 0.5;
       p[i] = world(lerp(lattice[i], target[i], t[i]));
       moved.push_back(i);
     }

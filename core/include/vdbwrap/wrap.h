@@ -115,8 +115,9 @@ WrapResult wrap(const Mesh& input, const WrapParams& params, ProgressSink* progr
 // Diagnostics of any mesh, welded exactly (exactly equal coordinates) first.
 MeshDiagnostics diagnose(const Mesh& mesh, bool find_intersections = true);
 
-// Metro-style one-sided distance: samples on `from` (about `samples_per_diagonal`^2
-// spread by area, plus every vertex), distances to `to`.
+// Metro-style one-sided distance: samples on `from` spread by area at a spacing of
+// diagonal / samples_per_diagonal (widened so that there are at most about two million),
+// plus every vertex; distances to `to`.
 DistanceStats sampled_distance(const Mesh& from, const Mesh& to, double samples_per_diagonal = 1000);
 
 std::string to_json(const WrapReport& report, int indent = 2);
