@@ -96,6 +96,9 @@ int main(int argc, char** argv) {
   check_cmd->add_option("input", check_input, "Mesh to check")->required();
   check_cmd->add_option("--against", against, "Reference mesh: also report the two-sided (Metro-style) distance");
   check_cmd->add_option("--report", check_report, "Write the diagnostics as JSON");
+  bool require_valid = false;
+  check_cmd->add_flag("--require-valid", require_valid,
+                      "Exit with code 4 unless the mesh is a valid closed surface (for scripts)");
 
   try {
     app.parse(argc, argv);
@@ -148,6 +151,7 @@ int main(int argc, char** argv) {
       }
       json += "}";
       if (!check_report.empty()) write_text(check_report, json);
+      if (require_valid && !d.valid_closed_surface()) return exit_code(ErrorKind::WrapFailed);
       return 0;
     }
   } catch (const Error& e) {

@@ -94,6 +94,7 @@ std::string to_json(const WrapReport& r, int indent) {
          {"features",
           {{"sharp_edges", r.features.sharp_edges},
            {"boundary_edges", r.features.boundary_edges},
+           {"nonmanifold_edges", r.features.nonmanifold_edges},
            {"intersection_segments", r.features.intersection_segments}}},
          {"parameters", params_json(r.params)},
          {"grid",

@@ -62,8 +62,11 @@ WrapResult wrap(const Mesh& input, const WrapParams& params, ProgressSink* progr
     StageTimer timer("prepare", report.stages);
     prepared = prep::prepare(input, params, progress);
   }
-  for (const auto& f : prepared.feature_edges)
-    (f.kind == prep::FeatureKind::Sharp ? report.features.sharp_edges : report.features.boundary_edges)++;
+  for (const auto& f : prepared.feature_edges) {
+    if (f.kind == prep::FeatureKind::Sharp) ++report.features.sharp_edges;
+    if (f.kind == prep::FeatureKind::Boundary) ++report.features.boundary_edges;
+    if (f.kind == prep::FeatureKind::NonManifold) ++report.features.nonmanifold_edges;
+  }
   report.features.intersection_segments = prepared.intersections.size();
   report.diagonal = prepared.diagonal;
   const double base = params.base_size.resolve(prepared.diagonal);
@@ -130,6 +133,11 @@ WrapResult wrap(const Mesh& input, const WrapParams& params, ProgressSink* progr
     // The authoritative self-intersection verdict is CGAL's own on the closed mesh.
     check::CgalVerdict verdict = check::cgal_verdict(result.surface.points, result.surface.triangles);
     report.output.self_intersecting = verdict.self_intersects;
+    if (verdict.valid_polygon_mesh) {
+      // Count what CGAL finds (zero for any surface that is handed back).
+      auto bad = check::mesh_self_intersecting_faces(result.surface.points, result.surface.triangles);
+      report.output.intersecting_triangles = bad.size();
+    }
     if (!report.output.valid_closed_surface() || !verdict.valid_polygon_mesh || !verdict.outward) {
       // For diagnosis only: VDBWRAP_DUMP_INVALID=FILE keeps the rejected surface.
       if (const char* dump = std::getenv("VDBWRAP_DUMP_INVALID")) io::write_mesh(result.surface, dump);

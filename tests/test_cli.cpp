@@ -80,6 +80,11 @@ TEST_F(Cli, CheckReportsWatertightnessAndDistance) {
   EXPECT_EQ(ok.code, 0) << ok.err;
 }
 
+TEST_F(Cli, CheckRequireValidFailsOnAnOpenMesh) {
+  EXPECT_EQ(run("check --require-valid " + vdbwrap::testing::data_path("suzanne.ply")).code, 4);
+  EXPECT_EQ(run("check --require-valid " + vdbwrap::testing::data_path("torus.STL")).code, 0);
+}
+
 TEST_F(Cli, EmptyFileIsInvalidInput) {
   CliRun r = run("wrap " + file("empty.stl", "") + " -o " + (dir / "o.stl").string());
   EXPECT_EQ(r.code, 3);

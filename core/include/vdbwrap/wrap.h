@@ -86,7 +86,7 @@ struct MeshDiagnostics {
 };
 
 struct FeatureStats {
-  size_t sharp_edges = 0, boundary_edges = 0, intersection_segments = 0;
+  size_t sharp_edges = 0, boundary_edges = 0, nonmanifold_edges = 0, intersection_segments = 0;
 };
 
 struct WrapReport {
