@@ -8,6 +8,9 @@
 #include <iostream>
 
 #include "cli_progress.h"
+#ifdef VDBWRAP_WITH_REMOTE
+#include "remote.h"  // submit, wait, jobs, cancel (gRPC job service)
+#endif
 #include "io/mesh_io.h"
 #include "vdbwrap/wrap.h"
 
@@ -87,6 +90,12 @@ int main(int argc, char** argv) {
                        "Smoothing iterations of the voxel surface before projection (untangles the staircase)")
       ->capture_default_str()
       ->check(CLI::Range(0, 100));
+  bool no_features = false;
+  wrap_cmd->add_flag("--no-features", no_features, "Do not snap the wrap onto sharp edges, boundaries and corners");
+  wrap_cmd->add_option("--corner-angle", params.corner_angle_deg,
+                       "Degrees a feature curve must turn at a point to make a corner there")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 180.0));
   wrap_cmd->add_option("--report", report_path, "Write a JSON report (diagnostics, parameters, validity, distances, timings)");
   wrap_cmd->add_flag("-q,--quiet", quiet, "No progress on stderr");
 
@@ -100,6 +109,9 @@ int main(int argc, char** argv) {
   check_cmd->add_flag("--require-valid", require_valid,
                       "Exit with code 4 unless the mesh is a valid closed surface (for scripts)");
 
+#ifdef VDBWRAP_WITH_REMOTE
+  vdbwrap::remote::RemoteCommands remote(app);
+#endif
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -107,10 +119,14 @@ int main(int argc, char** argv) {
     return code == 0 ? 0 : exit_code(ErrorKind::InvalidArgument);
   }
 
+#ifdef VDBWRAP_WITH_REMOTE
+  if (auto code = remote.run()) return *code;
+#endif
   std::string current_file;
   try {
     if (*wrap_cmd) {
       params.base_size = Length::parse(base_size);
+      params.snap_features = !no_features;
       params.volume = volume == "inside" ? VolumeChoice::Inside : VolumeChoice::Outside;
       if (io::format_from_extension(output) == io::Format::Unknown)
         throw Error(ErrorKind::InvalidArgument, output + ": unknown output format (use .stl, .obj, .off or .ply)");

@@ -59,7 +59,9 @@ json params_json(const WrapParams& p) {
               {"refine_at_features", p.refine_at_features},
               {"weld_tolerance", p.weld_tolerance},
               {"surface_offset", p.surface_offset},
-              {"presmooth_iterations", p.presmooth_iterations}};
+              {"presmooth_iterations", p.presmooth_iterations},
+              {"snap_features", p.snap_features},
+              {"corner_angle_deg", p.corner_angle_deg}};
 }
 }  // namespace
 
@@ -95,7 +97,12 @@ std::string to_json(const WrapReport& r, int indent) {
           {{"sharp_edges", r.features.sharp_edges},
            {"boundary_edges", r.features.boundary_edges},
            {"nonmanifold_edges", r.features.nonmanifold_edges},
-           {"intersection_segments", r.features.intersection_segments}}},
+           {"intersection_segments", r.features.intersection_segments},
+           {"curves", r.features.curves},
+           {"corners", r.features.corners},
+           {"curves_captured", r.features.curves_captured},
+           {"corners_captured", r.features.corners_captured},
+           {"nodes_snapped", r.features.nodes_snapped}}},
          {"parameters", params_json(r.params)},
          {"grid",
           {{"base_size", r.base_size},
@@ -107,6 +114,7 @@ std::string to_json(const WrapReport& r, int indent) {
          {"output", diag_json(r.output)},
          {"distance_output_to_input", dist_json(r.output_to_input)},
          {"distance_input_to_output", dist_json(r.input_to_output)},
+         {"distance_sharp_edges_to_output", dist_json(r.sharp_edges_to_output)},
          {"stages", stages},
          {"total_seconds", r.total_seconds}};
   return j.dump(indent);

@@ -32,6 +32,7 @@ void check_params(const WrapParams& p) {
   if (p.refine_max_triangles < 1) bad("refine_max_triangles must be at least 1");
   if (!(p.surface_offset >= 0 && p.surface_offset < 0.5)) bad("surface offset must be in [0, 0.5) of the finest cell");
   if (!(p.weld_tolerance >= 0 && p.weld_tolerance < 0.01)) bad("weld tolerance must be in [0, 0.01) of the diagonal");
+  if (!(p.corner_angle_deg > 0 && p.corner_angle_deg < 180)) bad("corner angle must be between 0 and 180 degrees");
 }
 
 void check_cancel(ProgressSink* progress) {
@@ -107,8 +108,15 @@ WrapResult wrap(const Mesh& input, const WrapParams& params, ProgressSink* progr
   {
     StageTimer timer("project", report.stages);
     fit::SurfaceIndex index(prepared.mesh.points, prepared.mesh.triangles);
-    fitted = fit::fit_to_input(lattice, g, index, prepared.origin, params, progress);
+    std::vector<fit::FeatureCurve> curves;
+    if (params.snap_features) curves = fit::build_feature_curves(prepared, params.corner_angle_deg);
+    fitted = fit::fit_to_input(lattice, g, index, curves, prepared.origin, params, progress);
     report.nodes_held_back = fitted.held_back;
+    report.features.curves = fitted.snap.curves;
+    report.features.corners = fitted.snap.corners;
+    report.features.curves_captured = fitted.snap.curves_captured;
+    report.features.corners_captured = fitted.snap.corners_captured;
+    report.features.nodes_snapped = fitted.snap.nodes_snapped;
 
     // Every output triangle carries the part of the input triangle nearest its centroid.
     Mesh& out = result.surface;
@@ -155,6 +163,7 @@ WrapResult wrap(const Mesh& input, const WrapParams& params, ProgressSink* progr
     if (progress) progress->progress("distances", 0.0, "sampling distances between the wrap and the input");
     report.output_to_input = sampled_distance(result.surface, input);
     report.input_to_output = sampled_distance(input, result.surface);
+    report.sharp_edges_to_output = sharp_edge_distance(input, result.surface);
   }
   report.total_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return result;

@@ -34,7 +34,7 @@ Fitted fit_mesh(const Mesh& m, double base_percent, WrapParams params = {}) {
   extract::ExtractStats stats;
   auto lattice = extract::extract_manifold_surface(*f.grid, label, params.volume, stats, nullptr);
   fit::SurfaceIndex index(f.input.mesh.points, f.input.mesh.triangles);
-  f.surface = fit::fit_to_input(lattice, *f.grid, index, Vec3{0, 0, 0}, params, nullptr);
+  f.surface = fit::fit_to_input(lattice, *f.grid, index, {}, Vec3{0, 0, 0}, params, nullptr);
   return f;
 }
 

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <set>
 #include <unordered_map>
 
 #include "check/intersections.h"
@@ -149,7 +150,8 @@ bool split_along_02(const std::array<uint32_t, 4>& q, const std::vector<Vec3>& p
 }  // namespace
 
 FittedSurface fit_to_input(const extract::LatticeSurface& surf, const grid::AdaptiveGrid& g, const SurfaceIndex& input,
-                           const Vec3& origin, const WrapParams& params, ProgressSink* progress) {
+                           const std::vector<FeatureCurve>& curves, const Vec3& origin, const WrapParams& params,
+                           ProgressSink* progress) {
   const double hf = g.fine_size();
   // Nodes: lattice nodes, then one centre node per polygon with more than four nodes.
   std::vector<Vec3> lattice;
@@ -215,37 +217,92 @@ FittedSurface fit_to_input(const extract::LatticeSurface& surf, const grid::Adap
 
   if (progress) progress->progress("project", 0.0, "projecting " + std::to_string(n) + " nodes onto the input");
   const double offset = params.surface_offset * hf;
-  std::vector<Vec3> target(n);
+  // The nearest input point of `from`, `offset` off the input on node i's side (the side
+  // its lattice node is on, judged against the plane of the triangle hit: smoothing may
+  // have carried `from` across a thin sheet).
+  auto project_on_side = [&](size_t i, const Vec3& from, const Vec3& lattice_foot, double lattice_distance) {
+    auto hit = input.closest(from);
+    const double lattice_side = dot(lattice[i] - hit.point, hit.normal);
+    const Vec3 fallback = lattice_side >= 0 ? hit.normal : hit.normal * -1.0;
+    Vec3 away = from - hit.point;
+    double d = norm(away);
+    const bool same_side = (dot(away, hit.normal) >= 0) == (lattice_side >= 0);
+    Vec3 dir = (d > 1e-3 * offset && same_side) ? away * (1.0 / d) : fallback;
+    if (norm2(dir) == 0) dir = (lattice[i] - lattice_foot) * (1.0 / lattice_distance);
+    Vec3 t = hit.point + dir * offset;
+    if (norm(t - lattice[i]) > 3.0 * g.base_size()) t = lattice[i];  // a wild move: keep it off
+    return t;
+  };
+  std::vector<Vec3> target(n), lattice_foot(n);
+  std::vector<double> lattice_distance(n);
   tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 256), [&](const tbb::blocked_range<size_t>& r) {
     for (size_t i = r.begin(); i != r.end(); ++i) {
       auto side_hit = input.closest(lattice[i]);
-      double lattice_distance = std::sqrt(side_hit.squared_distance);
-      if (lattice_distance <= offset) {
-        target[i] = lattice[i];
-        continue;
-      }
-      auto hit = input.closest(smoothed[i]);
-      // The node keeps the side of the input its lattice node is on, judged against the
-      // plane of the triangle hit: smoothing may carry it across a thin sheet.
-      const double lattice_side = dot(lattice[i] - hit.point, hit.normal);
-      const Vec3 fallback = lattice_side >= 0 ? hit.normal : hit.normal * -1.0;
-      Vec3 away = smoothed[i] - hit.point;
-      double d = norm(away);
-      const bool same_side = (dot(away, hit.normal) >= 0) == (lattice_side >= 0);
-      Vec3 dir = (d > 1e-3 * offset && same_side) ? away * (1.0 / d) : fallback;
-      if (norm2(dir) == 0) dir = (lattice[i] - side_hit.point) * (1.0 / lattice_distance);
-      target[i] = hit.point + dir * offset;
-      if (norm(target[i] - lattice[i]) > 3.0 * g.base_size()) target[i] = lattice[i];  // a wild move: keep it off
+      lattice_foot[i] = side_hit.point;
+      lattice_distance[i] = std::sqrt(side_hit.squared_distance);
+      target[i] = lattice_distance[i] <= offset ? lattice[i] : project_on_side(i, smoothed[i], lattice_foot[i], lattice_distance[i]);
     }
   });
   if (progress && progress->cancelled()) throw Error(ErrorKind::Cancelled, "cancelled");
 
-  const double min_area2 = 1e-6 * hf * hf;
+  // Feature snapping: chains of wrap edges traced along the feature curves and moved onto
+  // them; then the nodes around them relax onto the faces on either side (smoothing with
+  // re-projection), the snapped nodes held fixed.
   FittedSurface out;
+  std::vector<uint8_t> snapped(n, 0);
+  std::set<std::pair<uint32_t, uint32_t>> traced;
+  if (!curves.empty()) {
+    if (progress) progress->progress("project", 0.05, "snapping to " + std::to_string(curves.size()) + " feature curves");
+    // The chosen volume next to a concave crease is often coarse (only cells the input
+    // passes through are refined), so nodes along it can be a base cell apart: the trace
+    // radius covers that.
+    const double trace_radius = std::max(2.0 * hf, 1.5 * g.base_size());
+    WrapGraph graph;
+    graph.neighbours = neighbours;
+    for (const auto& q : quads) {
+      graph.neighbours[q[0]].push_back(q[2]), graph.neighbours[q[2]].push_back(q[0]);
+      graph.neighbours[q[1]].push_back(q[3]), graph.neighbours[q[3]].push_back(q[1]);
+    }
+    for (const auto& [a, b] : snap_to_curves(curves, graph, lattice, target, snapped, trace_radius, std::max(8.0 * hf, 2.0 * trace_radius), offset, out.snap))
+      traced.insert({std::min(a, b), std::max(a, b)});
+    // Relax the unsnapped nodes within three rings of a snapped one.
+    std::vector<uint8_t> relax(n, 0);
+    std::vector<uint32_t> ring;
+    for (uint32_t i = 0; i < n; ++i)
+      if (snapped[i]) ring.push_back(i);
+    for (int r = 0; r < 3; ++r) {
+      std::vector<uint32_t> next_ring;
+      for (uint32_t v : ring)
+        for (uint32_t w : neighbours[v])
+          if (!snapped[w] && !relax[w]) relax[w] = 1, next_ring.push_back(w);
+      ring.swap(next_ring);
+    }
+    std::vector<uint32_t> relaxed;
+    for (uint32_t i = 0; i < n; ++i)
+      if (relax[i] && lattice_distance[i] > offset) relaxed.push_back(i);
+    for (int it = 0; it < 4; ++it) {
+      std::vector<Vec3> moved(relaxed.size());
+      tbb::parallel_for(tbb::blocked_range<size_t>(0, relaxed.size(), 256), [&](const tbb::blocked_range<size_t>& r) {
+        for (size_t k = r.begin(); k != r.end(); ++k) {
+          uint32_t i = relaxed[k];
+          Vec3 avg{0, 0, 0};
+          for (uint32_t j : neighbours[i]) avg = avg + target[j];
+          avg = avg * (1.0 / double(std::max<size_t>(1, neighbours[i].size())));
+          moved[k] = project_on_side(i, avg, lattice_foot[i], lattice_distance[i]);
+        }
+      });
+      for (size_t k = 0; k < relaxed.size(); ++k) target[relaxed[k]] = moved[k];
+    }
+  }
+
+  const double min_area2 = 1e-6 * hf * hf;
   out.triangles = fans;
   out.triangles.reserve(fans.size() + 2 * quads.size());
+  // Traced feature edges stay edges: a quad whose diagonal was traced is split along it.
   for (const auto& q : quads) {
-    if (split_along_02(q, target, input, min_area2)) {
+    bool along02 = traced.count({std::min(q[0], q[2]), std::max(q[0], q[2])}) > 0;
+    bool along13 = traced.count({std::min(q[1], q[3]), std::max(q[1], q[3])}) > 0;
+    if (along02 || (!along13 && split_along_02(q, target, input, min_area2))) {
       out.triangles.push_back({q[0], q[1], q[2]});
       out.triangles.push_back({q[0], q[2], q[3]});
     } else {
@@ -265,12 +322,19 @@ FittedSurface fit_to_input(const extract::LatticeSurface& surf, const grid::Adap
   auto world = [&](const Vec3& local) { return local + origin; };
   p.resize(n);
   for (size_t i = 0; i < n; ++i) p[i] = world(target[i]);
+  std::vector<uint8_t> strikes(n, 0);
   std::vector<std::vector<uint32_t>> vertex_triangles(n);
+  (void)t;
   for (uint32_t f = 0; f < out.triangles.size(); ++f)
     for (uint32_t v : out.triangles[f]) vertex_triangles[v].push_back(f);
 
+  // Nodes on a feature curve stay on it: an offending triangle moves its other nodes first.
   auto flag_triangle = [&](uint32_t f, std::vector<uint8_t>& flag) {
-    for (uint32_t v : out.triangles[f]) flag[v] = 1;
+    const Tri& tri = out.triangles[f];
+    bool free_can_move = false;
+    for (uint32_t v : tri) free_can_move |= !snapped[v] && t[v] > 0;
+    for (uint32_t v : tri)
+      if (!free_can_move || !snapped[v]) flag[v] = 1;
   };
   NodeBuckets nodes(p, 1e-3 * hf);
   auto full_check = [&](std::vector<uint8_t>& flag) {
@@ -307,7 +371,7 @@ FittedSurface fit_to_input(const extract::LatticeSurface& surf, const grid::Adap
   // A node flagged again and again sits in a tangle that halving resolves only slowly:
   // after a few strikes it goes straight back to its lattice position.
   const int max_rounds = 400, give_up_halving = 200, strikes_to_lattice = 4;
-  std::vector<uint8_t> flag(n, 0), strikes(n, 0);
+  std::vector<uint8_t> flag(n, 0);
   full_check(flag);
   int round = 0;
   bool valid = false;

@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "extract/extract_surface.h"
+#include "fit/features.h"
 #include "fit/surface_index.h"
 #include "grid/adaptive_grid.h"
 #include "vdbwrap/wrap.h"
@@ -17,6 +18,7 @@ struct FittedSurface {
   std::vector<Tri> triangles;
   size_t held_back = 0;       // nodes that could not go all the way to the input
   size_t validity_rounds = 0;
+  SnapStats snap;
 };
 
 
@@ -25,7 +27,9 @@ struct FittedSurface {
 std::vector<uint32_t> invalid_triangles(const std::vector<Vec3>& points, const std::vector<Tri>& triangles, double min_area2);
 
 // `origin` turns the local frame of the grid and the index into output coordinates.
+// `curves`: feature curves to snap to (empty: no snapping).
 FittedSurface fit_to_input(const extract::LatticeSurface& surface, const grid::AdaptiveGrid& grid, const SurfaceIndex& input,
-                           const Vec3& origin, const WrapParams& params, ProgressSink* progress);
+                           const std::vector<FeatureCurve>& curves, const Vec3& origin, const WrapParams& params,
+                           ProgressSink* progress);
 
 }  // namespace vdbwrap::fit

@@ -42,6 +42,11 @@ struct WrapParams {
   double surface_offset = 0.02;    // nodes stop this fraction of the finest cell off the input
   int presmooth_iterations = 16;   // smoothing of the voxel surface before projection (untangling)
 
+  // Feature snapping (spec stage 3): wrap edges traced along the feature curves and moved
+  // onto them, convex and concave alike, with the corners.
+  bool snap_features = true;
+  double corner_angle_deg = 30;    // a feature curve turning more than this at a point has a corner there
+
   bool compute_distances = true;   // sample output-to-input distances for the report
 };
 
@@ -87,6 +92,7 @@ struct MeshDiagnostics {
 
 struct FeatureStats {
   size_t sharp_edges = 0, boundary_edges = 0, nonmanifold_edges = 0, intersection_segments = 0;
+  size_t curves = 0, corners = 0, curves_captured = 0, corners_captured = 0, nodes_snapped = 0;
 };
 
 struct WrapReport {
@@ -99,6 +105,7 @@ struct WrapReport {
   size_t nodes_held_back = 0;           // nodes kept off the input to stay valid
   MeshDiagnostics output;
   DistanceStats output_to_input, input_to_output;
+  DistanceStats sharp_edges_to_output;  // samples along the input's sharp edges (over 40 degrees)
   std::vector<StageStats> stages;
   double total_seconds = 0;
 };
@@ -119,6 +126,11 @@ MeshDiagnostics diagnose(const Mesh& mesh, bool find_intersections = true);
 // diagonal / samples_per_diagonal (widened so that there are at most about two million),
 // plus every vertex; distances to `to`.
 DistanceStats sampled_distance(const Mesh& from, const Mesh& to, double samples_per_diagonal = 1000);
+
+// Distance from points sampled every spacing_fraction x diagonal along the input's sharp
+// edges (normals more than angle_deg apart) to `surface`: how well it keeps the edges.
+DistanceStats sharp_edge_distance(const Mesh& input, const Mesh& surface, double angle_deg = 40,
+                                  double spacing_fraction = 0.001);
 
 std::string to_json(const WrapReport& report, int indent = 2);
 std::string to_json(const MeshDiagnostics& diagnostics, int indent = 2);

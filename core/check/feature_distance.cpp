@@ -1,0 +1,60 @@
+// Distance from the input's sharp edges to a surface: how well a wrap keeps the edges.
+#include <cmath>
+
+#include <tbb/parallel_for.h>
+
+#include "common/vec.h"
+#include "fit/surface_index.h"
+#include "prep/prepare.h"
+#include "vdbwrap/wrap.h"
+
+namespace vdbwrap {
+
+DistanceStats sharp_edge_distance(const Mesh& input, const Mesh& surface, double angle_deg, double spacing_fraction) {
+  DistanceStats s;
+  Box3 box;
+  for (const auto& p : input.points) box.add(p);
+  s.diagonal = box.diagonal();
+  if (input.triangles.empty() || surface.triangles.empty()) return s;
+  // Sharp edges as the pipeline sees them: welded, degenerate triangles ignored.
+  std::vector<Vec3> welded;
+  auto remap = prep::weld_points(input.points, 1e-7 * s.diagonal, welded);
+  std::vector<Tri> tris;
+  std::vector<Vec3> normals;
+  for (const Tri& t : input.triangles) {
+    Tri w{remap[t[0]], remap[t[1]], remap[t[2]]};
+    Vec3 n = area_vector(welded[w[0]], welded[w[1]], welded[w[2]]);
+    if (w[0] == w[1] || w[1] == w[2] || w[0] == w[2] || norm(n) == 0) continue;
+    tris.push_back(w);
+    normals.push_back(normalized(n));
+  }
+  // Orientation matters for the dihedral angle: make it consistent first.
+  prep::orient_pieces(welded, tris);
+  for (size_t t = 0; t < tris.size(); ++t) normals[t] = normalized(area_vector(welded[tris[t][0]], welded[tris[t][1]], welded[tris[t][2]]));
+  auto edges = prep::find_feature_edges(welded, tris, normals, angle_deg);
+  const double spacing = spacing_fraction * s.diagonal;
+  std::vector<Vec3> samples;
+  for (const auto& e : edges) {
+    if (e.kind != prep::FeatureKind::Sharp) continue;
+    const Vec3 &a = welded[e.a], &b = welded[e.b];
+    size_t k = std::max<size_t>(1, size_t(std::ceil(norm(b - a) / spacing)));
+    for (size_t i = 0; i <= k; ++i) samples.push_back(lerp(a, b, double(i) / double(k)));
+  }
+  s.samples = samples.size();
+  if (samples.empty()) return s;
+  fit::SurfaceIndex index(surface.points, surface.triangles);
+  std::vector<double> dist(samples.size());
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, samples.size(), 512), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t i = r.begin(); i != r.end(); ++i) dist[i] = std::sqrt(index.squared_distance(samples[i]));
+  });
+  double sum = 0;
+  for (double d : dist) sum += d;
+  s.mean = sum / double(dist.size());
+  size_t k95 = std::min(dist.size() - 1, size_t(0.95 * double(dist.size())));
+  std::nth_element(dist.begin(), dist.begin() + k95, dist.end());
+  s.p95 = dist[k95];
+  s.max = *std::max_element(dist.begin(), dist.end());
+  return s;
+}
+
+}  // namespace vdbwrap

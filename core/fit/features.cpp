@@ -1,0 +1,334 @@
+#include "fit/features.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <map>
+#include <queue>
+#include <unordered_map>
+
+#include "common/vec.h"
+
+namespace vdbwrap::fit {
+namespace {
+
+struct Key {
+  int64_t x, y, z;
+  bool operator==(const Key& o) const { return x == o.x && y == o.y && z == o.z; }
+};
+struct KeyHash {
+  size_t operator()(const Key& k) const { return size_t(k.x * 73856093LL ^ k.y * 19349663LL ^ k.z * 83492791LL); }
+};
+
+// Nearest point of segment ab to p, and its parameter in [0,1].
+Vec3 closest_on_segment(const Vec3& a, const Vec3& b, const Vec3& p, double& t) {
+  Vec3 ab = b - a;
+  double len2 = norm2(ab);
+  t = len2 > 0 ? std::clamp(dot(p - a, ab) / len2, 0.0, 1.0) : 0.0;
+  return a + ab * t;
+}
+
+// A piece of a curve with arc-length parameters at its points.
+struct Piece {
+  std::vector<Vec3> points;
+  std::vector<double> arc;
+  bool start_corner = false, end_corner = false;
+
+  // Nearest point on the piece: point, distance and arc parameter.
+  Vec3 closest(const Vec3& p, double& distance, double& at) const {
+    Vec3 best = points[0];
+    distance = std::numeric_limits<double>::infinity();
+    at = 0;
+    for (size_t i = 0; i + 1 < points.size(); ++i) {
+      double t;
+      Vec3 q = closest_on_segment(points[i], points[i + 1], p, t);
+      double d = norm(q - p);
+      if (d < distance) {
+        distance = d;
+        best = q;
+        at = arc[i] + t * (arc[i + 1] - arc[i]);
+      }
+    }
+    return best;
+  }
+};
+
+std::vector<Piece> split_into_pieces(const FeatureCurve& c, double piece_length) {
+  // Resample so that no segment is longer than piece_length / 4, then cut every piece_length.
+  std::vector<Vec3> dense;
+  for (size_t i = 0; i + 1 < c.points.size(); ++i) {
+    const Vec3 &a = c.points[i], &b = c.points[i + 1];
+    size_t k = std::max<size_t>(1, size_t(std::ceil(norm(b - a) / (piece_length / 4))));
+    for (size_t j = 0; j < k; ++j) dense.push_back(lerp(a, b, double(j) / double(k)));
+  }
+  dense.push_back(c.points.back());
+  std::vector<Piece> pieces;
+  Piece cur;
+  cur.start_corner = c.start_corner;
+  double run = 0;
+  cur.points.push_back(dense[0]);
+  cur.arc.push_back(0);
+  for (size_t i = 1; i < dense.size(); ++i) {
+    run += norm(dense[i] - dense[i - 1]);
+    cur.points.push_back(dense[i]);
+    cur.arc.push_back(run);
+    bool last = i + 1 == dense.size();
+    if (run >= piece_length || last) {
+      cur.end_corner = last && c.end_corner;
+      pieces.push_back(cur);
+      cur = Piece{};
+      cur.points.push_back(dense[i]);
+      cur.arc.push_back(0);
+      run = 0;
+    }
+  }
+  return pieces;
+}
+
+}  // namespace
+
+std::vector<FeatureCurve> build_feature_curves(const prep::PreparedInput& in, double corner_angle_deg) {
+  // Graph of feature segments over welded points (mesh vertices, and intersection segment
+  // ends merged by position).
+  const auto& pts = in.mesh.points;
+  std::vector<Vec3> node_pos(pts.begin(), pts.end());
+  std::unordered_map<Key, uint32_t, KeyHash> extra;
+  const double tol = 1e-9 * in.diagonal + 1e-300;
+  auto node_at = [&](const Vec3& p) {
+    Key k{int64_t(std::llround(p[0] / tol)), int64_t(std::llround(p[1] / tol)), int64_t(std::llround(p[2] / tol))};
+    auto [it, added] = extra.emplace(k, uint32_t(node_pos.size()));
+    if (added) node_pos.push_back(p);
+    return it->second;
+  };
+  std::vector<std::pair<uint32_t, uint32_t>> segs;
+  for (const auto& e : in.feature_edges) segs.emplace_back(e.a, e.b);
+  for (const auto& s : in.intersections) {
+    uint32_t a = node_at(s.a), b = node_at(s.b);
+    if (a != b) segs.emplace_back(a, b);
+  }
+  std::vector<std::vector<uint32_t>> adj(node_pos.size());  // segment ids per node
+  for (uint32_t i = 0; i < segs.size(); ++i) {
+    adj[segs[i].first].push_back(i);
+    adj[segs[i].second].push_back(i);
+  }
+  const double cos_corner = std::cos(corner_angle_deg * M_PI / 180.0);
+  auto other = [&](uint32_t s, uint32_t v) { return segs[s].first == v ? segs[s].second : segs[s].first; };
+  auto is_corner = [&](uint32_t v) {
+    if (adj[v].size() != 2) return true;
+    Vec3 d0 = normalized(node_pos[other(adj[v][0], v)] - node_pos[v]);
+    Vec3 d1 = normalized(node_pos[other(adj[v][1], v)] - node_pos[v]);
+    // Straight through: directions opposite (dot -1). A turn sharper than the corner angle is a corner.
+    return dot(d0, d1) > -cos_corner;
+  };
+  std::vector<uint8_t> used(segs.size(), 0);
+  std::vector<FeatureCurve> curves;
+  auto walk = [&](uint32_t start, uint32_t first_seg) {
+    FeatureCurve c;
+    c.start_corner = is_corner(start);
+    c.points.push_back(node_pos[start]);
+    uint32_t v = start, s = first_seg;
+    while (true) {
+      used[s] = 1;
+      v = other(s, v);
+      c.points.push_back(node_pos[v]);
+      if (v == start) {
+        c.closed = true;
+        break;
+      }
+      if (is_corner(v)) {
+        c.end_corner = true;
+        break;
+      }
+      uint32_t next = adj[v][0] == s ? adj[v][1] : adj[v][0];
+      if (used[next]) break;
+      s = next;
+    }
+    curves.push_back(std::move(c));
+  };
+  for (uint32_t v = 0; v < node_pos.size(); ++v)
+    if (!adj[v].empty() && is_corner(v))
+      for (uint32_t s : adj[v])
+        if (!used[s]) walk(v, s);
+  for (uint32_t s = 0; s < segs.size(); ++s)
+    if (!used[s]) walk(segs[s].first, s);  // closed loops without corners
+  return curves;
+}
+
+std::vector<std::pair<uint32_t, uint32_t>> snap_to_curves(const std::vector<FeatureCurve>& curves, const WrapGraph& graph,
+                                                          const std::vector<Vec3>& lattice, std::vector<Vec3>& target,
+                                                          std::vector<uint8_t>& snapped, double radius, double piece_length,
+                                                          double offset, SnapStats& stats) {
+  const size_t n = target.size();
+  std::vector<std::pair<uint32_t, uint32_t>> traced;
+  // Nodes bucketed by target position, cells of the radius.
+  const double inv = 1.0 / radius;
+  auto key = [&](const Vec3& p) {
+    return Key{int64_t(std::floor(p[0] * inv)), int64_t(std::floor(p[1] * inv)), int64_t(std::floor(p[2] * inv))};
+  };
+  std::unordered_map<Key, std::vector<uint32_t>, KeyHash> buckets;
+  for (uint32_t i = 0; i < n; ++i) {
+    Key kt = key(target[i]), kl = key(lattice[i]);
+    buckets[kt].push_back(i);
+    if (!(kl == kt)) buckets[kl].push_back(i);
+  }
+
+  // Corner points already taken by a node, so curves meeting there share it.
+  std::unordered_map<Key, uint32_t, KeyHash> corner_node;
+  const double ctol = radius * 1e-6;
+  auto corner_key = [&](const Vec3& p) {
+    return Key{int64_t(std::llround(p[0] / ctol)), int64_t(std::llround(p[1] / ctol)), int64_t(std::llround(p[2] / ctol))};
+  };
+  std::vector<uint8_t> is_corner_node(n, 0);
+
+  auto place = [&](uint32_t v, const Vec3& on_curve) {
+    Vec3 away = lattice[v] - on_curve;
+    double d = norm(away);
+    target[v] = d > 0 ? on_curve + away * (std::min(offset, d) / d) : on_curve;
+    snapped[v] = 1;
+  };
+
+  // Dijkstra state reused across pieces (reset through the touched list).
+  std::vector<double> dist(n, std::numeric_limits<double>::infinity());
+  std::vector<uint32_t> prev(n, UINT32_MAX);
+  std::vector<double> curve_distance(n, -1);
+  std::vector<uint32_t> touched;
+
+  stats.curves = curves.size();
+  for (const FeatureCurve& c : curves) {
+    stats.corners += (c.start_corner ? 1 : 0) + (c.end_corner ? 1 : 0);
+    auto pieces = split_into_pieces(c, piece_length);
+    size_t captured = 0;
+    uint32_t carry = UINT32_MAX;  // end node of the previous piece
+    for (size_t pi = 0; pi < pieces.size(); ++pi) {
+      const Piece& piece = pieces[pi];
+      ++stats.pieces;
+      // The region: nodes within the radius of the piece.
+      Box3 box;
+      for (const Vec3& q : piece.points) box.add(q);
+      Key lo = key(box.lo - Vec3{radius, radius, radius}), hi = key(box.hi + Vec3{radius, radius, radius});
+      std::vector<uint32_t> region;
+      for (int64_t x = lo.x; x <= hi.x; ++x)
+        for (int64_t y = lo.y; y <= hi.y; ++y)
+          for (int64_t z = lo.z; z <= hi.z; ++z) {
+            auto it = buckets.find({x, y, z});
+            if (it == buckets.end()) continue;
+            for (uint32_t v : it->second) {
+              // Nearer of the projected and the lattice position: smoothing rounds a
+              // concave corner away from its crease, the lattice node stays close to it.
+              double d, dl, at;
+              piece.closest(target[v], d, at);
+              piece.closest(lattice[v], dl, at);
+              d = std::min(d, dl);
+              if (d <= radius && curve_distance[v] < 0) {
+                curve_distance[v] = d;
+                region.push_back(v);
+              }
+            }
+          }
+      auto reset = [&]() {
+        for (uint32_t v : region) curve_distance[v] = -1;
+        for (uint32_t v : touched) dist[v] = std::numeric_limits<double>::infinity(), prev[v] = UINT32_MAX;
+        touched.clear();
+      };
+      if (region.empty()) {
+        carry = UINT32_MAX;
+        continue;
+      }
+      // End nodes: the region node nearest each end point (or the node already at a corner).
+      auto nearest_to = [&](const Vec3& p, bool corner) {
+        if (corner) {
+          auto it = corner_node.find(corner_key(p));
+          if (it != corner_node.end() && curve_distance[it->second] >= 0) return it->second;
+        }
+        uint32_t best = UINT32_MAX;
+        double bd = std::numeric_limits<double>::infinity();
+        for (uint32_t v : region) {
+          if (snapped[v] && !is_corner_node[v]) continue;
+          double d = norm(target[v] - p);
+          if (d < bd) bd = d, best = v;
+        }
+        return best;
+      };
+      uint32_t s = (carry != UINT32_MAX && curve_distance[carry] >= 0) ? carry : nearest_to(piece.points.front(), piece.start_corner);
+      uint32_t e = nearest_to(piece.points.back(), piece.end_corner);
+      if (s == UINT32_MAX || e == UINT32_MAX || s == e) {
+        carry = e;
+        reset();
+        continue;
+      }
+      // Shortest path hugging the piece; other curves' snapped nodes are not crossed.
+      using Item = std::pair<double, uint32_t>;
+      std::priority_queue<Item, std::vector<Item>, std::greater<Item>> heap;
+      dist[s] = 0;
+      touched.push_back(s);
+      heap.push({0, s});
+      while (!heap.empty()) {
+        auto [du, u] = heap.top();
+        heap.pop();
+        if (du > dist[u]) continue;
+        if (u == e) break;
+        for (uint32_t w : graph.neighbours[u]) {
+          if (curve_distance[w] < 0) continue;
+          if (snapped[w] && w != e && !is_corner_node[w]) continue;
+          double len = norm(target[w] - target[u]);
+          double cost = len * (1.0 + 4.0 * (curve_distance[u] + curve_distance[w]) / (2 * radius)) + 1e-12;
+          if (du + cost < dist[w]) {
+            if (dist[w] == std::numeric_limits<double>::infinity()) touched.push_back(w);
+            dist[w] = du + cost;
+            prev[w] = u;
+            heap.push({dist[w], w});
+          }
+        }
+      }
+      if (prev[e] == UINT32_MAX) {
+        carry = UINT32_MAX;
+        reset();
+        continue;
+      }
+      std::vector<uint32_t> path;
+      for (uint32_t v = e; v != UINT32_MAX; v = prev[v]) path.push_back(v);
+      std::reverse(path.begin(), path.end());
+      // Move the path onto the piece, keeping its order along the curve (no zig-zag back).
+      double last_at = -1;
+      std::vector<uint8_t> on(path.size(), 0);
+      for (size_t k = 0; k < path.size(); ++k) {
+        uint32_t v = path[k];
+        Vec3 q;
+        if (k == 0 && piece.start_corner) {
+          q = piece.points.front();
+          last_at = 0;
+        } else if (k + 1 == path.size() && piece.end_corner) {
+          q = piece.points.back();
+          last_at = piece.arc.back();
+        } else if (k == 0 && snapped[v]) {
+          on[k] = 1;  // shared with the previous piece or a corner: already on the curve
+          double d, at;
+          piece.closest(target[v], d, at);
+          last_at = at;
+          continue;
+        } else {
+          double d, at;
+          q = piece.closest(target[v], d, at);
+          if (at < last_at) continue;
+          last_at = at;
+        }
+        place(v, q);
+        on[k] = 1;
+        ++stats.nodes_snapped;
+      }
+      for (size_t k = 0; k + 1 < path.size(); ++k)
+        if (on[k] && on[k + 1]) traced.emplace_back(path[k], path[k + 1]);
+      if (piece.start_corner && on[0]) corner_node[corner_key(piece.points.front())] = path.front(), is_corner_node[path.front()] = 1;
+      if (piece.end_corner && on.back()) corner_node[corner_key(piece.points.back())] = path.back(), is_corner_node[path.back()] = 1;
+      ++stats.pieces_traced;
+      ++captured;
+      carry = e;
+      reset();
+    }
+    if (captured == pieces.size() && !pieces.empty()) ++stats.curves_captured;
+  }
+  for (const auto& kv : corner_node) (void)kv, ++stats.corners_captured;
+  return traced;
+}
+
+}  // namespace vdbwrap::fit
