@@ -27,7 +27,7 @@ enum class VolumeChoice { Outside, Inside };
 
 struct WrapParams {
   Length base_size{1.0, true};     // edge of a level-0 cell
-  int levels = 2;                  // most 2x2x2 refinements below the base size
+  int levels = 1;                  // most 2x2x2 refinements below the base size
   double feature_angle_deg = 30;   // dihedral angle (between normals) that makes an edge sharp
   VolumeChoice volume = VolumeChoice::Outside;
   int threads = 0;                 // 0: all cores
@@ -39,7 +39,7 @@ struct WrapParams {
 
   // Projection (spec stage 3).
   double weld_tolerance = 1e-7;    // fraction of the diagonal under which vertices merge
-  double surface_offset = 0.02;    // nodes stop this fraction of the finest cell off the input
+  double surface_offset = 0.005;   // nodes stop this fraction of the finest cell off the input
   int presmooth_iterations = 16;   // smoothing of the voxel surface before projection (untangling)
 
   // Feature snapping (spec stage 3): wrap edges traced along the feature curves and moved
