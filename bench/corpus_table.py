@@ -27,10 +27,12 @@ with tempfile.TemporaryDirectory() as tmp:
         r = json.load(open(rep))
         o, d = r["output"], r["distance_output_to_input"]
         valid = "yes" if o["valid_closed_surface"] and not o["self_intersecting"] else "NO"
+        e = r.get("distance_sharp_edges_to_output", {})
+        edges = (f"{e['mean_percent_of_diagonal']:.4f} / {e['p95_percent_of_diagonal']:.4f}" if e.get("samples") else "-")
         rows.append(f"| {name} | {r['input']['triangles']} | {o['triangles']} | {r['total_seconds']:.2f} | {valid} | "
-                    f"{o['intersecting_triangles']} | {d['mean_percent_of_diagonal']:.4f} | {d['p95_percent_of_diagonal']:.4f} |")
+                    f"{o['intersecting_triangles']} | {d['mean_percent_of_diagonal']:.4f} | {d['p95_percent_of_diagonal']:.4f} | {edges} |")
 print(f"Base size {args.base_size}, default options{(' ' + ' '.join(extra)) if extra else ''}; "
       "distances from the wrap to the input as % of the input's bounding-box diagonal.\n")
-print("| model | triangles in | triangles out | time (s) | valid (closed, manifold, outward, no self-intersection) | self-intersecting triangles | mean dist % | p95 dist % |")
-print("|---|---|---|---|---|---|---|---|")
+print("| model | triangles in | triangles out | time (s) | valid (closed, manifold, outward, no self-intersection) | self-intersecting triangles | mean dist % | p95 dist % | sharp edges to wrap, mean / p95 % |")
+print("|---|---|---|---|---|---|---|---|---|")
 print("\n".join(rows))

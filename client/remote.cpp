@@ -1,0 +1,788 @@
+#include "remote.h"
+
+#include <grpcpp/generic/generic_stub.h>
+#include <grpcpp/grpcpp.h>
+#include <sys/ioctl.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <condition_variable>
+#include <cstdio>
+#include <ctime>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <mutex>
+#include <random>
+#include <sstream>
+#include <thread>
+
+#include "params_mapping.h"
+#include "vdbwrap/v1/jobs.grpc.pb.h"
+
+namespace vdbwrap::remote {
+
+namespace {
+
+namespace pb = ::vdbwrap::v1;
+namespace fs = std::filesystem;
+using Clock = std::chrono::steady_clock;
+
+constexpr size_t kChunk = 1 << 20;
+
+// --- connection --------------------------------------------------------------------------
+
+struct Connection {
+  std::string server;       // --server
+  std::string token_file;   // --token-file
+  std::string tls_ca;       // --tls-ca
+  std::string tls_name;     // --tls-server-name
+  bool round_robin = false; // --round-robin
+  double retry_seconds = 30;
+
+  std::string token;
+  std::string ca_pem;
+
+  void load() {
+    auto read = [](const std::string& path, const char* what) {
+      std::ifstream in(path, std::ios::binary);
+      if (!in) throw Error(ErrorKind::InvalidArgument, path + ": cannot read the " + what);
+      std::stringstream ss;
+      ss << in.rdbuf();
+      return ss.str();
+    };
+    if (!token_file.empty()) {
+      token = read(token_file, "token file");
+      while (!token.empty() && std::isspace(static_cast<unsigned char>(token.back()))) token.pop_back();
+      if (token.empty()) throw Error(ErrorKind::InvalidArgument, token_file + ": the token file is empty");
+    }
+    if (!tls_ca.empty()) ca_pem = read(tls_ca, "CA certificate");
+  }
+
+  // A channel to `target` (default: --server). name_override: TLS host name to check when
+  // the target is an address found at run time.
+  std::shared_ptr<grpc::Channel> channel(const std::string& target = "", bool balanced = false) const {
+    grpc::ChannelArguments args;
+    args.SetMaxReceiveMessageSize(16 << 20);
+    if (balanced) args.SetLoadBalancingPolicyName("round_robin");
+    std::shared_ptr<grpc::ChannelCredentials> creds;
+    if (ca_pem.empty() && tls_name.empty()) {
+      creds = grpc::InsecureChannelCredentials();
+    } else {
+      grpc::SslCredentialsOptions ssl;
+      ssl.pem_root_certs = ca_pem;
+      creds = grpc::SslCredentials(ssl);
+      std::string name = tls_name;
+      if (name.empty() && !target.empty() && target != server) name = host_of(server);
+      if (!name.empty()) args.SetSslTargetNameOverride(name);
+    }
+    return grpc::CreateCustomChannel(target.empty() ? server : target, creds, args);
+  }
+
+  void prepare(grpc::ClientContext& ctx) const {
+    if (!token.empty()) ctx.AddMetadata("authorization", "Bearer " + token);
+  }
+
+  // The host name of a target ("h:p", "dns:///h:p", "ipv4:a:p,b:p", "ipv6:[::1]:p"): the
+  // name the server's certificate must carry when the CLI connects to an address found at
+  // run time (the replica that accepted a job).
+  static std::string host_of(std::string target) {
+    if (auto p = target.find(":///"); p != std::string::npos) target = target.substr(p + 4);
+    else if (target.rfind("ipv4:", 0) == 0 || target.rfind("ipv6:", 0) == 0) target = target.substr(5);
+    else if (target.rfind("dns:", 0) == 0) target = target.substr(4);
+    target = target.substr(0, target.find(','));
+    if (!target.empty() && target.front() == '[') return target.substr(1, target.find(']') - 1);
+    const auto colon = target.rfind(':');
+    if (colon != std::string::npos && target.find(':') == colon) target = target.substr(0, colon);
+    return target;
+  }
+};
+
+// The exit code of a failed call, like the local wrap's.
+int exit_code_of(const grpc::Status& st, const grpc::ClientContext& ctx) {
+  const auto& md = ctx.GetServerTrailingMetadata();
+  auto it = md.find(api::kErrorKindMetadata);
+  if (it != md.end()) {
+    int kind = std::atoi(std::string(it->second.data(), it->second.size()).c_str());
+    if (kind >= 1 && kind <= 6) return kind;
+  }
+  switch (st.error_code()) {
+    case grpc::StatusCode::INVALID_ARGUMENT:
+    case grpc::StatusCode::UNAUTHENTICATED:
+    case grpc::StatusCode::PERMISSION_DENIED:
+    case grpc::StatusCode::NOT_FOUND: return exit_code(ErrorKind::InvalidArgument);
+    case grpc::StatusCode::RESOURCE_EXHAUSTED: return exit_code(ErrorKind::InvalidInput);  // upload too large
+    default: return exit_code(ErrorKind::Internal);
+  }
+}
+
+const char* code_name(grpc::StatusCode c) {
+  switch (c) {
+    case grpc::StatusCode::CANCELLED: return "CANCELLED";
+    case grpc::StatusCode::INVALID_ARGUMENT: return "INVALID_ARGUMENT";
+    case grpc::StatusCode::DEADLINE_EXCEEDED: return "DEADLINE_EXCEEDED";
+    case grpc::StatusCode::NOT_FOUND: return "NOT_FOUND";
+    case grpc::StatusCode::RESOURCE_EXHAUSTED: return "RESOURCE_EXHAUSTED";
+    case grpc::StatusCode::FAILED_PRECONDITION: return "FAILED_PRECONDITION";
+    case grpc::StatusCode::UNAVAILABLE: return "UNAVAILABLE";
+    case grpc::StatusCode::UNAUTHENTICATED: return "UNAUTHENTICATED";
+    case grpc::StatusCode::INTERNAL: return "INTERNAL";
+    default: return "ERROR";
+  }
+}
+
+std::string describe(const grpc::Status& st) { return std::string(code_name(st.error_code())) + ": " + st.error_message(); }
+
+// --- progress display --------------------------------------------------------------------
+
+// A progress bar per job on a terminal (redrawn in place), plain lines otherwise.
+class Display {
+ public:
+  Display(bool quiet, std::vector<std::string> names) : quiet_(quiet), names_(std::move(names)) {
+    tty_ = ::isatty(2) == 1;
+    lines_.resize(names_.size());
+    width_ = 0;
+    for (auto& n : names_) width_ = std::max(width_, n.size());
+    width_ = std::min<size_t>(width_, 32);
+    start_ = Clock::now();
+  }
+  ~Display() { finish(); }
+
+  void event(size_t i, const pb::ProgressEvent& ev) {
+    if (quiet_) return;
+    std::lock_guard<std::mutex> g(lock_);
+    const char* state = api::state_name(ev.state());
+    if (!tty_) {
+      std::string prefix = names_.size() > 1 ? pad(names_[i]) + " " : std::string();
+      std::fprintf(stderr, "[%7.2fs] %s%-15s %3.0f%%  %s%s\n", elapsed(), prefix.c_str(),
+                   ev.stage().empty() ? state : ev.stage().c_str(), 100.0 * ev.fraction(), ev.message().c_str(),
+                   ev.state() == pb::JOB_STATE_QUEUED ? " (queued)" : "");
+      std::fflush(stderr);
+      return;
+    }
+    const int cells = 20;
+    int filled = int(std::clamp(ev.fraction(), 0.0, 1.0) * cells + 0.5);
+    if (ev.state() == pb::JOB_STATE_SUCCEEDED) filled = cells;
+    std::string bar = "[" + std::string(size_t(filled), '#') + std::string(size_t(cells - filled), '-') + "]";
+    char pct[16];
+    std::snprintf(pct, sizeof pct, "%3.0f%%", 100.0 * ev.fraction());
+    std::string stage = ev.stage().empty() || api::is_final(ev.state()) || ev.state() == pb::JOB_STATE_QUEUED
+                            ? std::string(state)
+                            : ev.stage();
+    lines_[i] = pad(names_[i]) + " " + bar + " " + pct + " " + stage + (ev.message() == stage ? "" : ": " + ev.message());
+    redraw(api::is_final(ev.state()));
+  }
+
+  // A final line for job i (replaces its bar on a terminal).
+  void note(size_t i, const std::string& text) {
+    std::lock_guard<std::mutex> g(lock_);
+    if (quiet_ && text.rfind("error", 0) != 0) return;
+    if (!tty_ || quiet_) {
+      std::fprintf(stderr, "%s\n", text.c_str());
+      std::fflush(stderr);
+      return;
+    }
+    lines_[i] = text;
+    redraw(true);
+  }
+
+  void finish() {
+    std::lock_guard<std::mutex> g(lock_);
+    if (tty_ && !quiet_ && drawn_ > 0) redraw(true);
+    drawn_ = 0;
+  }
+
+ private:
+  std::string pad(const std::string& n) const {
+    std::string s = n.size() > width_ ? n.substr(0, width_ - 3) + "..." : n;
+    return s + std::string(width_ - s.size(), ' ');
+  }
+  double elapsed() const { return std::chrono::duration<double>(Clock::now() - start_).count(); }
+  void redraw(bool force) {
+    auto now = Clock::now();
+    if (!force && now - last_draw_ < std::chrono::milliseconds(100)) return;
+    last_draw_ = now;
+    struct winsize ws {};
+    size_t cols = (::ioctl(2, TIOCGWINSZ, &ws) == 0 && ws.ws_col > 10) ? ws.ws_col : 100;
+    std::string out;
+    if (drawn_ > 0) out += "\033[" + std::to_string(drawn_) + "A";
+    for (const auto& l : lines_) out += "\r\033[K" + (l.size() >= cols ? l.substr(0, cols - 1) : l) + "\n";
+    drawn_ = lines_.size();
+    std::fputs(out.c_str(), stderr);
+    std::fflush(stderr);
+  }
+
+  bool quiet_, tty_ = false;
+  std::vector<std::string> names_;
+  std::vector<std::string> lines_;
+  size_t width_;
+  size_t drawn_ = 0;
+  Clock::time_point start_, last_draw_{};
+  std::mutex lock_;
+};
+
+// --- one job: follow it, download it ----------------------------------------------------
+
+struct Target {
+  std::string output;  // result file
+  std::string report;  // report file, or empty
+};
+
+std::string random_key() {
+  std::random_device rd;
+  char hex[33];
+  std::snprintf(hex, sizeof hex, "%08x%08x%08x%08x", rd(), rd(), rd(), rd());
+  return hex;
+}
+
+void write_file(const std::string& path, const std::string& bytes) {
+  const std::string tmp = path + ".tmp";
+  {
+    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
+    if (!out) throw Error(ErrorKind::OutputFailed, path + ": cannot write");
+    out.write(bytes.data(), std::streamsize(bytes.size()));
+    if (!out) throw Error(ErrorKind::OutputFailed, path + ": cannot write");
+  }
+  if (std::rename(tmp.c_str(), path.c_str()) != 0) throw Error(ErrorKind::OutputFailed, path + ": cannot write");
+}
+
+// Watches job `id` on `channel` until it ends (reconnecting while the server restarts), then
+// downloads its result into target. Returns the exit code.
+int follow(const Connection& conn, const std::shared_ptr<grpc::Channel>& channel, const std::string& id,
+           const Target& target, pb::MeshFormat format, Display& display, size_t index) {
+  auto stub = pb::Jobs::NewStub(channel);
+  const auto give_up = Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(conn.retry_seconds));
+  // Watch until a final state.
+  for (int attempt = 0;; ++attempt) {
+    grpc::ClientContext ctx;
+    conn.prepare(ctx);
+    ctx.set_wait_for_ready(attempt > 0);
+    pb::JobId req;
+    req.set_job_id(id);
+    auto reader = stub->Watch(&ctx, req);
+    pb::ProgressEvent ev;
+    bool ended = false;
+    while (reader->Read(&ev)) {
+      display.event(index, ev);
+      if (api::is_final(ev.state())) ended = true;
+    }
+    grpc::Status st = reader->Finish();
+    if (ended) break;
+    if (st.ok()) continue;  // the stream ended without a final state: watch again
+    const bool transient = st.error_code() == grpc::StatusCode::UNAVAILABLE;
+    if (!transient || Clock::now() > give_up) {
+      display.note(index, "error: job " + id + ": " + describe(st));
+      return exit_code_of(st, ctx);
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(std::min(2000, 200 * (attempt + 1))));
+  }
+  // Final status and report.
+  pb::JobStatus status;
+  {
+    grpc::ClientContext ctx;
+    conn.prepare(ctx);
+    pb::JobId req;
+    req.set_job_id(id);
+    grpc::Status st = stub->GetStatus(&ctx, req, &status);
+    if (!st.ok()) {
+      display.note(index, "error: job " + id + ": " + describe(st));
+      return exit_code_of(st, ctx);
+    }
+  }
+  if (status.state() != pb::JOB_STATE_SUCCEEDED) {
+    display.note(index, "error: job " + id + " (" + status.spec().file_name() + ") " + api::state_name(status.state()) + ": " +
+                            status.error_message());
+    return exit_code(api::to_error_kind(status.error_kind()));
+  }
+  // Download, straight to OUTPUT.tmp; renamed when complete.
+  const std::string tmp = target.output + ".tmp";
+  {
+    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
+    if (!out) {
+      display.note(index, "error: " + target.output + ": cannot write");
+      return exit_code(ErrorKind::OutputFailed);
+    }
+    grpc::ClientContext ctx;
+    conn.prepare(ctx);
+    pb::DownloadRequest req;
+    req.set_job_id(id);
+    req.set_format(format);
+    auto reader = stub->Download(&ctx, req);
+    pb::DownloadChunk chunk;
+    uint64_t total = 0, got = 0;
+    bool first = true;
+    while (reader->Read(&chunk)) {
+      if (first) total = chunk.total_size();
+      first = false;
+      out.write(chunk.data().data(), std::streamsize(chunk.data().size()));
+      got += chunk.data().size();
+    }
+    grpc::Status st = reader->Finish();
+    out.close();
+    if (!st.ok() || got != total || !out) {
+      std::remove(tmp.c_str());
+      if (!st.ok()) {
+        display.note(index, "error: job " + id + ": download failed: " + describe(st));
+        return exit_code_of(st, ctx);
+      }
+      display.note(index, "error: job " + id + (got != total ? ": download incomplete" : ": cannot write " + target.output));
+      return exit_code(got != total ? ErrorKind::Internal : ErrorKind::OutputFailed);
+    }
+  }
+  try {
+    if (std::rename(tmp.c_str(), target.output.c_str()) != 0) throw Error(ErrorKind::OutputFailed, target.output + ": cannot write");
+    if (!target.report.empty()) write_file(target.report, status.report_json() + "\n");
+  } catch (const Error& e) {
+    display.note(index, std::string("error: ") + e.what());
+    return exit_code(e.kind());
+  }
+  char line[512];
+  std::snprintf(line, sizeof line, "wrote %s: %llu triangles (job %s)%s%s", target.output.c_str(),
+                static_cast<unsigned long long>(status.output_triangles()), id.c_str(),
+                target.report.empty() ? "" : "; report ", target.report.c_str());
+  display.note(index, line);
+  return 0;
+}
+
+std::string stem_of(const std::string& file_name) {
+  std::string s = fs::path(file_name).stem().string();
+  for (char& c : s)
+    if (!(std::isalnum(static_cast<unsigned char>(c)) || c == '-' || c == '_' || c == '.')) c = '_';
+  return s.empty() ? std::string("job") : s;
+}
+
+// Outputs in DIR for names, unique within this run.
+std::vector<Target> targets_in(const std::string& dir, const std::vector<std::string>& stems, const std::string& ext,
+                               const std::vector<std::string>& ids) {
+  std::vector<Target> out;
+  std::map<std::string, int> seen;
+  for (size_t i = 0; i < stems.size(); ++i) {
+    std::string base = stems[i] + "_wrap";
+    if (seen[base]++ > 0) base += "_" + (i < ids.size() && !ids[i].empty() ? ids[i].substr(0, 8) : std::to_string(i));
+    out.push_back({(fs::path(dir) / (base + "." + ext)).string(), (fs::path(dir) / (base + ".json")).string()});
+  }
+  return out;
+}
+
+int worst(const std::vector<int>& codes) {
+  for (int c : codes)
+    if (c != 0) return c;
+  return 0;
+}
+
+// Runs follow() for every job at once (the server runs them concurrently).
+std::vector<int> follow_all(const Connection& conn, const std::vector<std::shared_ptr<grpc::Channel>>& channels,
+                            const std::vector<std::string>& ids, const std::vector<Target>& targets,
+                            const std::vector<pb::MeshFormat>& formats, Display& display) {
+  std::vector<int> codes(ids.size(), 0);
+  std::vector<std::thread> threads;
+  for (size_t i = 0; i < ids.size(); ++i)
+    threads.emplace_back([&, i] {
+      try {
+        codes[i] = follow(conn, channels[i], ids[i], targets[i], formats[i], display, i);
+      } catch (const std::exception& e) {
+        display.note(i, std::string("error: ") + e.what());
+        codes[i] = exit_code(ErrorKind::Internal);
+      }
+    });
+  for (auto& t : threads) t.join();
+  display.finish();
+  return codes;
+}
+
+}  // namespace
+
+// --- the subcommands -----------------------------------------------------------------------
+
+struct RemoteCommands::Impl {
+  CLI::App* submit = nullptr;
+  CLI::App* wait = nullptr;
+  CLI::App* jobs = nullptr;
+  CLI::App* cancel = nullptr;
+  CLI::App* health = nullptr;
+  Connection conn;
+  std::string health_service = "vdbwrap.v1.Jobs";
+
+  // submit
+  std::vector<std::string> inputs;
+  std::string output, out_dir, format, report, base_size = "1%", volume = "outside";
+  WrapParams params;
+  bool no_features = false, detach = false, quiet = false;
+  double queue_wait = 600;
+  // wait / cancel
+  std::vector<std::string> ids;
+
+  void add_connection(CLI::App* cmd) {
+    cmd->add_option("--server", conn.server,
+                    "Server address HOST:PORT, or a gRPC target (ipv4:H1:P1,H2:P2, dns:///name:port)")
+        ->required();
+    cmd->add_option("--token-file", conn.token_file, "File holding the server's bearer token")->check(CLI::ExistingFile);
+    cmd->add_option("--tls-ca", conn.tls_ca, "PEM file of the CA that signed the server's certificate: connect with TLS")
+        ->check(CLI::ExistingFile);
+    cmd->add_option("--tls-server-name", conn.tls_name, "Host name to expect in the server's certificate (TLS)");
+    cmd->add_option("--retry", conn.retry_seconds, "Seconds to keep retrying while the server is unreachable")
+        ->capture_default_str()
+        ->check(CLI::NonNegativeNumber);
+  }
+
+  explicit Impl(CLI::App& app) {
+    submit = app.add_subcommand("submit", "Wrap INPUT... on a vdbwrap-server: upload, show progress, download the results");
+    add_connection(submit);
+    submit->add_option("input", inputs, "Input meshes (.stl .obj .off .ply); several run concurrently on the server")
+        ->required()
+        ->check(CLI::ExistingFile);
+    submit->add_option("-o,--output", output, "Output mesh (one input); the format follows the extension");
+    submit->add_option("--out-dir", out_dir, "Folder for the results NAME_wrap.EXT and reports NAME_wrap.json");
+    submit->add_option("--format", format, "Output format with --out-dir (default: the input's)")
+        ->check(CLI::IsMember({"stl", "obj", "off", "ply"}));
+    submit->add_option("--report", report, "Write the JSON report (one input)");
+    submit->add_flag("--detach", detach, "Print the job ids (one per line) once accepted and exit; see `vdbwrap wait`");
+    submit->add_flag("--round-robin", conn.round_robin,
+                     "Spread the jobs over every address of --server (gRPC round_robin); each job is then followed on "
+                     "the server that accepted it");
+    submit->add_option("--queue-wait", queue_wait, "Seconds to keep retrying while the server's queue is full")
+        ->capture_default_str()
+        ->check(CLI::NonNegativeNumber);
+    submit->add_flag("-q,--quiet", quiet, "No progress on stderr");
+    // The wrap options, as in `vdbwrap wrap`.
+    submit->add_option("--base-size", base_size,
+                       "Level-0 cell edge: model units (0.5) or percent of the bounding-box diagonal (1%)")
+        ->capture_default_str();
+    submit->add_option("--levels", params.levels, "Most 2x2x2 refinement levels below the base size (0-6)")
+        ->capture_default_str()
+        ->check(CLI::Range(0, 6));
+    submit->add_option("--feature-angle", params.feature_angle_deg,
+                       "Angle in degrees between adjacent triangles' normals that makes their edge sharp")
+        ->capture_default_str()
+        ->check(CLI::Range(0.0, 180.0));
+    submit->add_option("--volume", volume, "Volume to wrap: outside (around the input) or inside (largest enclosed volume)")
+        ->capture_default_str()
+        ->check(CLI::IsMember({"outside", "inside"}));
+    submit->add_option("--threads", params.threads, "Worker threads on the server (0: all its cores)")
+        ->capture_default_str()
+        ->check(CLI::NonNegativeNumber);
+    submit->add_option("--refine-triangles", params.refine_max_triangles, "Refine a cell holding more input triangles than this")
+        ->capture_default_str()
+        ->check(CLI::PositiveNumber);
+    submit->add_option("--refine-normal-spread", params.refine_normal_spread_deg,
+                       "Refine a cell whose input normals spread more than this many degrees")
+        ->capture_default_str();
+    submit->add_option("--presmooth", params.presmooth_iterations,
+                       "Smoothing iterations of the voxel surface before projection (untangles the staircase)")
+        ->capture_default_str()
+        ->check(CLI::Range(0, 100));
+    submit->add_flag("--no-features", no_features, "Do not snap the wrap onto sharp edges, boundaries and corners");
+    submit->add_option("--corner-angle", params.corner_angle_deg, "Degrees a feature curve must turn at a point to make a corner there")
+        ->capture_default_str()
+        ->check(CLI::Range(0.0, 180.0));
+
+    wait = app.add_subcommand("wait", "Wait for jobs on a vdbwrap-server and download their results");
+    add_connection(wait);
+    wait->add_option("id", ids, "Job ids")->required();
+    wait->add_option("--out-dir", out_dir, "Folder for the results NAME_wrap.EXT and reports NAME_wrap.json")
+        ->capture_default_str();
+    wait->add_flag("-q,--quiet", quiet, "No progress on stderr");
+
+    jobs = app.add_subcommand("jobs", "List the jobs of a vdbwrap-server with their state");
+    add_connection(jobs);
+
+    cancel = app.add_subcommand("cancel", "Cancel jobs on a vdbwrap-server");
+    add_connection(cancel);
+    cancel->add_option("id", ids, "Job ids")->required();
+
+    health = app.add_subcommand("health", "Exit 0 when the server's gRPC health service answers SERVING (no token needed)");
+    add_connection(health);
+    health->add_option("--service", health_service, "Service name to ask about (empty: the whole server)")->capture_default_str();
+  }
+
+  int run_submit();
+  int run_wait();
+  int run_jobs();
+  int run_cancel();
+  int run_health();
+};
+
+// grpc.health.v1.Health/Check through a generic call (no generated code needed): the request
+// is {service: NAME} (field 1, string), the answer {status} (field 1, varint; 1 = SERVING).
+int RemoteCommands::Impl::run_health() {
+  conn.load();
+  if (health_service.size() > 127) throw Error(ErrorKind::InvalidArgument, "--service: name too long");
+  grpc::GenericStub stub(conn.channel());
+  std::string request;
+  if (!health_service.empty()) request = std::string("\x0a") + char(health_service.size()) + health_service;
+  grpc::Slice slice(request);
+  grpc::ByteBuffer in(&slice, 1), out;
+  grpc::ClientContext ctx;
+  ctx.set_deadline(std::chrono::system_clock::now() +
+                   std::chrono::duration_cast<std::chrono::system_clock::duration>(
+                       std::chrono::duration<double>(std::max(1.0, std::min(conn.retry_seconds, 10.0)))));
+  std::mutex m;
+  std::condition_variable cv;
+  bool done = false;
+  grpc::Status status;
+  stub.UnaryCall(&ctx, "/grpc.health.v1.Health/Check", grpc::StubOptions(), &in, &out, [&](grpc::Status st) {
+    std::lock_guard<std::mutex> g(m);
+    status = st;
+    done = true;
+    cv.notify_all();
+  });
+  {
+    std::unique_lock<std::mutex> g(m);
+    cv.wait(g, [&] { return done; });  // the call's deadline bounds this
+  }
+  if (!status.ok()) {
+    std::fprintf(stderr, "vdbwrap: health: %s\n", describe(status).c_str());
+    return exit_code(ErrorKind::Internal);
+  }
+  std::vector<grpc::Slice> slices;
+  out.Dump(&slices);
+  std::string bytes;
+  for (auto& sl : slices) bytes.append(reinterpret_cast<const char*>(sl.begin()), sl.size());
+  const bool serving = bytes.size() >= 2 && bytes[0] == 0x08 && bytes[1] == 0x01;
+  std::printf("%s\n", serving ? "SERVING" : "NOT_SERVING");
+  return serving ? 0 : exit_code(ErrorKind::Internal);
+}
+
+int RemoteCommands::Impl::run_submit() {
+  if (inputs.size() > 1 && !output.empty())
+    throw Error(ErrorKind::InvalidArgument, "-o names one output: use --out-dir DIR with several inputs");
+  if (!detach && output.empty() && out_dir.empty())
+    throw Error(ErrorKind::InvalidArgument, "give -o OUTPUT, --out-dir DIR or --detach");
+  if (!report.empty() && inputs.size() > 1)
+    throw Error(ErrorKind::InvalidArgument, "--report names one file: with --out-dir the reports are NAME_wrap.json");
+  if (!output.empty() && io::format_from_extension(output) == io::Format::Unknown)
+    throw Error(ErrorKind::InvalidArgument, output + ": unknown output format (use .stl, .obj, .off or .ply)");
+  if (!out_dir.empty() && !fs::is_directory(out_dir)) throw Error(ErrorKind::InvalidArgument, out_dir + ": not a folder");
+  params.base_size = Length::parse(base_size);
+  params.volume = volume == "inside" ? VolumeChoice::Inside : VolumeChoice::Outside;
+  params.snap_features = !no_features;
+  const pb::WrapParameters wire_params = api::to_proto(params);
+  conn.load();
+
+  // Output format per input.
+  std::vector<pb::MeshFormat> formats;
+  std::vector<std::string> names, stems;
+  for (const auto& in : inputs) {
+    pb::MeshFormat f = pb::MESH_FORMAT_UNSPECIFIED;
+    if (!output.empty()) f = api::format_from_file_name(output);
+    else if (!format.empty()) f = api::format_from_file_name("x." + format);
+    else f = api::format_from_file_name(in);
+    if (f == pb::MESH_FORMAT_UNSPECIFIED) f = pb::MESH_FORMAT_PLY;
+    formats.push_back(f);
+    names.push_back(fs::path(in).filename().string());
+    stems.push_back(stem_of(in));
+  }
+
+  auto channel = conn.channel(conn.server, conn.round_robin);
+  auto stub = pb::Jobs::NewStub(channel);
+
+  // Upload every input; retried with the same idempotency key while the server is
+  // unreachable or its queue is full.
+  std::vector<std::string> ids(inputs.size());
+  std::vector<std::shared_ptr<grpc::Channel>> job_channels(inputs.size(), channel);
+  std::vector<int> codes(inputs.size(), 0);
+  for (size_t i = 0; i < inputs.size(); ++i) {
+    pb::JobSpec spec;
+    spec.set_file_name(names[i]);
+    spec.set_input_format(api::format_from_file_name(inputs[i]));
+    *spec.mutable_params() = wire_params;
+    spec.set_output_format(formats[i]);
+    spec.set_idempotency_key(random_key());
+    std::error_code ec;
+    spec.set_size_bytes(fs::file_size(inputs[i], ec));
+    const auto start = Clock::now();
+    for (int attempt = 0;; ++attempt) {
+      grpc::ClientContext ctx;
+      conn.prepare(ctx);
+      ctx.set_wait_for_ready(attempt > 0);
+      if (attempt > 0) ctx.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(30));
+      pb::SubmitReply reply;
+      std::unique_ptr<grpc::ClientWriter<pb::SubmitRequest>> writer(stub->Submit(&ctx, &reply));
+      pb::SubmitRequest req;
+      *req.mutable_spec() = spec;
+      bool open = writer->Write(req);
+      std::ifstream in(inputs[i], std::ios::binary);
+      if (!in) throw Error(ErrorKind::InvalidInput, inputs[i] + ": cannot open");
+      std::string buf(kChunk, '\0');
+      while (open && in) {
+        in.read(buf.data(), std::streamsize(kChunk));
+        if (in.gcount() == 0) break;
+        req.set_chunk(buf.data(), size_t(in.gcount()));
+        open = writer->Write(req);
+      }
+      if (open) writer->WritesDone();
+      grpc::Status st = writer->Finish();
+      if (st.ok()) {
+        ids[i] = reply.job_id();
+        // Spread over replicas: follow each job on the replica that accepted it (the
+        // address this call reached; else the one the server advertises). Otherwise the
+        // channel's one connection stays on one server.
+        if (conn.round_robin) {
+          if (!ctx.peer().empty()) job_channels[i] = conn.channel(ctx.peer());
+          else if (!reply.server().empty()) job_channels[i] = conn.channel(reply.server());
+        }
+        break;
+      }
+      const double waited = std::chrono::duration<double>(Clock::now() - start).count();
+      const bool queue_full = st.error_code() == grpc::StatusCode::RESOURCE_EXHAUSTED &&
+                              st.error_message().find("queue is full") != std::string::npos;
+      const bool unreachable = st.error_code() == grpc::StatusCode::UNAVAILABLE;
+      if ((queue_full && waited < queue_wait) || (unreachable && waited < conn.retry_seconds)) {
+        if (attempt == 0 && !quiet)
+          std::fprintf(stderr, "%s: %s; retrying\n", names[i].c_str(), st.error_message().c_str());
+        std::this_thread::sleep_for(std::chrono::milliseconds(std::min(5000, 500 * (attempt + 1))));
+        continue;
+      }
+      std::fprintf(stderr, "vdbwrap: error: %s: %s\n", inputs[i].c_str(), describe(st).c_str());
+      codes[i] = exit_code_of(st, ctx);
+      break;
+    }
+  }
+  if (detach) {
+    for (const auto& id : ids)
+      if (!id.empty()) std::printf("%s\n", id.c_str());
+    std::fflush(stdout);
+    return worst(codes);
+  }
+
+  std::vector<Target> targets;
+  if (!output.empty()) targets.push_back({output, report});
+  else targets = targets_in(out_dir, stems, api::extension_of(formats.empty() ? pb::MESH_FORMAT_PLY : formats[0]), ids);
+  if (output.empty() && format.empty())  // per-input formats
+    for (size_t i = 0; i < targets.size(); ++i)
+      targets[i].output = fs::path(targets[i].output).replace_extension(api::extension_of(formats[i])).string();
+
+  // Follow the accepted jobs.
+  std::vector<size_t> accepted;
+  for (size_t i = 0; i < ids.size(); ++i)
+    if (!ids[i].empty()) accepted.push_back(i);
+  std::vector<std::string> a_ids, a_names;
+  std::vector<Target> a_targets;
+  std::vector<pb::MeshFormat> a_formats;
+  std::vector<std::shared_ptr<grpc::Channel>> a_channels;
+  for (size_t i : accepted) {
+    a_ids.push_back(ids[i]);
+    a_names.push_back(names[i]);
+    a_targets.push_back(targets[i]);
+    a_formats.push_back(formats[i]);
+    a_channels.push_back(job_channels[i]);
+  }
+  Display follow_display(quiet, a_names);
+  std::vector<int> a_codes = follow_all(conn, a_channels, a_ids, a_targets, a_formats, follow_display);
+  for (size_t k = 0; k < accepted.size(); ++k) codes[accepted[k]] = a_codes[k];
+  return worst(codes);
+}
+
+int RemoteCommands::Impl::run_wait() {
+  conn.load();
+  if (out_dir.empty()) out_dir = ".";
+  if (!fs::is_directory(out_dir)) throw Error(ErrorKind::InvalidArgument, out_dir + ": not a folder");
+  auto channel = conn.channel();
+  auto stub = pb::Jobs::NewStub(channel);
+  // Names and formats from the server.
+  std::vector<std::string> names, stems;
+  std::vector<pb::MeshFormat> formats;
+  for (const auto& id : ids) {
+    grpc::ClientContext ctx;
+    conn.prepare(ctx);
+    ctx.set_wait_for_ready(true);
+    ctx.set_deadline(std::chrono::system_clock::now() +
+                     std::chrono::duration_cast<std::chrono::system_clock::duration>(
+                         std::chrono::duration<double>(std::max(1.0, conn.retry_seconds))));
+    pb::JobId req;
+    req.set_job_id(id);
+    pb::JobStatus status;
+    grpc::Status st = stub->GetStatus(&ctx, req, &status);
+    if (!st.ok()) {
+      std::fprintf(stderr, "vdbwrap: error: job %s: %s\n", id.c_str(), describe(st).c_str());
+      return exit_code_of(st, ctx);
+    }
+    names.push_back(status.spec().file_name().empty() ? id : status.spec().file_name());
+    stems.push_back(stem_of(names.back()));
+    formats.push_back(status.spec().output_format());
+  }
+  std::vector<Target> targets = targets_in(out_dir, stems, "ply", ids);
+  for (size_t i = 0; i < targets.size(); ++i)
+    targets[i].output = fs::path(targets[i].output).replace_extension(api::extension_of(formats[i])).string();
+  Display display(quiet, names);
+  std::vector<std::shared_ptr<grpc::Channel>> channels(ids.size(), channel);
+  return worst(follow_all(conn, channels, ids, targets, formats, display));
+}
+
+int RemoteCommands::Impl::run_jobs() {
+  conn.load();
+  auto stub = pb::Jobs::NewStub(conn.channel());
+  grpc::ClientContext ctx;
+  conn.prepare(ctx);
+  ctx.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(30));
+  pb::ListReply reply;
+  grpc::Status st = stub->List(&ctx, pb::ListRequest(), &reply);
+  if (!st.ok()) {
+    std::fprintf(stderr, "vdbwrap: error: %s\n", describe(st).c_str());
+    return exit_code_of(st, ctx);
+  }
+  std::printf("%-32s  %-9s  %-19s  %-24s  %s\n", "ID", "STATE", "SUBMITTED", "PROGRESS", "FILE");
+  for (const auto& j : reply.jobs()) {
+    std::time_t t = std::time_t(j.submitted_unix_ms() / 1000);
+    std::tm tm{};
+    localtime_r(&t, &tm);
+    char when[32];
+    std::strftime(when, sizeof when, "%Y-%m-%d %H:%M:%S", &tm);
+    char progress[64] = "";
+    if (j.state() == pb::JOB_STATE_RUNNING) std::snprintf(progress, sizeof progress, "%s %.0f%%", j.stage().c_str(), 100 * j.fraction());
+    std::string detail = j.state() == pb::JOB_STATE_FAILED ? j.error_message() : std::string();
+    std::printf("%-32s  %-9s  %-19s  %-24s  %s%s%s\n", j.job_id().c_str(), api::state_name(j.state()), when, progress,
+                j.spec().file_name().c_str(), detail.empty() ? "" : ": ", detail.c_str());
+  }
+  return 0;
+}
+
+int RemoteCommands::Impl::run_cancel() {
+  conn.load();
+  auto stub = pb::Jobs::NewStub(conn.channel());
+  int code = 0;
+  for (const auto& id : ids) {
+    grpc::ClientContext ctx;
+    conn.prepare(ctx);
+    ctx.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(30));
+    pb::JobId req;
+    req.set_job_id(id);
+    pb::JobStatus status;
+    grpc::Status st = stub->Cancel(&ctx, req, &status);
+    if (!st.ok()) {
+      std::fprintf(stderr, "vdbwrap: error: job %s: %s\n", id.c_str(), describe(st).c_str());
+      if (code == 0) code = exit_code_of(st, ctx);
+      continue;
+    }
+    std::printf("%s %s\n", id.c_str(),
+                status.state() == pb::JOB_STATE_CANCELLED ? "cancelled" : "cancel requested (the job stops within moments)");
+  }
+  return code;
+}
+
+RemoteCommands::RemoteCommands(CLI::App& app) : impl_(std::make_unique<Impl>(app)) {}
+RemoteCommands::~RemoteCommands() = default;
+
+std::optional<int> RemoteCommands::run() {
+  auto guarded = [](auto&& fn) -> int {
+    try {
+      return fn();
+    } catch (const Error& e) {
+      std::fprintf(stderr, "vdbwrap: error: %s\n", e.what());
+      return exit_code(e.kind());
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "vdbwrap: internal error: %s\n", e.what());
+      return exit_code(ErrorKind::Internal);
+    }
+  };
+  if (*impl_->submit) return guarded([&] { return impl_->run_submit(); });
+  if (*impl_->wait) return guarded([&] { return impl_->run_wait(); });
+  if (*impl_->jobs) return guarded([&] { return impl_->run_jobs(); });
+  if (*impl_->cancel) return guarded([&] { return impl_->run_cancel(); });
+  if (*impl_->health) return guarded([&] { return impl_->run_health(); });
+  return std::nullopt;
+}
+
+}  // namespace vdbwrap::remote

@@ -1,0 +1,1041 @@
+// The gRPC job service as clients see it: real vdbwrap-server processes on 127.0.0.1 (any
+// free port, temporary spools), driven through the generated vdbwrap.v1 stubs and the CLI.
+// Every wait below is bounded in time.
+#include <gtest/gtest.h>
+#include <grpcpp/generic/generic_stub.h>
+#include <grpcpp/grpcpp.h>
+#include <fcntl.h>
+#include <signal.h>
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <condition_variable>
+#include <cstdlib>
+#include <filesystem>
+#include <future>
+#include <fstream>
+#include <limits>
+#include <map>
+#include <mutex>
+#include <regex>
+#include <set>
+#include <sstream>
+#include <thread>
+
+#include "io/mesh_io.h"
+#include "params_mapping.h"
+#include "test_meshes.h"
+#include "vdbwrap/v1/jobs.grpc.pb.h"
+
+#ifndef VDBWRAP_SERVER
+#define VDBWRAP_SERVER "vdbwrap-server"
+#endif
+#ifndef VDBWRAP_CLI
+#define VDBWRAP_CLI "vdbwrap"
+#endif
+
+extern char** environ;
+
+namespace {
+
+namespace pb = vdbwrap::v1;
+namespace fs = std::filesystem;
+using Clock = std::chrono::steady_clock;
+using namespace std::chrono_literals;
+
+std::string read_file(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+void write_file(const fs::path& p, const std::string& bytes) { std::ofstream(p, std::ios::binary) << bytes; }
+
+std::string data(const std::string& name) { return read_file(vdbwrap::testing::data_path(name)); }
+
+// A vdbwrap-server child process. Its stderr (the job log) goes to a file.
+class ServerProcess {
+ public:
+  ServerProcess(fs::path spool, fs::path log, std::vector<std::string> extra = {})
+      : spool_(std::move(spool)), log_(std::move(log)), extra_(std::move(extra)) {}
+  ~ServerProcess() { kill(SIGKILL); }
+
+  void start() {
+    std::vector<std::string> args = {VDBWRAP_SERVER, "--listen", listen_, "--spool", spool_.string()};
+    args.insert(args.end(), extra_.begin(), extra_.end());
+    std::vector<char*> argv;
+    for (auto& a : args) argv.push_back(a.data());
+    argv.push_back(nullptr);
+    posix_spawn_file_actions_t actions;
+    posix_spawn_file_actions_init(&actions);
+    posix_spawn_file_actions_addopen(&actions, 2, log_.c_str(), O_WRONLY | O_CREAT | O_APPEND, 0644);
+    posix_spawn_file_actions_addopen(&actions, 1, "/dev/null", O_WRONLY, 0);
+    ASSERT_EQ(posix_spawn(&pid_, argv[0], &actions, nullptr, argv.data(), environ), 0) << "cannot start " << argv[0];
+    posix_spawn_file_actions_destroy(&actions);
+    // The port is in the log line "listening on 127.0.0.1:PORT (".
+    const std::regex listening("listening on 127\\.0\\.0\\.1:([0-9]+) ");
+    const auto deadline = Clock::now() + 30s;
+    for (;;) {
+      std::string text = log();
+      // Only this start's line counts (the log is appended to across restarts).
+      std::smatch m;
+      std::string::const_iterator from = text.begin();
+      size_t count = 0;
+      int port = 0;
+      while (std::regex_search(from, text.cend(), m, listening)) {
+        ++count;
+        port = std::stoi(m[1]);
+        from = m.suffix().first;
+      }
+      if (count > starts_ && port > 0) {
+        port_ = port;
+        starts_ = count;
+        break;
+      }
+      int status = 0;
+      ASSERT_EQ(waitpid(pid_, &status, WNOHANG), 0) << "the server exited at start:\n" << text;
+      ASSERT_LT(Clock::now(), deadline) << "the server did not start listening within 30 s:\n" << text;
+      std::this_thread::sleep_for(20ms);
+    }
+  }
+
+  // Signals the server; returns its exit status (or -1) after waiting at most `wait`.
+  int kill(int sig, std::chrono::seconds wait = 30s) {
+    if (pid_ <= 0) return -1;
+    ::kill(pid_, sig);
+    const auto deadline = Clock::now() + wait;
+    int status = 0;
+    while (waitpid(pid_, &status, WNOHANG) == 0) {
+      if (Clock::now() > deadline) {
+        ::kill(pid_, SIGKILL);
+        waitpid(pid_, &status, 0);
+        pid_ = -1;
+        return -1;
+      }
+      std::this_thread::sleep_for(20ms);
+    }
+    pid_ = -1;
+    return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+  }
+
+  // The next start() listens here (default: any free port).
+  void set_listen(const std::string& address) { listen_ = address; }
+  int port() const { return port_; }
+  std::string address() const { return "127.0.0.1:" + std::to_string(port_); }
+  std::string log() const { return read_file(log_); }
+  const fs::path& spool() const { return spool_; }
+  size_t jobs_on_disk() const {
+    size_t n = 0;
+    std::error_code ec;
+    for (auto& e : fs::directory_iterator(spool_ / "jobs", ec)) n += e.is_directory() ? 1 : 0;
+    return n;
+  }
+
+ private:
+  fs::path spool_, log_;
+  std::vector<std::string> extra_;
+  std::string listen_ = "127.0.0.1:0";
+  pid_t pid_ = -1;
+  int port_ = 0;
+  size_t starts_ = 0;
+};
+
+struct SubmitOutcome {
+  grpc::Status status;
+  std::string job_id;
+  bool duplicate = false;
+  std::string error_kind;  // trailing metadata vdbwrap-error-kind
+};
+
+// Job parameters: the coarse ones keep the tests fast.
+pb::WrapParameters coarse(double percent = 3) {
+  pb::WrapParameters p;
+  p.set_base_size_percent(percent);
+  return p;
+}
+// A job that runs for several seconds on one thread (fuze.obj at 0.5 %).
+pb::WrapParameters slow() {
+  pb::WrapParameters p = coarse(0.5);
+  p.set_threads(1);
+  p.set_snap_features(false);
+  return p;
+}
+
+class Client {
+ public:
+  explicit Client(const std::string& address, std::string token = "")
+      : Client(grpc::CreateChannel(address, grpc::InsecureChannelCredentials()), std::move(token)) {}
+  Client(std::shared_ptr<grpc::Channel> channel, std::string token)
+      : channel_(std::move(channel)), stub_(pb::Jobs::NewStub(channel_)), token_(std::move(token)) {}
+
+  void prepare(grpc::ClientContext& ctx, std::chrono::seconds timeout = 60s) const {
+    if (!token_.empty()) ctx.AddMetadata("authorization", "Bearer " + token_);
+    ctx.set_deadline(std::chrono::system_clock::now() + timeout);
+  }
+
+  SubmitOutcome submit(const std::string& bytes, const std::string& file_name, const pb::WrapParameters& params,
+                       const std::string& key = "", pb::MeshFormat output = pb::MESH_FORMAT_UNSPECIFIED,
+                       uint64_t declared_size = 0) {
+    grpc::ClientContext ctx;
+    prepare(ctx);
+    pb::SubmitReply reply;
+    auto writer = stub_->Submit(&ctx, &reply);
+    pb::SubmitRequest req;
+    auto* spec = req.mutable_spec();
+    spec->set_file_name(file_name);
+    *spec->mutable_params() = params;
+    spec->set_idempotency_key(key);
+    spec->set_output_format(output);
+    spec->set_size_bytes(declared_size);
+    bool open = writer->Write(req);
+    const size_t chunk = 64 * 1024;
+    for (size_t off = 0; open && off < bytes.size(); off += chunk) {
+      req.set_chunk(bytes.substr(off, chunk));
+      open = writer->Write(req);
+    }
+    if (open) writer->WritesDone();
+    SubmitOutcome out;
+    out.status = writer->Finish();
+    out.job_id = reply.job_id();
+    out.duplicate = reply.duplicate();
+    auto md = ctx.GetServerTrailingMetadata();
+    if (auto it = md.find("vdbwrap-error-kind"); it != md.end()) out.error_kind = std::string(it->second.data(), it->second.size());
+    peer_ = ctx.peer();
+    return out;
+  }
+
+  std::string submit_ok(const std::string& name, const pb::WrapParameters& params = coarse(), const std::string& key = "") {
+    SubmitOutcome o = submit(data(name), name, params, key);
+    EXPECT_TRUE(o.status.ok()) << o.status.error_message();
+    return o.job_id;
+  }
+
+  grpc::Status status(const std::string& id, pb::JobStatus& out) {
+    grpc::ClientContext ctx;
+    prepare(ctx);
+    pb::JobId req;
+    req.set_job_id(id);
+    return stub_->GetStatus(&ctx, req, &out);
+  }
+
+  pb::JobStatus status(const std::string& id) {
+    pb::JobStatus s;
+    grpc::Status st = status(id, s);
+    EXPECT_TRUE(st.ok()) << st.error_message();
+    return s;
+  }
+
+  // Polls until pred(status) or the time is up; returns the last status.
+  template <class Pred>
+  pb::JobStatus poll(const std::string& id, Pred pred, std::chrono::seconds limit = 120s) {
+    const auto deadline = Clock::now() + limit;
+    pb::JobStatus s;
+    for (int i = 0; i < 100000 && Clock::now() < deadline; ++i) {
+      s = pb::JobStatus();
+      grpc::Status st = status(id, s);
+      if (st.ok() && pred(s)) return s;
+      std::this_thread::sleep_for(50ms);
+    }
+    ADD_FAILURE() << "job " << id << " did not reach the expected state in time (last: " << pb::JobState_Name(s.state())
+                  << " " << s.stage() << ")";
+    return s;
+  }
+  pb::JobStatus wait_done(const std::string& id, std::chrono::seconds limit = 120s) {
+    return poll(id, [](const pb::JobStatus& s) {
+      return s.state() == pb::JOB_STATE_SUCCEEDED || s.state() == pb::JOB_STATE_FAILED || s.state() == pb::JOB_STATE_CANCELLED;
+    }, limit);
+  }
+
+  grpc::Status download(const std::string& id, std::string& bytes, pb::MeshFormat format = pb::MESH_FORMAT_UNSPECIFIED) {
+    grpc::ClientContext ctx;
+    prepare(ctx);
+    pb::DownloadRequest req;
+    req.set_job_id(id);
+    req.set_format(format);
+    auto reader = stub_->Download(&ctx, req);
+    pb::DownloadChunk c;
+    uint64_t total = 0;
+    bool first = true;
+    bytes.clear();
+    while (reader->Read(&c)) {
+      if (first) total = c.total_size();
+      first = false;
+      bytes += c.data();
+    }
+    grpc::Status st = reader->Finish();
+    if (st.ok()) EXPECT_EQ(bytes.size(), total);
+    return st;
+  }
+
+  std::vector<pb::ProgressEvent> watch(const std::string& id, grpc::Status& st, std::chrono::seconds limit = 120s) {
+    grpc::ClientContext ctx;
+    prepare(ctx, limit);
+    pb::JobId req;
+    req.set_job_id(id);
+    auto reader = stub_->Watch(&ctx, req);
+    std::vector<pb::ProgressEvent> events;
+    pb::ProgressEvent ev;
+    while (reader->Read(&ev)) events.push_back(ev);
+    st = reader->Finish();
+    return events;
+  }
+
+  grpc::Status cancel(const std::string& id, pb::JobStatus* out = nullptr) {
+    grpc::ClientContext ctx;
+    prepare(ctx);
+    pb::JobId req;
+    req.set_job_id(id);
+    pb::JobStatus s;
+    grpc::Status st = stub_->Cancel(&ctx, req, &s);
+    if (out) *out = s;
+    return st;
+  }
+
+  grpc::Status list(pb::ListReply& out) {
+    grpc::ClientContext ctx;
+    prepare(ctx);
+    return stub_->List(&ctx, pb::ListRequest(), &out);
+  }
+
+  grpc::Status remove(const std::string& id) {
+    grpc::ClientContext ctx;
+    prepare(ctx);
+    pb::JobId req;
+    req.set_job_id(id);
+    pb::DeleteReply r;
+    return stub_->Delete(&ctx, req, &r);
+  }
+
+  const std::string& last_peer() const { return peer_; }
+  std::shared_ptr<grpc::Channel> channel() const { return channel_; }
+
+ private:
+  std::shared_ptr<grpc::Channel> channel_;
+  std::unique_ptr<pb::Jobs::Stub> stub_;
+  std::string token_;
+  std::string peer_;
+};
+
+void expect_valid_result(const std::string& bytes, vdbwrap::io::Format format, const std::string& what) {
+  ASSERT_FALSE(bytes.empty()) << what;
+  vdbwrap::Mesh m = vdbwrap::io::read_mesh_from_bytes(bytes, format, what);
+  // diagnose() welds bit-identical points first (STL stores 3 points per facet).
+  vdbwrap::MeshDiagnostics d = vdbwrap::diagnose(m, true);
+  EXPECT_TRUE(d.valid_closed_surface()) << what << ": closed " << d.closed << ", manifold " << d.manifold << ", oriented "
+                                        << d.oriented << ", outward " << d.outward << ", self-intersecting "
+                                        << d.self_intersecting;
+}
+
+std::string binary_stl(uint32_t declared, size_t triangles, float fill = 0.0f) {
+  std::string s(80, ' ');
+  s.append(reinterpret_cast<const char*>(&declared), 4);
+  for (size_t t = 0; t < triangles; ++t) {
+    float v[12] = {0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1, fill};
+    s.append(reinterpret_cast<const char*>(v), 48);
+    s.append(2, '\0');
+  }
+  return s;
+}
+
+struct CliRun {
+  int code;
+  std::string out, err;
+};
+
+class Service : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() / ("vdbwrap_server_" + std::to_string(::getpid()) + "_" +
+                                        ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+  }
+  void TearDown() override {
+    servers_.clear();  // SIGKILL whatever still runs
+    if (!HasFailure()) fs::remove_all(dir_);
+    else std::fprintf(stderr, "kept %s for inspection\n", dir_.c_str());
+  }
+
+  ServerProcess& server(std::vector<std::string> extra = {}, const std::string& name = "a") {
+    servers_.push_back(std::make_unique<ServerProcess>(dir_ / ("spool_" + name), dir_ / ("server_" + name + ".log"), extra));
+    servers_.back()->start();
+    return *servers_.back();
+  }
+
+  CliRun cli(const std::string& args) {
+    const std::string out = (dir_ / "cli_out.txt").string(), err = (dir_ / "cli_err.txt").string();
+    std::string cmd = std::string(VDBWRAP_CLI) + " " + args + " > " + out + " 2> " + err;
+    int status = std::system(cmd.c_str());
+    return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, read_file(out), read_file(err)};
+  }
+
+  fs::path dir_;
+  std::vector<std::unique_ptr<ServerProcess>> servers_;
+};
+
+// --- tests ----------------------------------------------------------------------------
+
+TEST(ParamsMapping, RoundTripsEveryFieldAndRefusesOutOfRange) {
+  vdbwrap::WrapParams p;
+  p.base_size = {0.25, false};
+  p.levels = 4;
+  p.feature_angle_deg = 42;
+  p.volume = vdbwrap::VolumeChoice::Inside;
+  p.threads = 3;
+  p.refine_max_triangles = 7;
+  p.refine_normal_spread_deg = 11;
+  p.refine_at_features = false;
+  p.weld_tolerance = 1e-5;
+  p.surface_offset = 0.1;
+  p.presmooth_iterations = 5;
+  p.snap_features = !vdbwrap::WrapParams().snap_features;
+  p.corner_angle_deg = 55;
+  p.compute_distances = false;
+  vdbwrap::WrapParams q = vdbwrap::api::to_wrap_params(vdbwrap::api::to_proto(p));
+  EXPECT_EQ(q.base_size.value, 0.25);
+  EXPECT_FALSE(q.base_size.percent_of_diagonal);
+  EXPECT_EQ(q.levels, 4);
+  EXPECT_EQ(q.feature_angle_deg, 42);
+  EXPECT_EQ(q.volume, vdbwrap::VolumeChoice::Inside);
+  EXPECT_EQ(q.threads, 3);
+  EXPECT_EQ(q.refine_max_triangles, 7);
+  EXPECT_EQ(q.refine_normal_spread_deg, 11);
+  EXPECT_FALSE(q.refine_at_features);
+  EXPECT_EQ(q.weld_tolerance, 1e-5);
+  EXPECT_EQ(q.surface_offset, 0.1);
+  EXPECT_EQ(q.presmooth_iterations, 5);
+  EXPECT_EQ(q.snap_features, p.snap_features);
+  EXPECT_EQ(q.corner_angle_deg, 55);
+  EXPECT_FALSE(q.compute_distances);
+  // Unset fields: the core's (the CLI's) defaults.
+  vdbwrap::WrapParams d = vdbwrap::api::to_wrap_params(pb::WrapParameters());
+  EXPECT_EQ(d.levels, vdbwrap::WrapParams().levels);
+  EXPECT_EQ(d.base_size.value, vdbwrap::WrapParams().base_size.value);
+  EXPECT_EQ(d.surface_offset, vdbwrap::WrapParams().surface_offset);
+  // Out of range.
+  auto refused = [](auto set) {
+    pb::WrapParameters w;
+    set(w);
+    try {
+      vdbwrap::api::to_wrap_params(w);
+    } catch (const vdbwrap::Error& e) {
+      return e.kind() == vdbwrap::ErrorKind::InvalidArgument;
+    }
+    return false;
+  };
+  EXPECT_TRUE(refused([](pb::WrapParameters& w) { w.set_levels(7); }));
+  EXPECT_TRUE(refused([](pb::WrapParameters& w) { w.set_base_size_percent(0); }));
+  EXPECT_TRUE(refused([](pb::WrapParameters& w) { w.set_base_size_model_units(std::nan("")); }));
+  EXPECT_TRUE(refused([](pb::WrapParameters& w) { w.set_feature_angle_deg(180); }));
+  EXPECT_TRUE(refused([](pb::WrapParameters& w) { w.set_threads(-1); }));
+  EXPECT_TRUE(refused([](pb::WrapParameters& w) { w.set_refine_max_triangles(0); }));
+  EXPECT_TRUE(refused([](pb::WrapParameters& w) { w.set_presmooth_iterations(101); }));
+  EXPECT_TRUE(refused([](pb::WrapParameters& w) { w.set_corner_angle_deg(0); }));
+  EXPECT_TRUE(refused([](pb::WrapParameters& w) { w.set_surface_offset(0.5); }));
+  EXPECT_TRUE(refused([](pb::WrapParameters& w) { w.set_volume(static_cast<pb::Volume>(9)); }));
+}
+
+TEST_F(Service, ConcurrentSubmissionsGiveValidResults) {
+  ServerProcess& s = server({"--workers", "2"});
+  const std::vector<std::string> names = {"fuze.obj", "unit_sphere.STL", "two_objects_mixed_case_names.stl"};
+  std::vector<std::string> ids(names.size());
+  std::vector<std::thread> threads;
+  for (size_t i = 0; i < names.size(); ++i)
+    threads.emplace_back([&, i] {
+      Client c(s.address());
+      ids[i] = c.submit_ok(names[i]);
+    });
+  for (auto& t : threads) t.join();
+  Client c(s.address());
+  for (size_t i = 0; i < names.size(); ++i) {
+    ASSERT_EQ(ids[i].size(), 32u);
+    pb::JobStatus st = c.wait_done(ids[i]);
+    ASSERT_EQ(st.state(), pb::JOB_STATE_SUCCEEDED) << names[i] << ": " << st.error_message();
+    EXPECT_NE(st.report_json().find("\"valid_closed_surface\": true"), std::string::npos);
+    EXPECT_NE(st.report_json().find("distance_output_to_input"), std::string::npos);
+    EXPECT_GT(st.output_triangles(), 0u);
+    std::string bytes;
+    ASSERT_TRUE(c.download(ids[i], bytes).ok());
+    // The result comes in the input's format by default.
+    expect_valid_result(bytes, vdbwrap::io::format_from_extension(names[i]), names[i]);
+    // And in any other format on request.
+    std::string obj;
+    ASSERT_TRUE(c.download(ids[i], obj, pb::MESH_FORMAT_OBJ).ok());
+    vdbwrap::Mesh m = vdbwrap::io::read_mesh_from_bytes(obj, vdbwrap::io::Format::Obj, "obj");
+    EXPECT_EQ(m.triangles.size(), st.output_triangles());
+  }
+  std::set<std::string> distinct(ids.begin(), ids.end());
+  EXPECT_EQ(distinct.size(), ids.size());
+  pb::ListReply list;
+  ASSERT_TRUE(c.list(list).ok());
+  EXPECT_EQ(list.jobs_size(), 3);
+  // One log line per job event.
+  std::string log = s.log();
+  for (const auto& id : ids) {
+    EXPECT_NE(log.find("job " + id + " accepted"), std::string::npos);
+    EXPECT_NE(log.find("job " + id + " started"), std::string::npos);
+    EXPECT_NE(log.find("job " + id + " finished"), std::string::npos);
+  }
+}
+
+TEST_F(Service, ProgressEventsArriveInOrder) {
+  ServerProcess& s = server();
+  Client c(s.address());
+  std::string id = c.submit_ok("fuze.obj");
+  grpc::Status st;
+  std::vector<pb::ProgressEvent> events = c.watch(id, st);
+  ASSERT_TRUE(st.ok()) << st.error_message();
+  ASSERT_GE(events.size(), 10u);
+  // Gapless sequence from 1, states never go back, the last one is final.
+  std::vector<std::string> stages;
+  for (size_t i = 0; i < events.size(); ++i) {
+    EXPECT_EQ(events[i].sequence(), i + 1);
+    if (i > 0) {
+      EXPECT_GE(int(events[i].state()), int(events[i - 1].state()));
+      EXPECT_GE(events[i].elapsed_seconds() + 1e-9, events[i - 1].elapsed_seconds());
+    }
+    if (!events[i].stage().empty() && (stages.empty() || stages.back() != events[i].stage())) stages.push_back(events[i].stage());
+  }
+  EXPECT_EQ(events.front().state(), pb::JOB_STATE_QUEUED);
+  EXPECT_EQ(events.back().state(), pb::JOB_STATE_SUCCEEDED);
+  // The pipeline's stages, in the pipeline's order (first appearances).
+  auto pos = [&](const std::string& name) {
+    auto it = std::find(stages.begin(), stages.end(), name);
+    return it == stages.end() ? -1 : int(it - stages.begin());
+  };
+  std::vector<std::string> expected = {"read", "diagnose input", "prepare", "refine", "flood fill", "extract", "project", "validate", "write"};
+  for (size_t i = 0; i < expected.size(); ++i) {
+    ASSERT_GE(pos(expected[i]), 0) << expected[i];
+    if (i > 0) EXPECT_LT(pos(expected[i - 1]), pos(expected[i]));
+  }
+  // A watcher of an ended job gets its final state at once.
+  std::vector<pb::ProgressEvent> again = c.watch(id, st, 10s);
+  ASSERT_TRUE(st.ok());
+  ASSERT_FALSE(again.empty());
+  EXPECT_EQ(again.back().state(), pb::JOB_STATE_SUCCEEDED);
+}
+
+TEST_F(Service, CancelStopsARunningJobAndOthersRunOn) {
+  ServerProcess& s = server({"--workers", "2"});
+  Client c(s.address());
+  std::string slow_id = c.submit_ok("fuze.obj", slow());
+  std::string small_id = c.submit_ok("two_objects_mixed_case_names.stl");
+  // Cancel once the slow job is inside the voxel stages.
+  c.poll(slow_id, [](const pb::JobStatus& st) {
+    return st.state() == pb::JOB_STATE_RUNNING && (st.stage() == "extract" || st.stage() == "project" || st.stage() == "flood fill");
+  }, 60s);
+  pb::JobStatus after;
+  const auto t0 = Clock::now();
+  ASSERT_TRUE(c.cancel(slow_id, &after).ok());
+  pb::JobStatus st = c.wait_done(slow_id, 30s);
+  const double seconds = std::chrono::duration<double>(Clock::now() - t0).count();
+  EXPECT_EQ(st.state(), pb::JOB_STATE_CANCELLED);
+  EXPECT_EQ(st.error_kind(), pb::ERROR_KIND_CANCELLED);
+  EXPECT_LT(seconds, 3.0) << "cancellation took " << seconds << " s";
+  // The other job is unharmed.
+  pb::JobStatus small = c.wait_done(small_id);
+  EXPECT_EQ(small.state(), pb::JOB_STATE_SUCCEEDED);
+  // No result for a cancelled job; cancelling again is a no-op; a succeeded job cannot be cancelled.
+  std::string bytes;
+  EXPECT_EQ(c.download(slow_id, bytes).error_code(), grpc::StatusCode::FAILED_PRECONDITION);
+  EXPECT_TRUE(c.cancel(slow_id).ok());
+  EXPECT_EQ(c.cancel(small_id).error_code(), grpc::StatusCode::FAILED_PRECONDITION);
+  // A queued job is cancelled at once.
+  std::string a = c.submit_ok("fuze.obj", slow());
+  std::string b = c.submit_ok("fuze.obj", slow());
+  std::string queued = c.submit_ok("fuze.obj", slow());
+  EXPECT_TRUE(c.cancel(queued, &after).ok());
+  EXPECT_EQ(after.state(), pb::JOB_STATE_CANCELLED);
+  c.cancel(a);
+  c.cancel(b);
+  EXPECT_EQ(c.wait_done(a, 30s).state(), pb::JOB_STATE_CANCELLED);
+  EXPECT_EQ(c.wait_done(b, 30s).state(), pb::JOB_STATE_CANCELLED);
+}
+
+TEST_F(Service, FullQueueIsResourceExhausted) {
+  ServerProcess& s = server({"--workers", "1", "--queue", "1"});
+  Client c(s.address());
+  std::string running = c.submit_ok("fuze.obj", slow());
+  c.poll(running, [](const pb::JobStatus& st) { return st.state() == pb::JOB_STATE_RUNNING; }, 30s);
+  std::string waiting = c.submit_ok("two_objects_mixed_case_names.stl");
+  SubmitOutcome full = c.submit(data("unit_sphere.STL"), "unit_sphere.STL", coarse());
+  EXPECT_EQ(full.status.error_code(), grpc::StatusCode::RESOURCE_EXHAUSTED);
+  EXPECT_NE(full.status.error_message().find("queue is full"), std::string::npos) << full.status.error_message();
+  EXPECT_EQ(s.jobs_on_disk(), 2u);
+  // Room again once the waiting job has started.
+  c.cancel(running);
+  c.poll(waiting, [](const pb::JobStatus& st) { return st.state() != pb::JOB_STATE_QUEUED; }, 30s);
+  SubmitOutcome again = c.submit(data("unit_sphere.STL"), "unit_sphere.STL", coarse());
+  EXPECT_TRUE(again.status.ok()) << again.status.error_message();
+  EXPECT_EQ(c.wait_done(waiting).state(), pb::JOB_STATE_SUCCEEDED);
+  EXPECT_EQ(c.wait_done(again.job_id).state(), pb::JOB_STATE_SUCCEEDED);
+}
+
+TEST_F(Service, SigkillAndRestartFinishesEveryAcceptedJob) {
+  ServerProcess& s = server({"--workers", "1", "--queue", "8"});
+  std::vector<std::string> ids;
+  {
+    Client c(s.address());
+    // One job ends before the crash: its result must be served after it.
+    ids.push_back(c.submit_ok("two_objects_mixed_case_names.stl"));
+    ASSERT_EQ(c.wait_done(ids[0]).state(), pb::JOB_STATE_SUCCEEDED);
+    ids.push_back(c.submit_ok("fuze.obj", slow()));
+    ids.push_back(c.submit_ok("unit_sphere.STL"));
+    ids.push_back(c.submit_ok("fuze.obj"));
+    ids.push_back(c.submit_ok("two_objects_mixed_case_names.stl", coarse(5)));
+    c.poll(ids[1], [](const pb::JobStatus& st) { return st.state() == pb::JOB_STATE_RUNNING; }, 30s);
+  }
+  EXPECT_EQ(s.kill(SIGKILL), 128 + SIGKILL);
+  EXPECT_EQ(s.jobs_on_disk(), ids.size());
+  s.start();  // same spool
+  Client c(s.address());
+  for (size_t i = 0; i < ids.size(); ++i) {
+    pb::JobStatus st = c.wait_done(ids[i], 180s);
+    ASSERT_EQ(st.state(), pb::JOB_STATE_SUCCEEDED) << "job " << i << ": " << st.error_message();
+    std::string bytes;
+    ASSERT_TRUE(c.download(ids[i], bytes).ok());
+    expect_valid_result(bytes, vdbwrap::io::format_from_extension(st.spec().file_name()), st.spec().file_name());
+  }
+  EXPECT_NE(s.log().find("4 job(s) queued again, 1 ended job(s) kept"), std::string::npos) << s.log();
+}
+
+TEST_F(Service, SigtermRequeuesTheRunningJob) {
+  ServerProcess& s = server({"--workers", "1", "--shutdown-grace", "0"});
+  std::string id;
+  {
+    Client c(s.address());
+    id = c.submit_ok("fuze.obj", slow());
+    c.poll(id, [](const pb::JobStatus& st) { return st.state() == pb::JOB_STATE_RUNNING && st.stage() != "read"; }, 30s);
+  }
+  const auto t0 = Clock::now();
+  EXPECT_EQ(s.kill(SIGTERM), 0);
+  EXPECT_LT(Clock::now() - t0, 10s);
+  EXPECT_NE(read_file(s.spool() / "jobs" / id / "job.json").find("JOB_STATE_QUEUED"), std::string::npos);
+  s.start();
+  Client c(s.address());
+  EXPECT_EQ(c.wait_done(id, 180s).state(), pb::JOB_STATE_SUCCEEDED);
+}
+
+TEST_F(Service, OneServerPerSpool) {
+  ServerProcess& s = server();
+  std::string cmd = std::string(VDBWRAP_SERVER) + " --listen 127.0.0.1:0 --spool " + s.spool().string() + " 2> " +
+                    (dir_ / "second.log").string();
+  int status = std::system(cmd.c_str());
+  EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) != 0);
+  EXPECT_NE(read_file(dir_ / "second.log").find("in use by another vdbwrap-server"), std::string::npos);
+}
+
+TEST_F(Service, BadUploadsAreRefusedWhileAJobRunsUnharmed) {
+  ServerProcess& s = server({"--workers", "1", "--max-upload", "200k"});
+  Client c(s.address());
+  std::string good = c.submit_ok("fuze.obj");
+
+  SubmitOutcome garbage = c.submit(std::string(5000, '\x7f') + "garbage", "garbage.stl", coarse());
+  EXPECT_EQ(garbage.status.error_code(), grpc::StatusCode::INVALID_ARGUMENT) << garbage.status.error_message();
+  EXPECT_EQ(garbage.error_kind, "3");
+  SubmitOutcome unknown = c.submit("this is not a mesh\n", "notes.txt", coarse());
+  EXPECT_EQ(unknown.status.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+
+  SubmitOutcome truncated = c.submit(binary_stl(100, 10), "truncated.stl", coarse());
+  EXPECT_EQ(truncated.status.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_NE(truncated.status.error_message().find("truncated.stl"), std::string::npos) << truncated.status.error_message();
+  std::string half = data("unit_sphere.STL");
+  half.resize(half.size() / 2);
+  EXPECT_EQ(c.submit(half, "unit_sphere.STL", coarse()).status.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+
+  SubmitOutcome nan = c.submit(binary_stl(2, 2, std::numeric_limits<float>::quiet_NaN()), "nan.stl", coarse());
+  EXPECT_EQ(nan.status.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_EQ(nan.error_kind, "3");
+  SubmitOutcome nan_obj = c.submit("v 0 0 0\nv 1 0 0\nv 0 nan 1\nf 1 2 3\n", "nan.obj", coarse());
+  EXPECT_EQ(nan_obj.status.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+
+  std::string big = binary_stl(5000, 5000);  // 250 kB > 200 kB
+  SubmitOutcome too_big = c.submit(big, "big.stl", coarse());
+  EXPECT_EQ(too_big.status.error_code(), grpc::StatusCode::RESOURCE_EXHAUSTED) << too_big.status.error_message();
+  SubmitOutcome declared = c.submit(big, "big.stl", coarse(), "", pb::MESH_FORMAT_UNSPECIFIED, big.size());
+  EXPECT_EQ(declared.status.error_code(), grpc::StatusCode::RESOURCE_EXHAUSTED);
+
+  pb::WrapParameters bad = coarse();
+  bad.set_levels(9);
+  SubmitOutcome bad_params = c.submit(data("fuze.obj"), "fuze.obj", bad);
+  EXPECT_EQ(bad_params.status.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_NE(bad_params.status.error_message().find("levels"), std::string::npos);
+  EXPECT_EQ(bad_params.error_kind, "2");
+  pb::WrapParameters bad_size;
+  bad_size.set_base_size_percent(-1);
+  EXPECT_EQ(c.submit(data("fuze.obj"), "fuze.obj", bad_size).status.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_EQ(c.submit("", "empty.stl", coarse()).status.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+
+  // Ids that are not ids, or not known.
+  pb::JobStatus st;
+  EXPECT_EQ(c.status("../../etc/passwd", st).error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_EQ(c.status(std::string(32, 'a'), st).error_code(), grpc::StatusCode::NOT_FOUND);
+  EXPECT_EQ(c.cancel(std::string(32, 'b')).error_code(), grpc::StatusCode::NOT_FOUND);
+
+  // Nothing was created for the refused uploads; the good job finished.
+  EXPECT_EQ(s.jobs_on_disk(), 1u);
+  pb::JobStatus done = c.wait_done(good);
+  EXPECT_EQ(done.state(), pb::JOB_STATE_SUCCEEDED);
+  std::string bytes;
+  ASSERT_TRUE(c.download(good, bytes).ok());
+  expect_valid_result(bytes, vdbwrap::io::Format::Obj, "fuze.obj");
+  EXPECT_NE(s.log().find("rejected"), std::string::npos);
+}
+
+TEST_F(Service, ResultNotReadyIsFailedPrecondition) {
+  ServerProcess& s = server({"--workers", "1"});
+  Client c(s.address());
+  std::string id = c.submit_ok("fuze.obj", slow());
+  std::string bytes;
+  grpc::Status st = c.download(id, bytes);
+  EXPECT_EQ(st.error_code(), grpc::StatusCode::FAILED_PRECONDITION);
+  EXPECT_NE(st.error_message().find("not ready"), std::string::npos) << st.error_message();
+  EXPECT_EQ(c.remove(id).error_code(), grpc::StatusCode::FAILED_PRECONDITION);
+  c.cancel(id);
+  c.wait_done(id, 30s);
+  // Delete removes an ended job and its files.
+  EXPECT_TRUE(c.remove(id).ok());
+  EXPECT_EQ(s.jobs_on_disk(), 0u);
+  pb::JobStatus gone;
+  EXPECT_EQ(c.status(id, gone).error_code(), grpc::StatusCode::NOT_FOUND);
+}
+
+TEST_F(Service, JobTimeoutStopsTheJob) {
+  ServerProcess& s = server({"--job-timeout", "1"});
+  Client c(s.address());
+  std::string id = c.submit_ok("fuze.obj", slow());
+  const auto t0 = Clock::now();
+  pb::JobStatus st = c.wait_done(id, 30s);
+  EXPECT_EQ(st.state(), pb::JOB_STATE_FAILED);
+  EXPECT_EQ(st.error_kind(), pb::ERROR_KIND_TIMED_OUT);
+  EXPECT_LT(Clock::now() - t0, 5s);
+}
+
+TEST_F(Service, TokenIsRequiredInEveryCall) {
+  write_file(dir_ / "token", "s3cret-token\n");
+  ServerProcess& s = server({"--token-file", (dir_ / "token").string()});
+  Client none(s.address()), wrong(s.address(), "guess"), right(s.address(), "s3cret-token");
+  EXPECT_EQ(none.submit(data("fuze.obj"), "fuze.obj", coarse()).status.error_code(), grpc::StatusCode::UNAUTHENTICATED);
+  EXPECT_EQ(wrong.submit(data("fuze.obj"), "fuze.obj", coarse()).status.error_code(), grpc::StatusCode::UNAUTHENTICATED);
+  pb::ListReply list;
+  EXPECT_EQ(none.list(list).error_code(), grpc::StatusCode::UNAUTHENTICATED);
+  EXPECT_EQ(wrong.list(list).error_code(), grpc::StatusCode::UNAUTHENTICATED);
+  std::string id = right.submit_ok("two_objects_mixed_case_names.stl");
+  pb::JobStatus st;
+  EXPECT_EQ(none.status(id, st).error_code(), grpc::StatusCode::UNAUTHENTICATED);
+  EXPECT_EQ(wrong.cancel(id).error_code(), grpc::StatusCode::UNAUTHENTICATED);
+  std::string bytes;
+  EXPECT_EQ(wrong.download(id, bytes).error_code(), grpc::StatusCode::UNAUTHENTICATED);
+  grpc::Status ws;
+  none.watch(id, ws, 10s);
+  EXPECT_EQ(ws.error_code(), grpc::StatusCode::UNAUTHENTICATED);
+  EXPECT_EQ(wrong.remove(id).error_code(), grpc::StatusCode::UNAUTHENTICATED);
+  EXPECT_EQ(right.wait_done(id).state(), pb::JOB_STATE_SUCCEEDED);
+  EXPECT_TRUE(right.download(id, bytes).ok());
+  EXPECT_EQ(s.jobs_on_disk(), 1u);
+}
+
+// grpc.health.v1.Health/Check through a generic call: the request is {service: NAME}
+// (field 1), the answer {status: SERVING = 1} (field 1, varint).
+int health(const std::shared_ptr<grpc::Channel>& channel, const std::string& service) {
+  grpc::GenericStub stub(channel);
+  std::string request = std::string("\x0a") + char(service.size()) + service;
+  grpc::Slice slice(request);
+  grpc::ByteBuffer in(&slice, 1), out;
+  grpc::ClientContext ctx;
+  ctx.set_deadline(std::chrono::system_clock::now() + 10s);
+  std::mutex m;
+  std::condition_variable cv;
+  bool done = false;
+  grpc::Status status;
+  stub.UnaryCall(&ctx, "/grpc.health.v1.Health/Check", grpc::StubOptions(), &in, &out, [&](grpc::Status s) {
+    std::lock_guard<std::mutex> g(m);
+    status = s;
+    done = true;
+    cv.notify_all();
+  });
+  std::unique_lock<std::mutex> g(m);
+  cv.wait_for(g, 15s, [&] { return done; });
+  if (!done || !status.ok()) return -1;
+  std::vector<grpc::Slice> slices;
+  out.Dump(&slices);
+  std::string bytes;
+  for (auto& s : slices) bytes.append(reinterpret_cast<const char*>(s.begin()), s.size());
+  return bytes.size() >= 2 && bytes[0] == 0x08 ? int(bytes[1]) : 0;  // 0 = UNKNOWN (field left out)
+}
+
+// grpc.reflection.v1alpha.ServerReflection/ServerReflectionInfo (a bidi stream) through a
+// generic call: one request {list_services: ""} (field 7); returns the raw answer, which
+// holds the service names.
+std::string reflection_answer(const std::shared_ptr<grpc::Channel>& channel) {
+  grpc::GenericStub stub(channel);
+  grpc::CompletionQueue cq;
+  grpc::ClientContext ctx;
+  ctx.set_deadline(std::chrono::system_clock::now() + 10s);
+  auto call = stub.PrepareCall(&ctx, "/grpc.reflection.v1alpha.ServerReflection/ServerReflectionInfo", &cq);
+  auto step = [&](intptr_t expect) {
+    void* tag = nullptr;
+    bool ok = false;
+    return cq.Next(&tag, &ok) && reinterpret_cast<intptr_t>(tag) == expect && ok;
+  };
+  std::string answer;
+  call->StartCall(reinterpret_cast<void*>(1));
+  if (step(1)) {
+    grpc::Slice slice(std::string("\x3a\x00", 2));
+    grpc::ByteBuffer request(&slice, 1), response;
+    call->Write(request, reinterpret_cast<void*>(2));
+    if (step(2)) {
+      call->Read(&response, reinterpret_cast<void*>(3));
+      if (step(3)) {
+        std::vector<grpc::Slice> slices;
+        response.Dump(&slices);
+        for (auto& sl : slices) answer.append(reinterpret_cast<const char*>(sl.begin()), sl.size());
+      }
+    }
+  }
+  ctx.TryCancel();
+  grpc::Status status;
+  call->Finish(&status, reinterpret_cast<void*>(5));
+  cq.Shutdown();
+  void* tag;
+  bool ok;
+  while (cq.Next(&tag, &ok)) {
+  }
+  return answer;
+}
+
+TEST_F(Service, HealthAndReflectionNeedNoToken) {
+  write_file(dir_ / "token", "s3cret-token");
+  ServerProcess& s = server({"--token-file", (dir_ / "token").string()});
+  auto channel = grpc::CreateChannel(s.address(), grpc::InsecureChannelCredentials());
+  EXPECT_EQ(health(channel, ""), 1);
+  EXPECT_EQ(health(channel, "vdbwrap.v1.Jobs"), 1);
+  EXPECT_EQ(health(channel, "no.such.Service"), -1);  // NOT_FOUND
+  std::string services = reflection_answer(channel);
+  EXPECT_NE(services.find("vdbwrap.v1.Jobs"), std::string::npos) << services;
+  EXPECT_NE(services.find("grpc.health.v1.Health"), std::string::npos) << services;
+  // The CLI's probe (Docker health check).
+  CliRun probe = cli("health --server " + s.address());
+  EXPECT_EQ(probe.code, 0) << probe.err;
+  EXPECT_EQ(probe.out, "SERVING\n");
+  EXPECT_NE(cli("health --server " + s.address() + " --service no.such.Service").code, 0);
+}
+
+TEST_F(Service, IdempotencyKeyReturnsTheSameJob) {
+  ServerProcess& s = server();
+  Client c(s.address());
+  SubmitOutcome first = c.submit(data("two_objects_mixed_case_names.stl"), "two.stl", coarse(), "retry-key-1");
+  SubmitOutcome second = c.submit(data("two_objects_mixed_case_names.stl"), "two.stl", coarse(), "retry-key-1");
+  ASSERT_TRUE(first.status.ok());
+  ASSERT_TRUE(second.status.ok());
+  EXPECT_EQ(first.job_id, second.job_id);
+  EXPECT_FALSE(first.duplicate);
+  EXPECT_TRUE(second.duplicate);
+  SubmitOutcome other = c.submit(data("two_objects_mixed_case_names.stl"), "two.stl", coarse(), "retry-key-2");
+  EXPECT_NE(other.job_id, first.job_id);
+  EXPECT_EQ(s.jobs_on_disk(), 2u);
+  // Also after a restart.
+  c.wait_done(first.job_id);
+  c.wait_done(other.job_id);
+  EXPECT_EQ(s.kill(SIGTERM), 0);
+  s.start();
+  Client c2(s.address());
+  SubmitOutcome third = c2.submit(data("two_objects_mixed_case_names.stl"), "two.stl", coarse(), "retry-key-1");
+  EXPECT_EQ(third.job_id, first.job_id);
+  EXPECT_TRUE(third.duplicate);
+}
+
+TEST_F(Service, RoundRobinSpreadsJobsOverServers) {
+  std::vector<ServerProcess*> servers;
+  for (const char* name : {"a", "b", "c"}) servers.push_back(&server({"--workers", "1"}, name));
+  std::string target = "ipv4:";
+  for (size_t i = 0; i < servers.size(); ++i) target += (i ? ",127.0.0.1:" : "127.0.0.1:") + std::to_string(servers[i]->port());
+  grpc::ChannelArguments args;
+  args.SetLoadBalancingPolicyName("round_robin");
+  Client balanced(grpc::CreateCustomChannel(target, grpc::InsecureChannelCredentials(), args), "");
+  // Let the policy connect to every address before the jobs go out.
+  balanced.channel()->WaitForConnected(std::chrono::system_clock::now() + 10s);
+  for (int i = 0; i < 20; ++i) {
+    pb::ListReply l;
+    balanced.list(l);
+  }
+  std::map<std::string, std::string> job_peer;  // job id -> server that accepted it
+  for (int i = 0; i < 6; ++i) {
+    std::string id = balanced.submit_ok("two_objects_mixed_case_names.stl", coarse(5));
+    job_peer[id] = balanced.last_peer();
+  }
+  size_t used = 0, total = 0;
+  for (auto* s : servers) {
+    used += s->jobs_on_disk() > 0 ? 1 : 0;
+    total += s->jobs_on_disk();
+  }
+  EXPECT_EQ(total, 6u);
+  EXPECT_GE(used, 2u) << "round robin left jobs on one server";
+  // Each job finishes on the server that holds it (named by the call's peer address).
+  for (auto& [id, peer] : job_peer) {
+    ASSERT_EQ(peer.rfind("ipv4:127.0.0.1:", 0), 0u) << peer;
+    Client direct(peer);
+    EXPECT_EQ(direct.wait_done(id).state(), pb::JOB_STATE_SUCCEEDED);
+  }
+}
+
+TEST_F(Service, TlsServesEncryptedClientsOnly) {
+  if (std::system("command -v openssl > /dev/null 2>&1") != 0) GTEST_SKIP() << "openssl not installed";
+  const fs::path key = dir_ / "key.pem", cert = dir_ / "cert.pem";
+  std::string cmd = "openssl req -x509 -newkey rsa:2048 -nodes -days 1 -subj /CN=localhost -addext "
+                    "subjectAltName=DNS:localhost,IP:127.0.0.1 -keyout " + key.string() + " -out " + cert.string() +
+                    " > /dev/null 2>&1";
+  ASSERT_EQ(std::system(cmd.c_str()), 0);
+  ServerProcess& s = server({"--tls-cert", cert.string(), "--tls-key", key.string()});
+  grpc::SslCredentialsOptions ssl;
+  ssl.pem_root_certs = read_file(cert);
+  Client secure(grpc::CreateChannel(s.address(), grpc::SslCredentials(ssl)), "");
+  pb::ListReply list;
+  EXPECT_TRUE(secure.list(list).ok());
+  Client plain(s.address());
+  EXPECT_FALSE(plain.list(list).ok());
+  std::string id = secure.submit_ok("two_objects_mixed_case_names.stl");
+  EXPECT_EQ(secure.wait_done(id).state(), pb::JOB_STATE_SUCCEEDED);
+  // The CLI with --tls-ca.
+  CliRun r = cli("jobs --server " + s.address() + " --tls-ca " + cert.string());
+  EXPECT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.out.find(id), std::string::npos);
+}
+
+// --- the CLI's remote mode ------------------------------------------------------------
+
+TEST_F(Service, CliSubmitDownloadsTheResult) {
+  ServerProcess& s = server({"--workers", "2"});
+  const fs::path out = dir_ / "fuze_remote.stl", report = dir_ / "fuze_remote.json";
+  CliRun r = cli("submit --server " + s.address() + " " + vdbwrap::testing::data_path("fuze.obj") + " -o " + out.string() +
+              " --base-size 3% --report " + report.string());
+  ASSERT_EQ(r.code, 0) << r.err;
+  expect_valid_result(read_file(out), vdbwrap::io::Format::Stl, "fuze_remote.stl");
+  EXPECT_NE(read_file(report).find("\"valid_closed_surface\": true"), std::string::npos);
+  EXPECT_NE(r.err.find("project"), std::string::npos) << "progress lines expected:\n" << r.err;
+  // Several inputs at once into a folder.
+  fs::create_directories(dir_ / "outs");
+  r = cli("submit --server " + s.address() + " " + vdbwrap::testing::data_path("unit_sphere.STL") + " " +
+          vdbwrap::testing::data_path("two_objects_mixed_case_names.stl") + " --out-dir " + (dir_ / "outs").string() +
+          " --base-size 3% --format ply -q");
+  ASSERT_EQ(r.code, 0) << r.err;
+  expect_valid_result(read_file(dir_ / "outs" / "unit_sphere_wrap.ply"), vdbwrap::io::Format::Ply, "sphere");
+  expect_valid_result(read_file(dir_ / "outs" / "two_objects_mixed_case_names_wrap.ply"), vdbwrap::io::Format::Ply, "two");
+  EXPECT_TRUE(fs::exists(dir_ / "outs" / "unit_sphere_wrap.json"));
+}
+
+TEST_F(Service, CliDetachWaitJobsCancel) {
+  ServerProcess& s = server({"--workers", "1"});
+  CliRun r = cli("submit --server " + s.address() + " --detach " + vdbwrap::testing::data_path("two_objects_mixed_case_names.stl") +
+              " " + vdbwrap::testing::data_path("unit_sphere.STL") + " --base-size 3%");
+  ASSERT_EQ(r.code, 0) << r.err;
+  std::istringstream lines(r.out);
+  std::vector<std::string> ids;
+  for (std::string line; std::getline(lines, line);) ids.push_back(line);
+  ASSERT_EQ(ids.size(), 2u) << r.out;
+  CliRun listed = cli("jobs --server " + s.address());
+  ASSERT_EQ(listed.code, 0) << listed.err;
+  for (auto& id : ids) EXPECT_NE(listed.out.find(id), std::string::npos);
+  fs::create_directories(dir_ / "w");
+  CliRun waited = cli("wait --server " + s.address() + " " + ids[0] + " " + ids[1] + " --out-dir " + (dir_ / "w").string());
+  ASSERT_EQ(waited.code, 0) << waited.err;
+  expect_valid_result(read_file(dir_ / "w" / "two_objects_mixed_case_names_wrap.stl"), vdbwrap::io::Format::Stl, "two");
+  expect_valid_result(read_file(dir_ / "w" / "unit_sphere_wrap.stl"), vdbwrap::io::Format::Stl, "sphere");
+  // cancel
+  CliRun slow_job = cli("submit --server " + s.address() + " --detach " + vdbwrap::testing::data_path("fuze.obj") +
+                     " --base-size 0.5% --threads 1 --no-features");
+  ASSERT_EQ(slow_job.code, 0) << slow_job.err;
+  std::string slow_id = slow_job.out.substr(0, 32);
+  CliRun cancelled = cli("cancel --server " + s.address() + " " + slow_id);
+  EXPECT_EQ(cancelled.code, 0) << cancelled.err;
+  Client c(s.address());
+  EXPECT_EQ(c.wait_done(slow_id, 30s).state(), pb::JOB_STATE_CANCELLED);
+  // wait on a cancelled job exits like a cancelled wrap (6).
+  CliRun w2 = cli("wait --server " + s.address() + " " + slow_id + " --out-dir " + (dir_ / "w").string());
+  EXPECT_EQ(w2.code, 6) << w2.err;
+}
+
+TEST_F(Service, CliRoundRobinSpreadsAndFollowsEachJob) {
+  std::vector<ServerProcess*> servers;
+  for (const char* name : {"a", "b"}) servers.push_back(&server({"--workers", "1"}, name));
+  const std::string target = "ipv4:127.0.0.1:" + std::to_string(servers[0]->port()) + ",127.0.0.1:" +
+                             std::to_string(servers[1]->port());
+  fs::create_directories(dir_ / "rr");
+  std::string inputs;
+  for (const char* n : {"two_objects_mixed_case_names.stl", "unit_sphere.STL", "fuze.obj", "multibody.stl"})
+    inputs += " " + vdbwrap::testing::data_path(n);
+  CliRun r = cli("submit --server " + target + " --round-robin" + inputs + " --out-dir " + (dir_ / "rr").string() +
+                 " --base-size 5% -q");
+  ASSERT_EQ(r.code, 0) << r.err;
+  expect_valid_result(read_file(dir_ / "rr" / "fuze_wrap.obj"), vdbwrap::io::Format::Obj, "fuze");
+  expect_valid_result(read_file(dir_ / "rr" / "multibody_wrap.stl"), vdbwrap::io::Format::Stl, "multibody");
+  EXPECT_EQ(servers[0]->jobs_on_disk() + servers[1]->jobs_on_disk(), 4u);
+  EXPECT_GT(servers[0]->jobs_on_disk(), 0u);
+  EXPECT_GT(servers[1]->jobs_on_disk(), 0u);
+}
+
+TEST_F(Service, CliWaitSurvivesAServerCrashAndRestart) {
+  ServerProcess& s = server({"--workers", "1"});
+  CliRun r = cli("submit --server " + s.address() + " --detach " + vdbwrap::testing::data_path("fuze.obj") +
+                 " --base-size 0.5% --threads 1 --no-features");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const std::string id = r.out.substr(0, 32);
+  fs::create_directories(dir_ / "w");
+  auto waiter = std::async(std::launch::async, [&] {
+    return cli("wait --server " + s.address() + " " + id + " --out-dir " + (dir_ / "w").string() + " --retry 60");
+  });
+  Client c(s.address());
+  c.poll(id, [](const pb::JobStatus& st) { return st.state() == pb::JOB_STATE_RUNNING && st.stage() != "read"; }, 30s);
+  EXPECT_EQ(s.kill(SIGKILL), 128 + SIGKILL);
+  s.set_listen(s.address());  // same address: the waiting CLI reconnects
+  s.start();
+  ASSERT_EQ(waiter.wait_for(180s), std::future_status::ready);
+  CliRun w = waiter.get();
+  EXPECT_EQ(w.code, 0) << w.err;
+  expect_valid_result(read_file(dir_ / "w" / "fuze_wrap.obj"), vdbwrap::io::Format::Obj, "fuze after restart");
+}
+
+TEST_F(Service, CliSubmitTakesEveryWrapOption) {
+  // `submit` mirrors `wrap`: every long option of one is an option of the other.
+  auto options = [](const std::string& help) {
+    std::set<std::string> out;
+    const std::regex opt("--[a-z][a-z0-9-]+");
+    for (auto it = std::sregex_iterator(help.begin(), help.end(), opt); it != std::sregex_iterator(); ++it)
+      out.insert(it->str());
+    return out;
+  };
+  CliRun wrap_help = cli("wrap --help");
+  CliRun submit_help = cli("submit --help");
+  std::set<std::string> wrap_options = options(wrap_help.out), submit_options = options(submit_help.out);
+  ASSERT_GT(wrap_options.size(), 5u) << wrap_help.out;
+  for (const auto& o : wrap_options) EXPECT_TRUE(submit_options.count(o)) << "submit lacks wrap's " << o;
+}
+
+TEST_F(Service, CliExitCodesMatchTheLocalWrap) {
+  write_file(dir_ / "token", "tok");
+  ServerProcess& s = server({"--token-file", (dir_ / "token").string()});
+  write_file(dir_ / "garbage.stl", std::string(3000, '\x01'));
+  const std::string token = " --token-file " + (dir_ / "token").string();
+  CliRun bad_input = cli("submit --server " + s.address() + token + " " + (dir_ / "garbage.stl").string() + " -o " +
+                      (dir_ / "o.stl").string());
+  EXPECT_EQ(bad_input.code, 3) << bad_input.err;
+  CliRun bad_levels = cli("submit --server " + s.address() + token + " " + vdbwrap::testing::data_path("fuze.obj") + " -o " +
+                       (dir_ / "o.stl").string() + " --levels 9");
+  EXPECT_EQ(bad_levels.code, 2) << bad_levels.err;
+  CliRun bad_output = cli("submit --server " + s.address() + token + " " + vdbwrap::testing::data_path("fuze.obj") + " -o " +
+                       (dir_ / "o.xyz").string());
+  EXPECT_EQ(bad_output.code, 2) << bad_output.err;
+  CliRun no_token = cli("jobs --server " + s.address());
+  EXPECT_EQ(no_token.code, 2) << no_token.err;
+  EXPECT_NE(no_token.err.find("UNAUTHENTICATED"), std::string::npos) << no_token.err;
+  CliRun unknown = cli("wait --server " + s.address() + token + " " + std::string(32, 'c'));
+  EXPECT_EQ(unknown.code, 2) << unknown.err;
+  EXPECT_EQ(s.jobs_on_disk(), 0u);
+}
+
+}  // namespace
