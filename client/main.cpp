@@ -163,7 +163,14 @@ int main(int argc, char** argv) {
         std::printf("  reference -> mesh: mean %s, p95 %s, max %s\n", percent(ba.mean, diag).c_str(),
                     percent(ba.p95, diag).c_str(), percent(ba.max, diag).c_str());
         std::printf("  two-sided (Hausdorff) max %s\n", percent(std::max(ab.max, ba.max), diag).c_str());
-        json += ", \"to_reference\": " + to_json(ab) + ", \"from_reference\": " + to_json(ba);
+        // How well the mesh keeps the reference's sharp edges (samples every 0.1 % of the diagonal).
+        DistanceStats edges = sharp_edge_distance(ref, mesh);
+        if (edges.samples > 0)
+          std::printf("  reference's sharp edges -> mesh: mean %s, p95 %s, max %s (%zu samples)\n",
+                      percent(edges.mean, diag).c_str(), percent(edges.p95, diag).c_str(), percent(edges.max, diag).c_str(),
+                      edges.samples);
+        json += ", \"to_reference\": " + to_json(ab) + ", \"from_reference\": " + to_json(ba) +
+                ", \"sharp_edges_from_reference\": " + to_json(edges);
       }
       json += "}";
       if (!check_report.empty()) write_text(check_report, json);

@@ -1,6 +1,6 @@
 // The pipeline: stage 1 (prepare), stage 2 (refine, flood fill, extract), stage 3 and the
 // triangulation (fit), final validation and the report.
-#include <tbb/global_control.h>
+#include <tbb/task_arena.h>
 #include <tbb/parallel_for.h>
 
 #include <chrono>
@@ -41,11 +41,21 @@ void check_cancel(ProgressSink* progress) {
 
 }  // namespace
 
+namespace {
+WrapResult run_pipeline(const Mesh& input, const WrapParams& params, ProgressSink* progress);
+}
+
 WrapResult wrap(const Mesh& input, const WrapParams& params, ProgressSink* progress) {
   check_params(params);
-  std::unique_ptr<tbb::global_control> threads;
-  if (params.threads > 0)
-    threads = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, size_t(params.threads));
+  // A task arena per job: its thread limit holds for this job only, so a server running
+  // several jobs at once does not let one job's limit throttle the others.
+  if (params.threads <= 0) return run_pipeline(input, params, progress);
+  tbb::task_arena arena(params.threads);
+  return arena.execute([&] { return run_pipeline(input, params, progress); });
+}
+
+namespace {
+WrapResult run_pipeline(const Mesh& input, const WrapParams& params, ProgressSink* progress) {
   const auto t0 = std::chrono::steady_clock::now();
   WrapResult result;
   WrapReport& report = result.report;
@@ -138,6 +148,7 @@ WrapResult wrap(const Mesh& input, const WrapParams& params, ProgressSink* progr
     StageTimer timer("validate", report.stages);
     if (progress) progress->progress("validate", 0.0, "checking the wrap");
     report.output = diagnose(result.surface, false);
+    check_cancel(progress);
     // The authoritative self-intersection verdict is CGAL's own on the closed mesh.
     check::CgalVerdict verdict = check::cgal_verdict(result.surface.points, result.surface.triangles);
     report.output.self_intersecting = verdict.self_intersects;
@@ -162,11 +173,14 @@ WrapResult wrap(const Mesh& input, const WrapParams& params, ProgressSink* progr
     StageTimer timer("distances", report.stages);
     if (progress) progress->progress("distances", 0.0, "sampling distances between the wrap and the input");
     report.output_to_input = sampled_distance(result.surface, input);
+    check_cancel(progress);
     report.input_to_output = sampled_distance(input, result.surface);
+    check_cancel(progress);
     report.sharp_edges_to_output = sharp_edge_distance(input, result.surface);
   }
   report.total_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return result;
 }
+}  // namespace
 
 }  // namespace vdbwrap

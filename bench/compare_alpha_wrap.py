@@ -1,0 +1,88 @@
+#!/usr/bin/env python3
+"""Side-by-side benchmark: vdbwrap against CGAL's alpha_wrap_3 (alpha = diag/100,
+offset = diag/3000) on the same inputs, each run several times in this one script run.
+Prints a Markdown table: median wall time, peak memory, output triangles, validity,
+mean / p95 distance from output to input, mean distance from the input's sharp edges to
+the output, and the time ratio vdbwrap / alpha wrap per model and overall (geometric mean).
+
+Usage: bench/compare_alpha_wrap.py [--runs 3] [--base-size 1%] [--build build] [FILES...]
+(default FILES: every mesh in tests/data). Quality figures come from `vdbwrap check`.
+"""
+import argparse, json, math, os, resource, statistics, subprocess, sys, tempfile, time
+
+root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+ap = argparse.ArgumentParser()
+ap.add_argument("--runs", type=int, default=3)
+ap.add_argument("--base-size", default="1%")
+ap.add_argument("--build", default=os.path.join(root, "build"))
+ap.add_argument("files", nargs="*")
+args = ap.parse_args()
+vdbwrap = os.path.join(args.build, "client", "vdbwrap")
+alpha = os.path.join(args.build, "bench", "alpha_wrap_runner")
+files = args.files or sorted((os.path.join(root, "tests", "data", f) for f in os.listdir(os.path.join(root, "tests", "data"))
+                             if f.lower().endswith((".stl", ".obj", ".off", ".ply"))), key=str.lower)
+
+
+def timed(cmd):
+    """Runs cmd; returns (wall seconds, peak RSS MB of that child, completed process)."""
+    before = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss
+    t0 = time.perf_counter()
+    # /usr/bin/time would be simpler but may be missing; run each child alone and read its
+    # peak from wait4.
+    proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    _, status, usage = os.wait4(proc.pid, 0)
+    wall = time.perf_counter() - t0
+    out, err = proc.stdout.read(), proc.stderr.read()
+    proc.returncode = os.waitstatus_to_exitcode(status)
+    return wall, usage.ru_maxrss / 1024.0, subprocess.CompletedProcess(cmd, proc.returncode, out, err)
+
+
+def quality(mesh, reference, tmp):
+    rep = os.path.join(tmp, "check.json")
+    subprocess.run([vdbwrap, "check", mesh, "--against", reference, "--report", rep], capture_output=True, check=True)
+    r = json.load(open(rep))
+    d = r["diagnostics"]
+    return {"triangles": d["triangles"], "valid": d["valid_closed_surface"],
+            "mean": r["to_reference"]["mean_percent_of_diagonal"], "p95": r["to_reference"]["p95_percent_of_diagonal"],
+            "edges": r.get("sharp_edges_from_reference", {}).get("mean_percent_of_diagonal")}
+
+
+rows, ratios = [], []
+with tempfile.TemporaryDirectory() as tmp:
+    for f in files:
+        name = os.path.basename(f)
+        out_v, out_a = os.path.join(tmp, "v.stl"), os.path.join(tmp, "a.stl")
+        tv, ta, mv, ma = [], [], [], []
+        ok = True
+        for _ in range(args.runs):
+            w, m, p = timed([vdbwrap, "wrap", f, "-o", out_v, "--base-size", args.base_size, "-q"])
+            if p.returncode != 0:
+                ok = False
+                rows.append(f"| {name} | vdbwrap failed ({p.returncode}): {p.stderr.strip()} |")
+                break
+            tv.append(w), mv.append(m)
+            w, m, p = timed([alpha, f, out_a])
+            if p.returncode != 0:
+                ok = False
+                rows.append(f"| {name} | alpha wrap failed ({p.returncode}) |")
+                break
+            ta.append(w), ma.append(m)
+        if not ok:
+            continue
+        qv, qa = quality(out_v, f, tmp), quality(out_a, f, tmp)
+        ratio = statistics.median(tv) / statistics.median(ta)
+        ratios.append(ratio)
+        fmt = lambda x: "-" if x is None else f"{x:.4f}"
+        rows.append(f"| {name} | {statistics.median(tv):.2f} | {statistics.median(ta):.2f} | {ratio:.2f} | "
+                    f"{max(mv):.0f} | {max(ma):.0f} | {qv['triangles']} | {qa['triangles']} | "
+                    f"{'yes' if qv['valid'] else 'NO'} | {'yes' if qa['valid'] else 'NO'} | "
+                    f"{qv['mean']:.4f} / {qv['p95']:.4f} | {qa['mean']:.4f} / {qa['p95']:.4f} | {fmt(qv['edges'])} | {fmt(qa['edges'])} |")
+        print(rows[-1], file=sys.stderr)
+
+print(f"vdbwrap --base-size {args.base_size} (defaults otherwise) against CGAL alpha_wrap_3 (alpha = diag/100, "
+      f"offset = diag/3000); median of {args.runs} runs, wall time including file I/O; distances in % of the diagonal.\n")
+print("| model | vdbwrap s | alpha wrap s | ratio v/a | vdbwrap MB | alpha MB | vdbwrap tris | alpha tris | vdbwrap valid | alpha valid | vdbwrap dist mean / p95 | alpha dist mean / p95 | vdbwrap sharp-edge mean | alpha sharp-edge mean |")
+print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
+print("\n".join(rows))
+if ratios:
+    print(f"\nGeometric mean of the time ratios vdbwrap / alpha wrap: {math.exp(sum(map(math.log, ratios)) / len(ratios)):.2f}")
