@@ -127,6 +127,8 @@ int main(int argc, char** argv) {
     if (*wrap_cmd) {
       params.base_size = Length::parse(base_size);
       params.snap_features = !no_features;
+      // Binary STL stores floats: validate what will be written.
+      params.float_coordinates = io::format_from_extension(output) == io::Format::Stl;
       params.volume = volume == "inside" ? VolumeChoice::Inside : VolumeChoice::Outside;
       if (io::format_from_extension(output) == io::Format::Unknown)
         throw Error(ErrorKind::InvalidArgument, output + ": unknown output format (use .stl, .obj, .off or .ply)");

@@ -61,7 +61,8 @@ json params_json(const WrapParams& p) {
               {"surface_offset", p.surface_offset},
               {"presmooth_iterations", p.presmooth_iterations},
               {"snap_features", p.snap_features},
-              {"corner_angle_deg", p.corner_angle_deg}};
+              {"corner_angle_deg", p.corner_angle_deg},
+              {"float_coordinates", p.float_coordinates}};
 }
 }  // namespace
 

@@ -345,6 +345,8 @@ void JobQueue::run(const std::shared_ptr<Job>& job) {
   try {
     const pb::JobSpec& spec = spec_record.spec();
     WrapParams params = api::to_wrap_params(spec.params());
+    // Binary STL stores floats: validate what will be written.
+    params.float_coordinates = spec.output_format() == pb::MESH_FORMAT_STL;
     if (sink.cancelled()) throw Error(ErrorKind::Cancelled, "cancelled");
     Mesh input;
     {

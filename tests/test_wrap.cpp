@@ -146,3 +146,19 @@ INSTANTIATE_TEST_SUITE_P(Corpus, CorpusWrap,
                              if (!std::isalnum(static_cast<unsigned char>(c))) c = '_';
                            return n;
                          });
+
+TEST(Wrap, SinglePrecisionOutputStaysValidWhenWrittenAsBinaryStl) {
+  // Binary STL rounds coordinates to float; a wrap validated in double precision could
+  // become self-intersecting on the way to disk. With float_coordinates it is validated
+  // as written.
+  for (const char* name : {"20mm-xyz-cube.stl", "octagonal_pocket.stl"}) {
+    Mesh input = io::read_mesh(data_path(name));
+    WrapParams p = at("1%");
+    p.float_coordinates = true;
+    WrapResult r = wrap(input, p);
+    const std::string path = ::testing::TempDir() + "/single_precision.stl";
+    io::write_mesh(r.surface, path);
+    auto v = valid_closed_surface(io::read_mesh(path));
+    EXPECT_TRUE(v.ok) << name << ": " << v.why;
+  }
+}

@@ -319,7 +319,11 @@ FittedSurface fit_to_input(const extract::LatticeSurface& surf, const grid::Adap
   // and only what is written counts.
   std::vector<double> t(n, 1.0);
   std::vector<Vec3>& p = out.points;
-  auto world = [&](const Vec3& local) { return local + origin; };
+  auto world = [&](const Vec3& local) {
+    Vec3 w = local + origin;
+    if (params.float_coordinates) w = {double(float(w[0])), double(float(w[1])), double(float(w[2]))};
+    return w;
+  };
   p.resize(n);
   for (size_t i = 0; i < n; ++i) p[i] = world(target[i]);
   std::vector<uint8_t> strikes(n, 0);

@@ -1,6 +1,7 @@
 // Meshes built in code for the tests, and helpers that check surfaces with CGAL.
 #pragma once
 #include <cmath>
+#include <map>
 #include <string>
 
 #include "check/intersections.h"
@@ -63,7 +64,21 @@ struct SurfaceVerdict {
   bool ok = false;
   std::string why;
 };
-inline SurfaceVerdict valid_closed_surface(const Mesh& m) {
+inline SurfaceVerdict valid_closed_surface(const Mesh& unwelded) {
+  // Files such as binary STL repeat each corner: merge bit-identical points first.
+  Mesh m;
+  m.triangles = unwelded.triangles;
+  {
+    std::map<Vec3, uint32_t> index;
+    std::vector<uint32_t> remap(unwelded.points.size());
+    for (size_t i = 0; i < unwelded.points.size(); ++i) {
+      auto [it, added] = index.emplace(unwelded.points[i], uint32_t(m.points.size()));
+      if (added) m.points.push_back(unwelded.points[i]);
+      remap[i] = it->second;
+    }
+    for (auto& t : m.triangles)
+      for (auto& v : t) v = remap[v];
+  }
   MeshDiagnostics d = diagnose(m, false);
   check::CgalVerdict v = check::cgal_verdict(m.points, m.triangles);
   SurfaceVerdict out;

@@ -47,6 +47,10 @@ struct WrapParams {
   bool snap_features = true;
   double corner_angle_deg = 30;    // a feature curve turning more than this at a point has a corner there
 
+  // The output will be stored in single precision (binary STL): coordinates are rounded to
+  // float during the validity loop, so the validity checked is that of what is written.
+  bool float_coordinates = false;
+
   bool compute_distances = true;   // sample output-to-input distances for the report
 };
 
