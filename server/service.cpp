@@ -263,6 +263,18 @@ grpc::Status JobsService::Download(grpc::ServerContext* ctx, const pb::DownloadR
   try {
     std::string ply = JobStore::read_file(queue_.store().result_path(r.job_id(), pb::MESH_FORMAT_PLY));
     Mesh mesh = io::read_mesh_from_bytes(ply, io::Format::Ply, "result");
+    if (format == pb::MESH_FORMAT_STL) {
+      // Binary STL stores floats: a result validated in double precision is checked again
+      // as it will be written, and refused rather than handed back invalid.
+      Mesh rounded = mesh;
+      for (auto& p : rounded.points) p = {double(float(p[0])), double(float(p[1])), double(float(p[2]))};
+      MeshDiagnostics d = diagnose(rounded, true);
+      if (!d.valid_closed_surface())
+        return status(grpc::StatusCode::FAILED_PRECONDITION,
+                      "this result is not valid once rounded to single precision for STL (" +
+                          std::to_string(d.intersecting_triangles) + " intersecting triangles); download it as PLY or OBJ, "
+                          "or submit the job with output format STL");
+    }
     bytes = io::write_mesh_to_bytes(mesh, api::to_io_format(format));
   } catch (const std::exception& e) {
     return status(grpc::StatusCode::INTERNAL, std::string("cannot convert the result: ") + e.what());
