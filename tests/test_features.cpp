@@ -145,9 +145,4 @@ INSTANTIATE_TEST_SUITE_P(Cad, CorpusFeatures,
                          ::testing::Values("fandisk.obj", "1002_tray_bottom.STL", "featuretype.STL", "octagonal_pocket.stl",
                                            "plate_holes.STL", "idler_riser.STL", "angle_block.STL", "busted.STL",
                                            "20mm-xyz-cube.stl"),
-                         [](const ::testing::TestParamInfo<const char*>& info) {
-                           std::string n = info.param;
-                           for (char& c : n)
-                             if (!std::isalnum(static_cast<unsigned char>(c))) c = '_';
-                           return n;
-                         });
+                         [](const ::testing::TestParamInfo<const char*>& info) { return test_name_of(info.param); });

@@ -140,12 +140,7 @@ INSTANTIATE_TEST_SUITE_P(Corpus, CorpusWrap,
                                            "plate_holes.STL", "quadknot.obj", "round.stl", "soup.stl", "suzanne.ply",
                                            "teapot.stl", "torus.STL", "tube.obj", "two_objects_mixed_case_names.stl",
                                            "unit_sphere.STL"),
-                         [](const ::testing::TestParamInfo<const char*>& info) {
-                           std::string n = info.param;
-                           for (char& c : n)
-                             if (!std::isalnum(static_cast<unsigned char>(c))) c = '_';
-                           return n;
-                         });
+                         [](const ::testing::TestParamInfo<const char*>& info) { return test_name_of(info.param); });
 
 TEST(Wrap, SinglePrecisionOutputStaysValidWhenWrittenAsBinaryStl) {
   // Binary STL rounds coordinates to float; a wrap validated in double precision could

@@ -5,6 +5,7 @@
 
 #include <tbb/parallel_for.h>
 
+#include "check/distance_stats.h"
 #include "common/vec.h"
 #include "fit/surface_index.h"
 #include "vdbwrap/wrap.h"
@@ -37,6 +38,15 @@ DistanceStats sampled_distance(const Mesh& from, const Mesh& to, double samples_
       samples.push_back(a + (b - a) * u + (c - a) * v);
     }
   }
+  return check::distances_to(samples, to, s.diagonal);
+}
+
+namespace check {
+
+DistanceStats distances_to(const std::vector<Vec3>& samples, const Mesh& to, double diagonal) {
+  DistanceStats s;
+  s.diagonal = diagonal;
+  if (samples.empty() || to.triangles.empty()) return s;
   fit::SurfaceIndex index(to.points, to.triangles);
   std::vector<double> dist(samples.size());
   tbb::parallel_for(tbb::blocked_range<size_t>(0, samples.size(), 1024), [&](const tbb::blocked_range<size_t>& r) {
@@ -52,5 +62,7 @@ DistanceStats sampled_distance(const Mesh& from, const Mesh& to, double samples_
   s.max = *std::max_element(dist.begin(), dist.end());
   return s;
 }
+
+}  // namespace check
 
 }  // namespace vdbwrap

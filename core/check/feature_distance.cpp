@@ -1,10 +1,8 @@
 // Distance from the input's sharp edges to a surface: how well a wrap keeps the edges.
 #include <cmath>
 
-#include <tbb/parallel_for.h>
-
+#include "check/distance_stats.h"
 #include "common/vec.h"
-#include "fit/surface_index.h"
 #include "prep/prepare.h"
 #include "vdbwrap/wrap.h"
 
@@ -40,21 +38,7 @@ DistanceStats sharp_edge_distance(const Mesh& input, const Mesh& surface, double
     size_t k = std::max<size_t>(1, size_t(std::ceil(norm(b - a) / spacing)));
     for (size_t i = 0; i <= k; ++i) samples.push_back(lerp(a, b, double(i) / double(k)));
   }
-  s.samples = samples.size();
-  if (samples.empty()) return s;
-  fit::SurfaceIndex index(surface.points, surface.triangles);
-  std::vector<double> dist(samples.size());
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, samples.size(), 512), [&](const tbb::blocked_range<size_t>& r) {
-    for (size_t i = r.begin(); i != r.end(); ++i) dist[i] = std::sqrt(index.squared_distance(samples[i]));
-  });
-  double sum = 0;
-  for (double d : dist) sum += d;
-  s.mean = sum / double(dist.size());
-  size_t k95 = std::min(dist.size() - 1, size_t(0.95 * double(dist.size())));
-  std::nth_element(dist.begin(), dist.begin() + k95, dist.end());
-  s.p95 = dist[k95];
-  s.max = *std::max_element(dist.begin(), dist.end());
-  return s;
+  return check::distances_to(samples, surface, s.diagonal);
 }
 
 }  // namespace vdbwrap

@@ -7,18 +7,14 @@
 #include <queue>
 #include <unordered_map>
 
+#include "common/grid_key.h"
 #include "common/vec.h"
 
 namespace vdbwrap::fit {
 namespace {
 
-struct Key {
-  int64_t x, y, z;
-  bool operator==(const Key& o) const { return x == o.x && y == o.y && z == o.z; }
-};
-struct KeyHash {
-  size_t operator()(const Key& k) const { return size_t(k.x * 73856093LL ^ k.y * 19349663LL ^ k.z * 83492791LL); }
-};
+using Key = GridKey;
+using KeyHash = GridKeyHash;
 
 // Nearest point of segment ab to p, and its parameter in [0,1].
 Vec3 closest_on_segment(const Vec3& a, const Vec3& b, const Vec3& p, double& t) {
@@ -162,9 +158,7 @@ std::vector<std::pair<uint32_t, uint32_t>> snap_to_curves(const std::vector<Feat
   std::vector<std::pair<uint32_t, uint32_t>> traced;
   // Nodes bucketed by target position, cells of the radius.
   const double inv = 1.0 / radius;
-  auto key = [&](const Vec3& p) {
-    return Key{int64_t(std::floor(p[0] * inv)), int64_t(std::floor(p[1] * inv)), int64_t(std::floor(p[2] * inv))};
-  };
+  auto key = [&](const Vec3& p) { return grid_key(p, inv); };
   std::unordered_map<Key, std::vector<uint32_t>, KeyHash> buckets;
   for (uint32_t i = 0; i < n; ++i) {
     Key kt = key(target[i]), kl = key(lattice[i]);

@@ -8,6 +8,7 @@
 #include <unordered_map>
 
 #include "check/intersections.h"
+#include "common/grid_key.h"
 #include "common/vec.h"
 #include "vdbwrap/errors.h"
 
@@ -54,19 +55,11 @@ class NodeBuckets {
   }
 
  private:
-  struct Key {
-    int64_t x, y, z;
-    bool operator==(const Key& o) const { return x == o.x && y == o.y && z == o.z; }
-  };
-  struct KeyHash {
-    size_t operator()(const Key& k) const { return size_t(k.x * 73856093LL ^ k.y * 19349663LL ^ k.z * 83492791LL); }
-  };
-  Key key(const Vec3& q) const {
-    return {int64_t(std::floor(q[0] * inv_)), int64_t(std::floor(q[1] * inv_)), int64_t(std::floor(q[2] * inv_))};
-  }
+  using Key = GridKey;
+  Key key(const Vec3& q) const { return grid_key(q, inv_); }
   const std::vector<Vec3>& p_;
   double sep2_, inv_;
-  std::unordered_map<Key, std::vector<uint32_t>, KeyHash> cells_;
+  std::unordered_map<Key, std::vector<uint32_t>, GridKeyHash> cells_;
 };
 
 // Triangles bucketed by bounding box on a uniform grid, so that the triangles around a few
@@ -100,13 +93,7 @@ class TriangleBuckets {
   }
 
  private:
-  struct Key {
-    int64_t x, y, z;
-    bool operator==(const Key& o) const { return x == o.x && y == o.y && z == o.z; }
-  };
-  struct KeyHash {
-    size_t operator()(const Key& k) const { return size_t(k.x * 73856093LL ^ k.y * 19349663LL ^ k.z * 83492791LL); }
-  };
+  using Key = GridKey;
   template <typename F>
   void for_cells(const Box3& b, F&& fn) const {
     int64_t lo[3], hi[3];
@@ -130,7 +117,7 @@ class TriangleBuckets {
   std::vector<Box3> boxes_;
   std::vector<uint32_t> seen_;
   uint32_t stamp_ = 0;
-  std::unordered_map<Key, std::vector<uint32_t>, KeyHash> cells_;
+  std::unordered_map<Key, std::vector<uint32_t>, GridKeyHash> cells_;
 };
 
 // Diagonal (0-2 or 1-3) of a quad whose midpoint lies nearer the input: the split that
@@ -155,11 +142,9 @@ FittedSurface fit_to_input(const extract::LatticeSurface& surf, const grid::Adap
   const double hf = g.fine_size();
   // Nodes: lattice nodes, then one centre node per polygon with more than four nodes.
   std::vector<Vec3> lattice;
-  std::vector<double> node_cell;  // local cell size (model units) per node
   lattice.reserve(surf.nodes.size());
   for (size_t i = 0; i < surf.nodes.size(); ++i) {
     lattice.push_back(g.node_position(surf.nodes[i]));
-    node_cell.push_back(surf.node_size[i] * hf);
   }
   std::vector<std::array<uint32_t, 4>> quads;
   std::vector<Tri> fans;
@@ -177,8 +162,6 @@ FittedSurface fit_to_input(const extract::LatticeSurface& surf, const grid::Adap
     Coord mid((lo.x() + hi.x()) / 2, (lo.y() + hi.y()) / 2, (lo.z() + hi.z()) / 2);
     uint32_t centre = uint32_t(lattice.size());
     lattice.push_back(g.node_position(mid));
-    int32_t side = std::max({hi.x() - lo.x(), hi.y() - lo.y(), hi.z() - lo.z()});
-    node_cell.push_back(side * hf);
     for (size_t k = 0; k < poly.size(); ++k) fans.push_back({centre, poly[k], poly[(k + 1) % poly.size()]});
   }
   const size_t n = lattice.size();

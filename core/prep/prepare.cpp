@@ -6,21 +6,12 @@
 #include <unordered_map>
 
 #include "check/intersections.h"
+#include "common/grid_key.h"
 #include "common/vec.h"
 #include "vdbwrap/errors.h"
 
 namespace vdbwrap::prep {
 namespace {
-
-struct CellKey {
-  int64_t x, y, z;
-  bool operator==(const CellKey& o) const { return x == o.x && y == o.y && z == o.z; }
-};
-struct CellKeyHash {
-  size_t operator()(const CellKey& k) const {
-    return size_t(k.x * 73856093LL) ^ size_t(k.y * 19349663LL) ^ size_t(k.z * 83492791LL);
-  }
-};
 
 uint64_t edge_key(uint32_t a, uint32_t b) {
   if (a > b) std::swap(a, b);
@@ -32,14 +23,14 @@ uint64_t edge_key(uint32_t a, uint32_t b) {
 std::vector<uint32_t> weld_points(const std::vector<Vec3>& points, double tolerance, std::vector<Vec3>& welded) {
   // Hash grid with cells of the tolerance: a match can only be in the 27 cells around.
   const double inv = tolerance > 0 ? 1.0 / tolerance : 0;
-  std::unordered_map<CellKey, std::vector<uint32_t>, CellKeyHash> buckets;
+  std::unordered_map<GridKey, std::vector<uint32_t>, GridKeyHash> buckets;
   buckets.reserve(points.size());
   std::vector<uint32_t> remap(points.size());
   welded.clear();
   const double tol2 = tolerance * tolerance;
   for (size_t i = 0; i < points.size(); ++i) {
     const Vec3& p = points[i];
-    CellKey key{int64_t(std::floor(p[0] * inv)), int64_t(std::floor(p[1] * inv)), int64_t(std::floor(p[2] * inv))};
+    GridKey key = grid_key(p, inv);
     uint32_t found = UINT32_MAX;
     for (int dx = -1; dx <= 1 && found == UINT32_MAX; ++dx)
       for (int dy = -1; dy <= 1 && found == UINT32_MAX; ++dy)

@@ -1,5 +1,6 @@
 // Meshes built in code for the tests, and helpers that check surfaces with CGAL.
 #pragma once
+#include <cctype>
 #include <cmath>
 #include <map>
 #include <string>
@@ -15,6 +16,14 @@
 namespace vdbwrap::testing {
 
 inline std::string data_path(const std::string& name) { return std::string(VDBWRAP_TEST_DATA_DIR) + "/" + name; }
+
+// A GoogleTest parameter name from a file name (letters and digits only).
+inline std::string test_name_of(const std::string& file) {
+  std::string n = file;
+  for (char& c : n)
+    if (!std::isalnum(static_cast<unsigned char>(c))) c = '_';
+  return n;
+}
 
 // Axis-aligned box, 12 outward triangles, as part `part`.
 inline void add_box(Mesh& m, const Vec3& lo, const Vec3& hi, int32_t part = 0) {

@@ -1,0 +1,25 @@
+// Integer cell coordinates for hash grids over points (welding, buckets, spacing checks).
+#pragma once
+#include <cmath>
+#include <cstdint>
+#include <functional>
+
+#include "vdbwrap/mesh.h"
+
+namespace vdbwrap {
+
+struct GridKey {
+  int64_t x, y, z;
+  bool operator==(const GridKey& o) const { return x == o.x && y == o.y && z == o.z; }
+};
+
+struct GridKeyHash {
+  size_t operator()(const GridKey& k) const { return size_t(k.x * 73856093LL ^ k.y * 19349663LL ^ k.z * 83492791LL); }
+};
+
+// The cell of p on a grid of cells 1/inv_cell wide.
+inline GridKey grid_key(const Vec3& p, double inv_cell) {
+  return {int64_t(std::floor(p[0] * inv_cell)), int64_t(std::floor(p[1] * inv_cell)), int64_t(std::floor(p[2] * inv_cell))};
+}
+
+}  // namespace vdbwrap
