@@ -8,6 +8,7 @@
 #include <iostream>
 
 #include "cli_progress.h"
+#include "wrap_options.h"
 #ifdef VDBWRAP_WITH_REMOTE
 #include "remote.h"  // submit, wait, jobs, cancel (gRPC job service)
 #endif
@@ -60,42 +61,14 @@ int main(int argc, char** argv) {
 
   // wrap
   auto* wrap_cmd = app.add_subcommand("wrap", "Wrap INPUT into a closed, valid surface written to OUTPUT");
-  std::string input, output, report_path, base_size = "1%", volume = "outside";
-  WrapParams params;
+  std::string input, output, report_path, leak_path;
+  cli::WrapOptions wrap_options;
   bool quiet = false;
   wrap_cmd->add_option("input", input, "Input mesh (.stl .obj .off .ply)")->required();
   wrap_cmd->add_option("-o,--output", output, "Output mesh; the format follows the extension")->required();
-  wrap_cmd->add_option("--base-size", base_size,
-                       "Level-0 cell edge: model units (0.5) or percent of the bounding-box diagonal (1%)")
-      ->capture_default_str();
-  wrap_cmd->add_option("--levels", params.levels, "Most 2x2x2 refinement levels below the base size (0-6)")
-      ->capture_default_str()
-      ->check(CLI::Range(0, 6));
-  wrap_cmd->add_option("--feature-angle", params.feature_angle_deg,
-                       "Angle in degrees between adjacent triangles' normals that makes their edge sharp")
-      ->capture_default_str()
-      ->check(CLI::Range(0.0, 180.0));
-  wrap_cmd->add_option("--volume", volume, "Volume to wrap: outside (around the input) or inside (largest enclosed volume)")
-      ->capture_default_str()
-      ->check(CLI::IsMember({"outside", "inside"}));
-  wrap_cmd->add_option("--threads", params.threads, "Worker threads (0: all cores)")->capture_default_str()->check(CLI::NonNegativeNumber);
-  wrap_cmd->add_option("--refine-triangles", params.refine_max_triangles,
-                       "Refine a cell holding more input triangles than this")
-      ->capture_default_str()
-      ->check(CLI::PositiveNumber);
-  wrap_cmd->add_option("--refine-normal-spread", params.refine_normal_spread_deg,
-                       "Refine a cell whose input normals spread more than this many degrees")
-      ->capture_default_str();
-  wrap_cmd->add_option("--presmooth", params.presmooth_iterations,
-                       "Smoothing iterations of the voxel surface before projection (untangles the staircase)")
-      ->capture_default_str()
-      ->check(CLI::Range(0, 100));
-  bool no_features = false;
-  wrap_cmd->add_flag("--no-features", no_features, "Do not snap the wrap onto sharp edges, boundaries and corners");
-  wrap_cmd->add_option("--corner-angle", params.corner_angle_deg,
-                       "Degrees a feature curve must turn at a point to make a corner there")
-      ->capture_default_str()
-      ->check(CLI::Range(0.0, 180.0));
+  wrap_options.add_to(wrap_cmd, "Worker threads (0: all cores)");
+  wrap_cmd->add_option("--leak-path", leak_path,
+                       "When a seed point's volume leaks: write the narrowest passage and the path to it here (OBJ)");
   wrap_cmd->add_option("--report", report_path, "Write a JSON report (diagnostics, parameters, validity, distances, timings)");
   wrap_cmd->add_flag("-q,--quiet", quiet, "No progress on stderr");
 
@@ -125,18 +98,31 @@ int main(int argc, char** argv) {
   std::string current_file;
   try {
     if (*wrap_cmd) {
-      params.base_size = Length::parse(base_size);
-      params.snap_features = !no_features;
+      WrapParams params = wrap_options.resolve();
       // Binary STL stores floats: validate what will be written.
       params.float_coordinates = io::format_from_extension(output) == io::Format::Stl;
-      params.volume = volume == "inside" ? VolumeChoice::Inside : VolumeChoice::Outside;
       if (io::format_from_extension(output) == io::Format::Unknown)
         throw Error(ErrorKind::InvalidArgument, output + ": unknown output format (use .stl, .obj, .off or .ply)");
       cli::StderrProgress progress(quiet);
       progress.progress("read", 0.0, input);
       Mesh mesh = io::read_mesh(input);
       progress.progress("read", 1.0, std::to_string(mesh.triangles.size()) + " triangles");
-      WrapResult result = wrap(mesh, params, &progress);
+      WrapResult result;
+      try {
+        result = wrap(mesh, params, &progress);
+      } catch (const WrapFailure& failure) {
+        // The report is written even when the run stops (a leak, a failed validation).
+        if (!report_path.empty()) write_text(report_path, to_json(failure.report()));
+        const LeakReport& leak = failure.report().leak;
+        if (leak.detected) {
+          if (!leak_path.empty()) write_text(leak_path, leak_to_obj(leak));
+          std::fprintf(stderr, "vdbwrap: %s\n", leak.description.c_str());
+          std::fprintf(stderr, "vdbwrap: narrowest passage at (%.6g, %.6g, %.6g), about %.4g wide%s%s\n", leak.location[0],
+                       leak.location[1], leak.location[2], leak.width, leak_path.empty() ? "" : "; path in ",
+                       leak_path.c_str());
+        }
+        throw;
+      }
       progress.progress("write", 0.0, output);
       io::write_mesh(result.surface, output);
       if (!report_path.empty()) write_text(report_path, to_json(result.report));

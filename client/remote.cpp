@@ -1,4 +1,5 @@
 #include "remote.h"
+#include "wrap_options.h"
 
 #include <grpcpp/generic/generic_stub.h>
 #include <grpcpp/grpcpp.h>
@@ -226,8 +227,9 @@ class Display {
 // --- one job: follow it, download it ----------------------------------------------------
 
 struct Target {
-  std::string output;  // result file
-  std::string report;  // report file, or empty
+  std::string output;     // result file
+  std::string report;     // report file, or empty
+  std::string leak_path;  // where a leak's passage and path go (OBJ), or empty
 };
 
 std::string random_key() {
@@ -294,6 +296,18 @@ int follow(const Connection& conn, const std::shared_ptr<grpc::Channel>& channel
   if (status.state() != pb::JOB_STATE_SUCCEEDED) {
     display.note(index, "error: job " + id + " (" + status.spec().file_name() + ") " + api::state_name(status.state()) + ": " +
                             status.error_message());
+    // A failed job's report (a leak's location) is kept like a successful one's.
+    if (!status.report_json().empty()) {
+      try {
+        if (!target.report.empty()) write_file(target.report, status.report_json() + "\n");
+        const LeakReport leak = leak_from_report_json(status.report_json());
+        if (leak.detected && !target.leak_path.empty()) {
+          write_file(target.leak_path, leak_to_obj(leak));
+          display.note(index, "leak: narrowest passage and path written to " + target.leak_path);
+        }
+      } catch (const Error&) {
+      }
+    }
     return exit_code(api::to_error_kind(status.error_kind()));
   }
   // Download, straight to OUTPUT.tmp; renamed when complete.
@@ -407,9 +421,9 @@ struct RemoteCommands::Impl {
 
   // submit
   std::vector<std::string> inputs;
-  std::string output, out_dir, format, report, base_size = "1%", volume = "outside";
-  WrapParams params;
-  bool no_features = false, detach = false, quiet = false;
+  std::string output, out_dir, format, report, leak_path;
+  cli::WrapOptions wrap_options;
+  bool detach = false, quiet = false;
   double queue_wait = 600;
   // wait / cancel
   std::vector<std::string> ids;
@@ -447,36 +461,9 @@ struct RemoteCommands::Impl {
         ->check(CLI::NonNegativeNumber);
     submit->add_flag("-q,--quiet", quiet, "No progress on stderr");
     // The wrap options, as in `vdbwrap wrap`.
-    submit->add_option("--base-size", base_size,
-                       "Level-0 cell edge: model units (0.5) or percent of the bounding-box diagonal (1%)")
-        ->capture_default_str();
-    submit->add_option("--levels", params.levels, "Most 2x2x2 refinement levels below the base size (0-6)")
-        ->capture_default_str()
-        ->check(CLI::Range(0, 6));
-    submit->add_option("--feature-angle", params.feature_angle_deg,
-                       "Angle in degrees between adjacent triangles' normals that makes their edge sharp")
-        ->capture_default_str()
-        ->check(CLI::Range(0.0, 180.0));
-    submit->add_option("--volume", volume, "Volume to wrap: outside (around the input) or inside (largest enclosed volume)")
-        ->capture_default_str()
-        ->check(CLI::IsMember({"outside", "inside"}));
-    submit->add_option("--threads", params.threads, "Worker threads on the server (0: all its cores)")
-        ->capture_default_str()
-        ->check(CLI::NonNegativeNumber);
-    submit->add_option("--refine-triangles", params.refine_max_triangles, "Refine a cell holding more input triangles than this")
-        ->capture_default_str()
-        ->check(CLI::PositiveNumber);
-    submit->add_option("--refine-normal-spread", params.refine_normal_spread_deg,
-                       "Refine a cell whose input normals spread more than this many degrees")
-        ->capture_default_str();
-    submit->add_option("--presmooth", params.presmooth_iterations,
-                       "Smoothing iterations of the voxel surface before projection (untangles the staircase)")
-        ->capture_default_str()
-        ->check(CLI::Range(0, 100));
-    submit->add_flag("--no-features", no_features, "Do not snap the wrap onto sharp edges, boundaries and corners");
-    submit->add_option("--corner-angle", params.corner_angle_deg, "Degrees a feature curve must turn at a point to make a corner there")
-        ->capture_default_str()
-        ->check(CLI::Range(0.0, 180.0));
+    wrap_options.add_to(submit, "Worker threads on the server (0: all its cores)");
+    submit->add_option("--leak-path", leak_path,
+                       "When a seed point's volume leaks: write the narrowest passage and the path to it here (OBJ; one input)");
 
     wait = app.add_subcommand("wait", "Wait for jobs on a vdbwrap-server and download their results");
     add_connection(wait);
@@ -555,10 +542,7 @@ int RemoteCommands::Impl::run_submit() {
   if (!output.empty() && io::format_from_extension(output) == io::Format::Unknown)
     throw Error(ErrorKind::InvalidArgument, output + ": unknown output format (use .stl, .obj, .off or .ply)");
   if (!out_dir.empty() && !fs::is_directory(out_dir)) throw Error(ErrorKind::InvalidArgument, out_dir + ": not a folder");
-  params.base_size = Length::parse(base_size);
-  params.volume = volume == "inside" ? VolumeChoice::Inside : VolumeChoice::Outside;
-  params.snap_features = !no_features;
-  const pb::WrapParameters wire_params = api::to_proto(params);
+  const pb::WrapParameters wire_params = api::to_proto(wrap_options.resolve());
   conn.load();
 
   // Output format per input.
@@ -648,7 +632,7 @@ int RemoteCommands::Impl::run_submit() {
   }
 
   std::vector<Target> targets;
-  if (!output.empty()) targets.push_back({output, report});
+  if (!output.empty()) targets.push_back({output, report, leak_path});
   else targets = targets_in(out_dir, stems, api::extension_of(formats.empty() ? pb::MESH_FORMAT_PLY : formats[0]), ids);
   if (output.empty() && format.empty())  // per-input formats
     for (size_t i = 0; i < targets.size(); ++i)

@@ -2,6 +2,7 @@
 // server's job report share them).
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <charconv>
 #include <cmath>
 #include <sstream>
@@ -48,11 +49,32 @@ json dist_json(const DistanceStats& s) {
               {"max_percent_of_diagonal", 100 * s.max / dg}};
 }
 
+json control_volumes_json(const WrapParams& p) {
+  json a = json::array();
+  for (const auto& cv : p.control_volumes) a.push_back(cv.to_string());
+  return a;
+}
+json part_sizes_json(const WrapParams& p) {
+  json a = json::array();
+  for (const auto& ps : p.part_sizes) a.push_back(ps.part + "=" + ps.size.to_string());
+  return a;
+}
+json contact_json(const WrapParams& p) {
+  json a = json::array();
+  for (const auto& r : p.contact_prevention) a.push_back(r.to_string());
+  return a;
+}
+
 json params_json(const WrapParams& p) {
   return json{{"base_size", p.base_size.to_string()},
               {"levels", p.levels},
               {"feature_angle_deg", p.feature_angle_deg},
-              {"volume", p.volume == VolumeChoice::Outside ? "outside" : "inside"},
+              {"volume", volume_choice_to_string(p.volume, p.seed_points)},
+              {"gap_closure", p.gap_closure ? json(p.gap_closure->to_string()) : json(nullptr)},
+              {"control_volumes", control_volumes_json(p)},
+              {"part_sizes", part_sizes_json(p)},
+              {"contact_prevention", contact_json(p)},
+              {"contact_floor", p.contact_floor ? json(p.contact_floor->to_string()) : json(nullptr)},
               {"threads", p.threads},
               {"refine_max_triangles", p.refine_max_triangles},
               {"refine_normal_spread_deg", p.refine_normal_spread_deg},
@@ -64,7 +86,56 @@ json params_json(const WrapParams& p) {
               {"corner_angle_deg", p.corner_angle_deg},
               {"float_coordinates", p.float_coordinates}};
 }
+json leak_json(const LeakReport& l) {
+  if (!l.detected) return json{{"detected", false}};
+  return json{{"detected", true},
+              {"description", l.description},
+              {"location", l.location},
+              {"width", l.width},
+              {"path", l.path}};
+}
+
 }  // namespace
+
+LeakReport leak_from_report_json(const std::string& text) {
+  LeakReport leak;
+  try {
+    const json j = json::parse(text);
+    if (!j.contains("leak") || !j["leak"].value("detected", false)) return leak;
+    const json& l = j["leak"];
+    leak.detected = true;
+    leak.description = l.value("description", "");
+    leak.location = l.at("location").get<Vec3>();
+    leak.width = l.value("width", 0.0);
+    if (l.contains("path")) leak.path = l["path"].get<std::vector<Vec3>>();
+  } catch (const json::exception& e) {
+    throw Error(ErrorKind::InvalidInput, std::string("report: ") + e.what());
+  }
+  return leak;
+}
+
+std::string leak_to_obj(const LeakReport& leak) {
+  std::ostringstream o;
+  o.precision(9);
+  o << "# vdbwrap leak: " << leak.description << "\n# narrowest passage at " << leak.location[0] << ' ' << leak.location[1]
+    << ' ' << leak.location[2] << ", about " << leak.width << " wide\n";
+  // A small octahedron at the passage, then the path as a polyline.
+  const double r = std::max(leak.width * 0.5, 1e-9);
+  const Vec3& c = leak.location;
+  const double d[6][3] = {{r, 0, 0}, {-r, 0, 0}, {0, r, 0}, {0, -r, 0}, {0, 0, r}, {0, 0, -r}};
+  o << "o leak_passage\n";
+  for (const auto& v : d) o << "v " << c[0] + v[0] << ' ' << c[1] + v[1] << ' ' << c[2] + v[2] << "\n";
+  const int f[8][3] = {{1, 3, 5}, {3, 2, 5}, {2, 4, 5}, {4, 1, 5}, {3, 1, 6}, {2, 3, 6}, {4, 2, 6}, {1, 4, 6}};
+  for (const auto& t : f) o << "f " << t[0] << ' ' << t[1] << ' ' << t[2] << "\n";
+  o << "o leak_path\n";
+  for (const Vec3& p : leak.path) o << "v " << p[0] << ' ' << p[1] << ' ' << p[2] << "\n";
+  if (leak.path.size() > 1) {
+    o << "l";
+    for (size_t i = 0; i < leak.path.size(); ++i) o << ' ' << 7 + i;
+    o << "\n";
+  }
+  return o.str();
+}
 
 Length Length::parse(const std::string& text) {
   std::string t = text;
@@ -93,6 +164,8 @@ std::string to_json(const DistanceStats& s, int indent) { return dist_json(s).du
 std::string to_json(const WrapReport& r, int indent) {
   json stages = json::array();
   for (const auto& s : r.stages) stages.push_back({{"name", s.name}, {"seconds", s.seconds}, {"peak_memory_mb", s.peak_memory_mb}});
+  json sizes = json::array();
+  for (const auto& [what, size] : r.control_sizes) sizes.push_back({{"control", what}, {"cell_size", size}});
   json j{{"input", diag_json(r.input)},
          {"features",
           {{"sharp_edges", r.features.sharp_edges},
@@ -111,6 +184,21 @@ std::string to_json(const WrapReport& r, int indent) {
            {"diagonal", r.diagonal},
            {"cells_on_input_per_level", r.cells_per_level},
            {"cells_excluded_for_manifoldness", r.manifold_fixes}}},
+         {"volumes",
+          {{"free_volumes", r.volumes.free_volumes},
+           {"enclosed_volumes", r.volumes.enclosed_volumes},
+           {"largest_enclosed_volume", r.volumes.largest_enclosed},
+           {"input_encloses_a_volume", r.volumes.encloses_volume},
+           {"chosen_volume", r.volumes.chosen_volume},
+           {"gap_closure", r.volumes.gap_closure}}},
+         {"leak", leak_json(r.leak)},
+         {"contact_prevention",
+          {{"rules", r.contact.rules},
+           {"floor", r.contact.floor},
+           {"unresolved_cells", r.contact.unresolved_cells},
+           {"unresolved_locations", r.contact.unresolved_locations},
+           {"separate_bodies", r.contact.separate_bodies}}},
+         {"control_sizes", sizes},
          {"projection", {{"nodes_held_back", r.nodes_held_back}}},
          {"output", diag_json(r.output)},
          {"distance_output_to_input", dist_json(r.output_to_input)},

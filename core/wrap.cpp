@@ -6,6 +6,7 @@
 #include <chrono>
 #include <cmath>
 #include <memory>
+#include <set>
 
 #include "check/intersections.h"
 #include "common/stage_timer.h"
@@ -17,6 +18,8 @@
 #include "fit/surface_index.h"
 #include "grid/flood_fill.h"
 #include "grid/refine.h"
+#include "grid/size_controls.h"
+#include "grid/volume_select.h"
 #include "prep/prepare.h"
 #include "vdbwrap/wrap.h"
 
@@ -33,6 +36,28 @@ void check_params(const WrapParams& p) {
   if (!(p.surface_offset >= 0 && p.surface_offset < 0.5)) bad("surface offset must be in [0, 0.5) of the finest cell");
   if (!(p.weld_tolerance >= 0 && p.weld_tolerance < 0.01)) bad("weld tolerance must be in [0, 0.01) of the diagonal");
   if (!(p.corner_angle_deg > 0 && p.corner_angle_deg < 180)) bad("corner angle must be between 0 and 180 degrees");
+  if (p.volume == VolumeChoice::SeedPoints && p.seed_points.empty()) bad("volume by seed points needs at least one seed point");
+  if (p.volume != VolumeChoice::SeedPoints && !p.seed_points.empty()) bad("seed points are given but the volume is not chosen by seed points");
+  for (const Vec3& s : p.seed_points)
+    if (!std::isfinite(s[0]) || !std::isfinite(s[1]) || !std::isfinite(s[2])) bad("a seed point has a non-finite coordinate");
+  auto positive = [&](const Length& l, const std::string& what) {
+    if (!(l.value > 0) || !std::isfinite(l.value)) bad(what + " must be a positive length");
+  };
+  if (p.gap_closure) positive(*p.gap_closure, "gap closure");
+  if (p.contact_floor) positive(*p.contact_floor, "contact floor");
+  for (const auto& cv : p.control_volumes) {
+    positive(cv.size, "control volume " + cv.to_string() + ": its size");
+    for (int k = 0; k < 3; ++k)
+      if (!std::isfinite(cv.a[k]) || !std::isfinite(cv.b[k])) bad("control volume " + cv.to_string() + ": non-finite coordinate");
+    if (!(cv.radius >= 0) || !(cv.radius_b >= 0)) bad("control volume " + cv.to_string() + ": radii must not be negative");
+  }
+  for (const auto& ps : p.part_sizes) positive(ps.size, "part size " + ps.part);
+  for (const auto& rule : p.contact_prevention) {
+    size_t names = 0;
+    for (const auto& g : rule.groups) names += g.size();
+    if (rule.groups.empty() || rule.groups.size() > 2 || names < 2)
+      bad("contact prevention " + rule.to_string() + ": name two groups (a:b) or at least two parts (a,b)");
+  }
 }
 
 void check_cancel(ProgressSink* progress) {
@@ -82,26 +107,66 @@ WrapResult run_pipeline(const Mesh& input, const WrapParams& params, ProgressSin
   report.diagonal = prepared.diagonal;
   const double base = params.base_size.resolve(prepared.diagonal);
   report.base_size = base;
-  report.finest_size = base / double(1 << params.levels);
   if (prepared.diagonal / base > 20000)
     throw Error(ErrorKind::InvalidArgument, "base size " + params.base_size.to_string() +
                                                 " is too small for this model (over 20000 cells across its diagonal)");
+  const grid::SizeControls controls =
+      grid::make_size_controls(params, prepared.mesh, prepared.origin, prepared.diagonal, base);
+  report.finest_size = base / double(1 << controls.max_level);
+  report.control_sizes = controls.described;
   check_cancel(progress);
 
   grid::RefineResult refined;
   {
     StageTimer timer("refine", report.stages);
-    refined = grid::build_refined_grid(prepared, params, base, progress);
+    refined = grid::build_refined_grid(prepared, params, base, controls, progress);
   }
   report.cells_per_level = refined.touched_per_level;
+  if (controls.contact()) {
+    report.contact.rules = params.contact_prevention.size();
+    report.contact.floor = controls.contact_floor;
+    report.contact.unresolved_cells = refined.unresolved_contacts.size();
+    // One location per base cell is plenty to find them.
+    std::set<std::array<long, 3>> seen;
+    for (const Vec3& c : refined.unresolved_contacts) {
+      std::array<long, 3> key{long(std::floor(c[0] / base)), long(std::floor(c[1] / base)), long(std::floor(c[2] / base))};
+      if (seen.insert(key).second && report.contact.unresolved_locations.size() < 100)
+        report.contact.unresolved_locations.push_back(c + prepared.origin);
+    }
+  }
   grid::AdaptiveGrid& g = *refined.grid;
   check_cancel(progress);
 
+  // The input's nearest-point index: clearance for gap closure and leaks, then projection.
+  fit::SurfaceIndex index(prepared.mesh.points, prepared.mesh.triangles);
+
   int32_t label;
+  std::vector<grid::Coord> anchors;
   {
     StageTimer timer("flood fill", report.stages);
-    grid::Components comps;
-    label = grid::choose_volume(g, params.volume, comps, progress);
+    grid::VolumeRequest request;
+    request.choice = params.volume;
+    request.world_offset = prepared.origin;
+    for (const Vec3& s : params.seed_points) request.seeds.push_back(s - prepared.origin);
+    request.gap_closure = params.gap_closure ? params.gap_closure->resolve(prepared.diagonal) : 0.0;
+    grid::VolumeSelection sel = grid::select_volume(
+        g, request, [&](const Vec3& p) { return std::sqrt(index.squared_distance(p)); }, progress);
+    report.volumes = sel.report;
+    if (sel.leak.detected) {
+      report.leak = sel.leak;
+      report.leak.location = report.leak.location + prepared.origin;
+      for (Vec3& p : report.leak.path) p = p + prepared.origin;
+      const Vec3& at = report.leak.location;
+      char where[160];
+      std::snprintf(where, sizeof where, " through a passage about %.4g wide at (%.6g, %.6g, %.6g)", report.leak.width, at[0],
+                    at[1], at[2]);
+      report.total_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+      throw WrapFailure("leak: " + report.leak.description + where +
+                            " (close the hole, or set --gap-closure above its width)",
+                        report);
+    }
+    label = sel.label;
+    anchors = sel.anchors;
   }
   check_cancel(progress);
 
@@ -109,7 +174,7 @@ WrapResult run_pipeline(const Mesh& input, const WrapParams& params, ProgressSin
   {
     StageTimer timer("extract", report.stages);
     extract::ExtractStats stats;
-    lattice = extract::extract_manifold_surface(g, label, params.volume, stats, progress);
+    lattice = extract::extract_manifold_surface(g, label, params.volume, stats, progress, anchors, params.levels);
     report.manifold_fixes = stats.excluded_cells;
   }
   check_cancel(progress);
@@ -117,7 +182,6 @@ WrapResult run_pipeline(const Mesh& input, const WrapParams& params, ProgressSin
   fit::FittedSurface fitted;
   {
     StageTimer timer("project", report.stages);
-    fit::SurfaceIndex index(prepared.mesh.points, prepared.mesh.triangles);
     std::vector<fit::FeatureCurve> curves;
     if (params.snap_features) curves = fit::build_feature_curves(prepared, params.corner_angle_deg);
     fitted = fit::fit_to_input(lattice, g, index, curves, prepared.origin, params, progress);
@@ -160,12 +224,13 @@ WrapResult run_pipeline(const Mesh& input, const WrapParams& params, ProgressSin
     if (!report.output.valid_closed_surface() || !verdict.valid_polygon_mesh || !verdict.outward) {
       // For diagnosis only: VDBWRAP_DUMP_INVALID=FILE keeps the rejected surface.
       if (const char* dump = std::getenv("VDBWRAP_DUMP_INVALID")) io::write_mesh(result.surface, dump);
-      throw Error(ErrorKind::WrapFailed,
-                  "the wrap failed validation: closed=" + std::to_string(report.output.closed) +
-                      " manifold=" + std::to_string(report.output.manifold) +
-                      " outward=" + std::to_string(verdict.outward) +
-                      " self-intersecting=" + std::to_string(verdict.self_intersects));
+      throw WrapFailure("the wrap failed validation: closed=" + std::to_string(report.output.closed) +
+                            " manifold=" + std::to_string(report.output.manifold) +
+                            " outward=" + std::to_string(verdict.outward) +
+                            " self-intersecting=" + std::to_string(verdict.self_intersects),
+                        report);
     }
+    report.contact.separate_bodies = report.output.components;
     if (progress) progress->progress("validate", 1.0, "closed, manifold, outward, no self-intersections");
   }
 

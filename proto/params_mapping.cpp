@@ -15,6 +15,34 @@ double finite(const std::string& field, double v) {
   return v;
 }
 
+Length to_length(const std::string& field, const pb::Size& size) {
+  switch (size.value_case()) {
+    case pb::Size::kPercent:
+      if (!(finite(field, size.percent()) > 0)) bad(field, "must be positive");
+      return Length{size.percent(), true};
+    case pb::Size::kModelUnits:
+      if (!(finite(field, size.model_units()) > 0)) bad(field, "must be positive");
+      return Length{size.model_units(), false};
+    case pb::Size::VALUE_NOT_SET: break;
+  }
+  bad(field, "set percent or model_units");
+}
+
+pb::Size to_proto_size(const Length& l) {
+  pb::Size s;
+  if (l.percent_of_diagonal)
+    s.set_percent(l.value);
+  else
+    s.set_model_units(l.value);
+  return s;
+}
+
+pb::Point to_proto_point(const Vec3& v) {
+  pb::Point p;
+  p.set_x(v[0]), p.set_y(v[1]), p.set_z(v[2]);
+  return p;
+}
+
 }  // namespace
 
 WrapParams to_wrap_params(const pb::WrapParameters& in) {
@@ -44,7 +72,56 @@ WrapParams to_wrap_params(const pb::WrapParameters& in) {
     case pb::VOLUME_UNSPECIFIED:
     case pb::VOLUME_OUTSIDE: p.volume = VolumeChoice::Outside; break;
     case pb::VOLUME_INSIDE: p.volume = VolumeChoice::Inside; break;
+    case pb::VOLUME_SEED_POINTS: p.volume = VolumeChoice::SeedPoints; break;
     default: bad("volume", "unknown value " + std::to_string(int(in.volume())));
+  }
+  for (const auto& s : in.seed_points())
+    p.seed_points.push_back({finite("seed_points", s.x()), finite("seed_points", s.y()), finite("seed_points", s.z())});
+  if (p.volume == VolumeChoice::SeedPoints && p.seed_points.empty()) bad("seed_points", "VOLUME_SEED_POINTS needs at least one");
+  if (p.volume != VolumeChoice::SeedPoints && !p.seed_points.empty()) bad("seed_points", "given, but volume is not VOLUME_SEED_POINTS");
+  if (in.has_gap_closure()) p.gap_closure = to_length("gap_closure", in.gap_closure());
+  if (in.has_contact_floor()) p.contact_floor = to_length("contact_floor", in.contact_floor());
+  for (const auto& c : in.control_volumes()) {
+    ControlVolume cv;
+    switch (c.shape()) {
+      case pb::ControlVolume::SHAPE_BOX: cv.shape = ControlVolume::Shape::Box; break;
+      case pb::ControlVolume::SHAPE_SPHERE: cv.shape = ControlVolume::Shape::Sphere; break;
+      case pb::ControlVolume::SHAPE_CYLINDER: cv.shape = ControlVolume::Shape::Cylinder; break;
+      case pb::ControlVolume::SHAPE_CONE: cv.shape = ControlVolume::Shape::Cone; break;
+      default: bad("control_volumes", "shape must be SHAPE_BOX, SHAPE_SPHERE, SHAPE_CYLINDER or SHAPE_CONE");
+    }
+    cv.a = {finite("control_volumes.a", c.a().x()), finite("control_volumes.a", c.a().y()), finite("control_volumes.a", c.a().z())};
+    cv.b = {finite("control_volumes.b", c.b().x()), finite("control_volumes.b", c.b().y()), finite("control_volumes.b", c.b().z())};
+    if (cv.shape == ControlVolume::Shape::Sphere) cv.b = cv.a;
+    if (cv.shape == ControlVolume::Shape::Box)
+      for (int k = 0; k < 3; ++k)
+        if (cv.a[k] > cv.b[k]) std::swap(cv.a[k], cv.b[k]);
+    cv.radius = finite("control_volumes.radius", c.radius());
+    cv.radius_b = cv.shape == ControlVolume::Shape::Cone ? finite("control_volumes.radius_b", c.radius_b()) : cv.radius;
+    if (cv.radius < 0 || cv.radius_b < 0) bad("control_volumes", "radii must not be negative");
+    if ((cv.shape == ControlVolume::Shape::Cylinder || cv.shape == ControlVolume::Shape::Cone) && cv.a == cv.b)
+      bad("control_volumes", "the axis a -> b has zero length");
+    if (!c.has_size()) bad("control_volumes", "size is required");
+    cv.size = to_length("control_volumes.size", c.size());
+    cv.name = cv.to_string();
+    p.control_volumes.push_back(cv);
+  }
+  for (const auto& ps : in.part_sizes()) {
+    if (ps.part().empty()) bad("part_sizes", "part name is empty");
+    if (!ps.has_size()) bad("part_sizes", "size is required");
+    p.part_sizes.push_back({ps.part(), to_length("part_sizes.size", ps.size())});
+  }
+  for (const auto& rule : in.contact_prevention()) {
+    ContactRule r;
+    size_t names = 0;
+    for (const auto& g : rule.groups()) {
+      r.groups.emplace_back(g.parts().begin(), g.parts().end());
+      names += size_t(g.parts_size());
+      if (g.parts().empty()) bad("contact_prevention", "a group has no parts");
+    }
+    if (r.groups.empty() || r.groups.size() > 2 || names < 2)
+      bad("contact_prevention", "name two groups or at least two parts in one group");
+    p.contact_prevention.push_back(std::move(r));
   }
   if (in.has_threads()) {
     if (in.threads() < 0) bad("threads", "must be 0 (all cores) or more");
@@ -92,7 +169,38 @@ pb::WrapParameters to_proto(const WrapParams& in) {
     out.set_base_size_model_units(in.base_size.value);
   out.set_levels(in.levels);
   out.set_feature_angle_deg(in.feature_angle_deg);
-  out.set_volume(in.volume == VolumeChoice::Inside ? pb::VOLUME_INSIDE : pb::VOLUME_OUTSIDE);
+  out.set_volume(in.volume == VolumeChoice::Inside       ? pb::VOLUME_INSIDE
+                 : in.volume == VolumeChoice::SeedPoints ? pb::VOLUME_SEED_POINTS
+                                                         : pb::VOLUME_OUTSIDE);
+  for (const Vec3& s : in.seed_points) *out.add_seed_points() = to_proto_point(s);
+  if (in.gap_closure) *out.mutable_gap_closure() = to_proto_size(*in.gap_closure);
+  if (in.contact_floor) *out.mutable_contact_floor() = to_proto_size(*in.contact_floor);
+  for (const ControlVolume& cv : in.control_volumes) {
+    auto* c = out.add_control_volumes();
+    switch (cv.shape) {
+      case ControlVolume::Shape::Box: c->set_shape(pb::ControlVolume::SHAPE_BOX); break;
+      case ControlVolume::Shape::Sphere: c->set_shape(pb::ControlVolume::SHAPE_SPHERE); break;
+      case ControlVolume::Shape::Cylinder: c->set_shape(pb::ControlVolume::SHAPE_CYLINDER); break;
+      case ControlVolume::Shape::Cone: c->set_shape(pb::ControlVolume::SHAPE_CONE); break;
+    }
+    *c->mutable_a() = to_proto_point(cv.a);
+    *c->mutable_b() = to_proto_point(cv.b);
+    c->set_radius(cv.radius);
+    c->set_radius_b(cv.radius_b);
+    *c->mutable_size() = to_proto_size(cv.size);
+  }
+  for (const PartSize& ps : in.part_sizes) {
+    auto* s = out.add_part_sizes();
+    s->set_part(ps.part);
+    *s->mutable_size() = to_proto_size(ps.size);
+  }
+  for (const ContactRule& r : in.contact_prevention) {
+    auto* rule = out.add_contact_prevention();
+    for (const auto& g : r.groups) {
+      auto* group = rule->add_groups();
+      for (const auto& name : g) group->add_parts(name);
+    }
+  }
   out.set_threads(in.threads);
   out.set_refine_max_triangles(in.refine_max_triangles);
   out.set_refine_normal_spread_deg(in.refine_normal_spread_deg);

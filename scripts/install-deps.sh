@@ -11,7 +11,7 @@ PKGS=(
   libeigen3-dev libcgal-dev libgmp-dev libmpfr-dev
   libgrpc++-dev libprotobuf-dev protobuf-compiler protobuf-compiler-grpc
   libgtest-dev libgmock-dev
-  libcli11-dev nlohmann-json3-dev
+  libcli11-dev nlohmann-json3-dev libyaml-cpp-dev
   python3 python3-grpcio python3-protobuf python3-yaml openssl
 )
 missing=()

@@ -381,6 +381,13 @@ void JobQueue::run(const std::shared_ptr<Job>& job) {
     std::snprintf(line, sizeof line, " finished: %zu triangles, %.2f s", result.surface.triangles.size(),
                   result.report.total_seconds);
     log_line("job " + id + line);
+  } catch (const WrapFailure& f) {
+    // A leak or a failed validation: the report says where, so it is kept with the job.
+    try {
+      store_.write_file_atomic(store_.report_path(id), to_json(f.report()) + "\n");
+    } catch (const std::exception&) {
+    }
+    fail(api::to_proto(f.kind()), f.what());
   } catch (const Error& e) {
     if (e.kind() == ErrorKind::Cancelled && interrupt_) {
       set_state(*job, pb::JOB_STATE_QUEUED, pb::ERROR_KIND_UNSPECIFIED, "");

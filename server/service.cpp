@@ -207,6 +207,12 @@ grpc::Status JobsService::GetStatus(grpc::ServerContext* ctx, const pb::JobId* r
     } catch (const std::exception& e) {
       return status(grpc::StatusCode::INTERNAL, std::string("cannot read the report: ") + e.what());
     }
+  } else if (reply->state() == pb::JOB_STATE_FAILED) {
+    // A failed job may have a report (a leak's location); none is fine.
+    try {
+      reply->set_report_json(JobStore::read_file(queue_.store().report_path(reply->job_id())));
+    } catch (const std::exception&) {
+    }
   }
   return grpc::Status::OK;
 }

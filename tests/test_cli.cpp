@@ -154,3 +154,70 @@ TEST_F(Cli, InsideOfAnOpenSurfaceFailsClearly) {
   EXPECT_EQ(r.code, 4);
   EXPECT_NE(r.err.find("encloses no volume"), std::string::npos) << r.err;
 }
+
+TEST_F(Cli, LeakStopsWithExitFourAndStillWritesTheReportAndTheLeakPath) {
+  const std::string in = (dir / "holed.obj").string();
+  io::write_mesh(vdbwrap::testing::holed_cube(0.1), in);
+  const std::string report = (dir / "r.json").string(), leak = (dir / "leak.obj").string();
+  CliRun r = run("wrap " + in + " -o " + (dir / "o.obj").string() + " --volume 0.5,0.5,0.5 --report " + report +
+                 " --leak-path " + leak);
+  EXPECT_EQ(r.code, 4) << r.err;
+  EXPECT_NE(r.err.find("narrowest passage"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(dir / "o.obj")) << "no surface is written for a leaking volume";
+  std::ifstream rep(report);
+  std::string json((std::istreambuf_iterator<char>(rep)), std::istreambuf_iterator<char>());
+  EXPECT_NE(json.find("\"detected\": true"), std::string::npos) << json.substr(0, 400);
+  EXPECT_NE(json.find("\"location\": ["), std::string::npos);
+  Mesh marker = io::read_mesh(leak);
+  EXPECT_EQ(marker.triangles.size(), 8u) << "the octahedron at the passage";
+
+  // The same with a gap closure above the hole: wrapped.
+  CliRun closed = run("wrap " + in + " -o " + (dir / "c.obj").string() + " --volume 0.5,0.5,0.5 --gap-closure 0.15");
+  EXPECT_EQ(closed.code, 0) << closed.err;
+}
+
+TEST_F(Cli, ParameterFilesInJsonAndYamlAndTheCommandLineOverrides) {
+  Mesh m;
+  vdbwrap::testing::add_box(m, {0, 0, 0}, {1, 1, 1}, 0);
+  vdbwrap::testing::add_box(m, {1.007, 0, 0}, {2.007, 1, 1}, 1);
+  m.part_names = {"hot", "cold"};
+  const std::string in = (dir / "parts.obj").string();
+  io::write_mesh(m, in);
+  const std::string yaml = file("p.yaml",
+                                "# keep the two parts apart\n"
+                                "base_size_percent: 1\n"
+                                "levels: 1\n"
+                                "contact_prevention:\n"
+                                "  - groups:\n"
+                                "      - parts: [hot, cold]\n"
+                                "control_volumes:\n"
+                                "  - shape: box\n"
+                                "    a: {x: 0, y: 0, z: 0}\n"
+                                "    b: {x: 0.2, y: 0.2, z: 0.2}\n"
+                                "    size: {percent: 0.5}\n");
+  const std::string out = (dir / "o.obj").string(), report = (dir / "r.json").string();
+  CliRun r = run("wrap " + in + " -o " + out + " --params " + yaml + " --levels 2 --report " + report);
+  ASSERT_EQ(r.code, 0) << r.err;
+  Mesh wrapped = io::read_mesh(out);
+  EXPECT_TRUE(vdbwrap::testing::valid_closed_surface(wrapped).ok);
+  EXPECT_EQ(diagnose(wrapped, false).components, 2u) << "the file's contact prevention applied";
+  ASSERT_EQ(wrapped.part_names.size(), 2u) << "part labels written as OBJ groups";
+  std::ifstream rep(report);
+  std::string json((std::istreambuf_iterator<char>(rep)), std::istreambuf_iterator<char>());
+  EXPECT_NE(json.find("\"levels\": 2"), std::string::npos) << "the command line overrides the file";
+  EXPECT_NE(json.find("box:0,0,0,0.2,0.2,0.2:0.5%"), std::string::npos);
+
+  const std::string good = file("p.json", R"({"base_size_percent": 2, "volume": "VOLUME_INSIDE", "levels": 0})");
+  CliRun inside = run("wrap " + in + " -o " + (dir / "i.obj").string() + " --params " + good);
+  EXPECT_EQ(inside.code, 0) << inside.err;
+
+  const std::string typo = file("typo.json", R"({"base_size_percnt": 2})");
+  CliRun bad = run("wrap " + in + " -o " + out + " --params " + typo);
+  EXPECT_EQ(bad.code, 2);
+  EXPECT_NE(bad.err.find("typo.json"), std::string::npos) << bad.err;
+  EXPECT_NE(bad.err.find("base_size_percnt"), std::string::npos) << bad.err;
+  const std::string unknown_part = file("u.yaml", "contact_prevention: [{groups: [{parts: [hot, warm]}]}]\n");
+  CliRun part = run("wrap " + in + " -o " + out + " --params " + unknown_part);
+  EXPECT_EQ(part.code, 2);
+  EXPECT_NE(part.err.find("warm"), std::string::npos) << part.err;
+}

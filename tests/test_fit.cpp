@@ -27,7 +27,9 @@ struct Fitted {
 Fitted fit_mesh(const Mesh& m, double base_percent, WrapParams params = {}) {
   Fitted f;
   f.input = prep::prepare(m, params, nullptr);
-  auto refined = grid::build_refined_grid(f.input, params, base_percent * 0.01 * f.input.diagonal, nullptr);
+  const double base = base_percent * 0.01 * f.input.diagonal;
+  auto controls = grid::make_size_controls(params, f.input.mesh, f.input.origin, f.input.diagonal, base);
+  auto refined = grid::build_refined_grid(f.input, params, base, controls, nullptr);
   f.grid = std::move(refined.grid);
   grid::Components comps;
   int32_t label = grid::choose_volume(*f.grid, params.volume, comps, nullptr);

@@ -38,7 +38,9 @@ void expect_closed_manifold(const extract::LatticeSurface& s, VolumeChoice choic
 grid::RefineResult refine(const Mesh& m, double base_percent, int levels, WrapParams params = {}) {
   params.levels = levels;
   auto prepared = prep::prepare(m, params, nullptr);
-  return grid::build_refined_grid(prepared, params, base_percent * 0.01 * prepared.diagonal, nullptr);
+  const double base = base_percent * 0.01 * prepared.diagonal;
+  auto controls = grid::make_size_controls(params, prepared.mesh, prepared.origin, prepared.diagonal, base);
+  return grid::build_refined_grid(prepared, params, base, controls, nullptr);
 }
 
 }  // namespace

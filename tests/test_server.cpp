@@ -412,6 +412,34 @@ TEST(ParamsMapping, RoundTripsEveryFieldAndRefusesOutOfRange) {
   EXPECT_EQ(q.snap_features, p.snap_features);
   EXPECT_EQ(q.corner_angle_deg, 55);
   EXPECT_FALSE(q.compute_distances);
+  // The voxel-stage controls (issue 5), through the API and back.
+  vdbwrap::WrapParams c;
+  vdbwrap::parse_volume_choice("1,2,3;4,5,6", c.volume, c.seed_points);
+  c.gap_closure = vdbwrap::Length{0.5, false};
+  c.contact_floor = vdbwrap::Length{0.05, true};
+  for (const char* cv : {"box:0,0,0,1,2,3:1%", "sphere:1,1,1,0.5:0.2", "cylinder:0,0,0,0,0,1,0.3:0.5%",
+                         "cone:0,0,0,1,0,0,0.5,0.1:0.25%"})
+    c.control_volumes.push_back(vdbwrap::ControlVolume::parse(cv));
+  c.part_sizes.push_back(vdbwrap::PartSize::parse("wing=0.1%"));
+  c.contact_prevention.push_back(vdbwrap::ContactRule::parse("a,b:c"));
+  c.contact_prevention.push_back(vdbwrap::ContactRule::parse("x,y,z"));
+  vdbwrap::WrapParams c2 = vdbwrap::api::to_wrap_params(vdbwrap::api::to_proto(c));
+  EXPECT_EQ(c2.volume, vdbwrap::VolumeChoice::SeedPoints);
+  EXPECT_EQ(c2.seed_points, c.seed_points);
+  ASSERT_TRUE(c2.gap_closure && c2.contact_floor);
+  EXPECT_EQ(c2.gap_closure->to_string(), "0.5");
+  EXPECT_EQ(c2.contact_floor->to_string(), "0.05%");
+  ASSERT_EQ(c2.control_volumes.size(), 4u);
+  for (size_t i = 0; i < 4; ++i) EXPECT_EQ(c2.control_volumes[i].to_string(), c.control_volumes[i].to_string());
+  ASSERT_EQ(c2.part_sizes.size(), 1u);
+  EXPECT_EQ(c2.part_sizes[0].part, "wing");
+  ASSERT_EQ(c2.contact_prevention.size(), 2u);
+  EXPECT_EQ(c2.contact_prevention[0].to_string(), "a,b:c");
+  EXPECT_EQ(c2.contact_prevention[1].to_string(), "x,y,z");
+  pb::WrapParameters seeds_without_points;
+  seeds_without_points.set_volume(pb::VOLUME_SEED_POINTS);
+  EXPECT_THROW(vdbwrap::api::to_wrap_params(seeds_without_points), vdbwrap::Error);
+
   // Unset fields: the core's (the CLI's) defaults.
   vdbwrap::WrapParams d = vdbwrap::api::to_wrap_params(pb::WrapParameters());
   EXPECT_EQ(d.levels, vdbwrap::WrapParams().levels);
@@ -927,6 +955,24 @@ TEST_F(Service, CliSubmitDownloadsTheResult) {
   expect_valid_result(read_file(dir_ / "outs" / "unit_sphere_wrap.ply"), vdbwrap::io::Format::Ply, "sphere");
   expect_valid_result(read_file(dir_ / "outs" / "two_objects_mixed_case_names_wrap.ply"), vdbwrap::io::Format::Ply, "two");
   EXPECT_TRUE(fs::exists(dir_ / "outs" / "unit_sphere_wrap.json"));
+}
+
+TEST_F(Service, RemoteLeakKeepsTheReportAndTheLeakPathAndParamsFilesWork) {
+  ServerProcess& s = server({"--workers", "1"});
+  const fs::path in = dir_ / "holed.obj", report = dir_ / "leak.json", leak = dir_ / "leak.obj";
+  vdbwrap::io::write_mesh(vdbwrap::testing::holed_cube(0.1), in.string());
+  CliRun r = cli("submit --server " + s.address() + " " + in.string() + " -o " + (dir_ / "o.obj").string() +
+                 " --volume 0.5,0.5,0.5 --report " + report.string() + " --leak-path " + leak.string() + " -q");
+  EXPECT_EQ(r.code, 4) << r.err;
+  EXPECT_NE(r.err.find("leak"), std::string::npos) << r.err;
+  EXPECT_NE(read_file(report).find("\"detected\": true"), std::string::npos);
+  EXPECT_EQ(vdbwrap::io::read_mesh(leak.string()).triangles.size(), 8u);
+  // The same job with a gap closure from a parameter file: wrapped on the server.
+  write_file(dir_ / "p.yaml", "volume: seed_points\nseed_points: [{x: 0.5, y: 0.5, z: 0.5}]\ngap_closure: {model_units: 0.15}\n");
+  r = cli("submit --server " + s.address() + " " + in.string() + " -o " + (dir_ / "c.ply").string() + " --params " +
+          (dir_ / "p.yaml").string() + " -q");
+  ASSERT_EQ(r.code, 0) << r.err;
+  expect_valid_result(read_file(dir_ / "c.ply"), vdbwrap::io::Format::Ply, "inside of the holed cube");
 }
 
 TEST_F(Service, CliDetachWaitJobsCancel) {

@@ -141,8 +141,10 @@ void octant_groups(const bool in[8], int group[8], int& groups_in, int& groups_o
 
 }  // namespace
 
-size_t exclude_nonmanifold_cells(AdaptiveGrid& g, int32_t label, VolumeChoice choice, const LatticeSurface& surf) {
+size_t exclude_nonmanifold_cells(AdaptiveGrid& g, int32_t label, VolumeChoice choice, const LatticeSurface& surf,
+                                 int min_exclude_level) {
   const int L = g.max_level();
+  const int exclude_from = min_exclude_level < 0 ? L : std::min(min_exclude_level, L);
   struct LeafKey {
     int level;
     Coord c;
@@ -209,7 +211,7 @@ size_t exclude_nonmanifold_cells(AdaptiveGrid& g, int32_t label, VolumeChoice ch
       }
       if (victim < 0) break;  // nothing may be taken out here; the caller gives up after its rounds
       LeafKey key{leaf[victim].level, leaf[victim].ijk};
-      if (key.level < L) {
+      if (key.level < exclude_from) {
         // Taking out a coarse cell would push the surface far off the input: split it into
         // chosen children instead and decide again, one level finer, next round.
         to_split.insert(key);
@@ -231,7 +233,7 @@ size_t exclude_nonmanifold_cells(AdaptiveGrid& g, int32_t label, VolumeChoice ch
 }
 
 LatticeSurface extract_manifold_surface(AdaptiveGrid& g, int32_t& label, VolumeChoice choice, ExtractStats& stats,
-                                        ProgressSink* progress) {
+                                        ProgressSink* progress, const std::vector<Coord>& anchors, int min_exclude_level) {
   for (int k = 0; k < 3; ++k)
     if (int64_t(g.dims0()[k]) * g.fine_units(0) >= (1 << 21) - 2)
       throw Error(ErrorKind::InvalidArgument, "too many cells across the model at this base size and number of levels");
@@ -246,7 +248,7 @@ LatticeSurface extract_manifold_surface(AdaptiveGrid& g, int32_t& label, VolumeC
     }
     LatticeSurface surf = extract_faces(g, label, choice);
     if (surf.polygons.empty()) throw Error(ErrorKind::WrapFailed, "the chosen volume has no boundary: nothing to wrap");
-    size_t excluded = exclude_nonmanifold_cells(g, label, choice, surf);
+    size_t excluded = exclude_nonmanifold_cells(g, label, choice, surf, min_exclude_level);
     stats.rounds = round + 1;
     if (excluded == 0) {
       if (progress)
@@ -269,15 +271,30 @@ LatticeSurface extract_manifold_surface(AdaptiveGrid& g, int32_t& label, VolumeC
       }
     }
     if (keep < 0) throw Error(ErrorKind::WrapFailed, "the chosen volume vanished while making the surface manifold");
-    stats.dropped_pieces += comps.count() - 1;
+    // With seed points, every piece holding one stays (one chamber per seed point).
+    std::vector<int32_t> kept{keep};
+    if (choice == VolumeChoice::SeedPoints && !anchors.empty()) {
+      kept.clear();
+      for (const Coord& a : anchors) {
+        int32_t v = g.leaf_at(g.max_level(), a).value;
+        if (v >= comps.first_label && std::find(kept.begin(), kept.end(), v) == kept.end()) kept.push_back(v);
+      }
+      if (kept.empty()) kept.push_back(keep);
+    }
+    stats.dropped_pieces += comps.count() - kept.size();
     if (comps.count() > 1) {
-      std::vector<std::pair<int, Coord>> drop;
+      std::vector<std::pair<int, Coord>> drop, merge;
       g.for_each_leaf([&](int level, const Coord& c, int32_t v) {
-        if (v >= comps.first_label && v != keep) drop.emplace_back(level, c);
+        if (v < comps.first_label) return;
+        if (std::find(kept.begin(), kept.end(), v) == kept.end())
+          drop.emplace_back(level, c);
+        else if (v != kept.front())
+          merge.emplace_back(level, c);
       });
       for (auto& [level, c] : drop) g.set(level, c, grid::kExcluded);
+      for (auto& [level, c] : merge) g.set(level, c, kept.front());
     }
-    label = keep;
+    label = kept.front();
   }
   throw Error(ErrorKind::WrapFailed, "could not make the voxel surface manifold after " + std::to_string(max_rounds) + " rounds");
 }

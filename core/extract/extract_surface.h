@@ -26,15 +26,20 @@ LatticeSurface extract_faces(const grid::AdaptiveGrid& grid, int32_t label, Volu
 // not face-connected (edge or corner contacts: non-manifold). Takes chosen cells of the
 // finest level out of the volume there, and splits coarser chosen cells into chosen
 // children so that the next round can do so at the finest level. Returns cells changed.
-size_t exclude_nonmanifold_cells(grid::AdaptiveGrid& grid, int32_t label, VolumeChoice choice, const LatticeSurface& surface);
+// Cells at or below min_exclude_level may be taken out; coarser ones are split.
+size_t exclude_nonmanifold_cells(grid::AdaptiveGrid& grid, int32_t label, VolumeChoice choice, const LatticeSurface& surface,
+                                 int min_exclude_level);
 
 struct ExtractStats {
   size_t excluded_cells = 0, rounds = 0, dropped_pieces = 0;
 };
 
 // Extract, repair and repeat until the surface is a closed 2-manifold; keeps only the main
-// piece of the volume (the outside one, or the largest inside one). `label` may change.
+// piece of the volume (the outside one, the largest inside one, or with seed points the
+// pieces holding the `anchors`, finest-level cells). `label` may change. Cells finer than
+// min_exclude_level (the depth of the refinement criteria) may be taken out of the volume.
 LatticeSurface extract_manifold_surface(grid::AdaptiveGrid& grid, int32_t& label, VolumeChoice choice, ExtractStats& stats,
-                                        ProgressSink* progress);
+                                        ProgressSink* progress, const std::vector<Coord>& anchors = {},
+                                        int min_exclude_level = -1);
 
 }  // namespace vdbwrap::extract

@@ -21,6 +21,7 @@ enum CellState : int32_t {
   kTouched = -2,   // a leaf the input passes through
   kFree = -3,      // a leaf the input does not touch, not yet labelled
   kExcluded = -4,  // a free leaf taken out of the chosen volume (manifold repair)
+  kNarrow = -5,    // a free leaf closer to the input than half the gap closure
 };
 
 struct LeafRef {

@@ -98,13 +98,64 @@ FeatureSegments collect_features(const prep::PreparedInput& in) {
 
 }  // namespace
 
-RefineResult build_refined_grid(const prep::PreparedInput& in, const WrapParams& params, double base, ProgressSink* progress,
-                                int padding) {
+namespace {
+
+// Triangles of the parts under contact prevention, bucketed by level-0 cell, to find the
+// parts near a cell quickly.
+class ContactBuckets {
+ public:
+  ContactBuckets(const std::vector<std::pair<Coord, uint32_t>>& hits, const prep::PreparedInput& in,
+                 const SizeControls& sc) {
+    for (const auto& [c, t] : hits)
+      if (sc.part_in_contact_rule[size_t(in.mesh.part_of(t))]) cells_[key(c)].push_back(t);
+  }
+
+  // True when the cell [lo, lo+h]^3, grown by h on every side, meets a triangle of a part
+  // that must stay apart from one of `present` (the parts in the cell).
+  bool conflict(const prep::PreparedInput& in, const SizeControls& sc, const std::vector<int32_t>& present,
+                const Vec3& origin, double base, const Vec3& lo, double h) const {
+    const Vec3 centre = lo + Vec3{0.5 * h, 0.5 * h, 0.5 * h};
+    const Vec3 half{1.5 * h, 1.5 * h, 1.5 * h};
+    Coord c0, c1;
+    for (int k = 0; k < 3; ++k) {
+      c0[k] = int(std::floor((centre[k] - half[k] - origin[k]) / base));
+      c1[k] = int(std::floor((centre[k] + half[k] - origin[k]) / base));
+    }
+    const auto& pts = in.mesh.points;
+    for (int z = c0.z(); z <= c1.z(); ++z)
+      for (int y = c0.y(); y <= c1.y(); ++y)
+        for (int x = c0.x(); x <= c1.x(); ++x) {
+          auto it = cells_.find(key(Coord(x, y, z)));
+          if (it == cells_.end()) continue;
+          for (uint32_t t : it->second) {
+            const int32_t q = in.mesh.part_of(t);
+            bool against = false;
+            for (int32_t p : present) against |= sc.conflicting(p, q);
+            if (!against) continue;
+            const Tri& tri = in.mesh.triangles[t];
+            if (triangle_overlaps_box(pts[tri[0]], pts[tri[1]], pts[tri[2]], centre, half)) return true;
+          }
+        }
+    return false;
+  }
+
+ private:
+  static uint64_t key(const Coord& c) {
+    return (uint64_t(uint32_t(c.x()) & 0x1FFFFF) << 42) | (uint64_t(uint32_t(c.y()) & 0x1FFFFF) << 21) |
+           uint64_t(uint32_t(c.z()) & 0x1FFFFF);
+  }
+  std::unordered_map<uint64_t, std::vector<uint32_t>> cells_;
+};
+
+}  // namespace
+
+RefineResult build_refined_grid(const prep::PreparedInput& in, const WrapParams& params, double base,
+                                const SizeControls& sc, ProgressSink* progress, int padding) {
   const auto& pts = in.mesh.points;
   const auto& tris = in.mesh.triangles;
   Box3 box;
   for (const auto& p : pts) box.add(p);
-  const int levels = params.levels;
+  const int levels = sc.max_level;
   Vec3 origin = box.lo - Vec3{padding * base, padding * base, padding * base};
   Coord dims0;
   for (int k = 0; k < 3; ++k) {
@@ -148,6 +199,8 @@ RefineResult build_refined_grid(const prep::PreparedInput& in, const WrapParams&
   tbb::parallel_sort(hits.begin(), hits.end(), [](const auto& u, const auto& v) {
     return u.first != v.first ? u.first < v.first : u.second < v.second;
   });
+  std::unique_ptr<ContactBuckets> contact;
+  if (sc.contact()) contact = std::make_unique<ContactBuckets>(hits, in, sc);
   std::vector<CellTris> level_cells;
   for (size_t i = 0; i < hits.size();) {
     CellTris ct{hits[i].first, {}};
@@ -172,15 +225,32 @@ RefineResult build_refined_grid(const prep::PreparedInput& in, const WrapParams&
     const double h = g.cell_size(level);
     // Decide refinement per cell, in parallel; a refined cell's children are tested against
     // the parent's triangles only.
-    std::vector<uint8_t> refine(level_cells.size(), 0);
+    std::vector<uint8_t> refine(level_cells.size(), 0), unresolved(level_cells.size(), 0);
     std::vector<std::array<std::vector<uint32_t>, 8>> children(level < levels ? level_cells.size() : 0);
     tbb::parallel_for(tbb::blocked_range<size_t>(0, level_cells.size(), 64), [&](const tbb::blocked_range<size_t>& r) {
       for (size_t i = r.begin(); i != r.end(); ++i) {
-        if (level >= levels) continue;
         const CellTris& ct = level_cells[i];
         Vec3 lo{origin[0] + ct.c.x() * h, origin[1] + ct.c.y() * h, origin[2] + ct.c.z() * h};
-        bool split = int(ct.tris.size()) > params.refine_max_triangles;
-        if (!split) {
+        auto in_contact = [&] {
+          std::vector<int32_t> present;
+          for (uint32_t t : ct.tris) {
+            int32_t p = in.mesh.part_of(t);
+            if (sc.part_in_contact_rule[size_t(p)] && std::find(present.begin(), present.end(), p) == present.end())
+              present.push_back(p);
+          }
+          return !present.empty() && contact->conflict(in, sc, present, origin, base, lo, h);
+        };
+        if (level >= levels) {
+          if (contact && in_contact()) unresolved[i] = 1;
+          continue;
+        }
+        // The user's sizes first (control volumes, parts), then the criteria (down to
+        // --levels), then contact prevention (down to its floor).
+        bool split = level < region_level(sc, lo, h);
+        for (size_t k = 0; !split && k < ct.tris.size(); ++k) split = level < sc.part_level[size_t(in.mesh.part_of(ct.tris[k]))];
+        const bool criteria = level < sc.criteria_levels;
+        if (!split && criteria) split = int(ct.tris.size()) > params.refine_max_triangles;
+        if (!split && criteria) {
           const Vec3& n0 = in.normals[ct.tris[0]];
           for (uint32_t t : ct.tris)
             if (dot(in.normals[t], n0) < cos_spread) {
@@ -188,7 +258,7 @@ RefineResult build_refined_grid(const prep::PreparedInput& in, const WrapParams&
               break;
             }
         }
-        if (!split && params.refine_at_features) {
+        if (!split && criteria && params.refine_at_features) {
           Vec3 glo = lo - Vec3{h * margin_fraction, h * margin_fraction, h * margin_fraction};
           Vec3 ghi = lo + Vec3{h * (1 + margin_fraction), h * (1 + margin_fraction), h * (1 + margin_fraction)};
           for (uint32_t t : ct.tris) {
@@ -199,6 +269,12 @@ RefineResult build_refined_grid(const prep::PreparedInput& in, const WrapParams&
               }
             if (split) break;
           }
+        }
+        if (!split && contact && in_contact()) {
+          if (level < sc.contact_level)
+            split = true;
+          else
+            unresolved[i] = 1;
         }
         if (!split) continue;
         refine[i] = 1;
@@ -216,6 +292,9 @@ RefineResult build_refined_grid(const prep::PreparedInput& in, const WrapParams&
     size_t refined = 0;
     for (size_t i = 0; i < level_cells.size(); ++i) {
       const Coord& c = level_cells[i].c;
+      if (unresolved[i])
+        result.unresolved_contacts.push_back(
+            {origin[0] + (c.x() + 0.5) * h, origin[1] + (c.y() + 0.5) * h, origin[2] + (c.z() + 0.5) * h});
       if (!refine[i]) {
         g.set(level, c, kTouched);
         continue;

@@ -4,6 +4,7 @@
 #include <memory>
 
 #include "grid/adaptive_grid.h"
+#include "grid/size_controls.h"
 #include "prep/prepare.h"
 #include "vdbwrap/wrap.h"
 
@@ -13,12 +14,16 @@ struct RefineResult {
   std::unique_ptr<AdaptiveGrid> grid;
   std::vector<size_t> touched_per_level;
   std::vector<size_t> refined_per_level;
+  // Contact prevention: cells at the floor level still holding parts that must stay apart.
+  std::vector<Vec3> unresolved_contacts;  // cell centres, local frame
 };
 
 // base_size in model units. The grid pads the input's bounding box by `padding` level-0
 // cells on every side so the outside volume wraps around everything.
+// The refinement criteria apply down to controls.criteria_levels; control volumes, part
+// sizes and contact prevention down to their own levels (the grid has controls.max_level).
 RefineResult build_refined_grid(const prep::PreparedInput& input, const WrapParams& params, double base_size,
-                                ProgressSink* progress, int padding = 2);
+                                const SizeControls& controls, ProgressSink* progress, int padding = 2);
 
 // Exact-enough separating-axis test of a triangle against an axis-aligned box.
 bool triangle_overlaps_box(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& box_center, const Vec3& half);

@@ -68,6 +68,39 @@ inline Mesh sphere_mesh(double r, int rings = 24, int segments = 48) {
   return m;
 }
 
+// A unit cube of zero-thickness walls, each face a 20 x 20 grid of squares, with a square
+// hole of `hole` x `hole` (a multiple of 0.05) in the middle of the top face.
+inline Mesh holed_cube(double hole) {
+  Mesh m;
+  const int n = 20;
+  const double w = 1.0 / n;
+  std::map<std::array<long, 3>, uint32_t> index;
+  auto vid = [&](double x, double y, double z) {
+    std::array<long, 3> k{std::lround(x * 1e6), std::lround(y * 1e6), std::lround(z * 1e6)};
+    auto [it, added] = index.emplace(k, uint32_t(m.points.size()));
+    if (added) m.points.push_back({x, y, z});
+    return it->second;
+  };
+  auto quad = [&](Vec3 a, Vec3 b, Vec3 c, Vec3 d) {
+    uint32_t i = vid(a[0], a[1], a[2]), j = vid(b[0], b[1], b[2]), k = vid(c[0], c[1], c[2]), l = vid(d[0], d[1], d[2]);
+    m.triangles.push_back({i, j, k});
+    m.triangles.push_back({i, k, l});
+  };
+  const double h0 = 0.5 - hole / 2, h1 = 0.5 + hole / 2;
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < n; ++j) {
+      double u0 = i * w, u1 = (i + 1) * w, v0 = j * w, v1 = (j + 1) * w;
+      quad({u0, v0, 0}, {u0, v1, 0}, {u1, v1, 0}, {u1, v0, 0});                // z = 0, normal -z
+      bool in_hole = u0 >= h0 - 1e-9 && u1 <= h1 + 1e-9 && v0 >= h0 - 1e-9 && v1 <= h1 + 1e-9;
+      if (!in_hole) quad({u0, v0, 1}, {u1, v0, 1}, {u1, v1, 1}, {u0, v1, 1});  // z = 1, normal +z
+      quad({u0, 0, v0}, {u1, 0, v0}, {u1, 0, v1}, {u0, 0, v1});                // y = 0
+      quad({u0, 1, v0}, {u0, 1, v1}, {u1, 1, v1}, {u1, 1, v0});                // y = 1
+      quad({0, u0, v0}, {0, u0, v1}, {0, u1, v1}, {0, u1, v0});                // x = 0
+      quad({1, u0, v0}, {1, u1, v0}, {1, u1, v1}, {1, u0, v1});                // x = 1
+    }
+  return m;
+}
+
 // The verdict the product promises, from CGAL's own predicates plus the combinatorial checks.
 struct SurfaceVerdict {
   bool ok = false;

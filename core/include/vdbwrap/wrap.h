@@ -4,6 +4,8 @@
 #pragma once
 #include <cstdint>
 #include <functional>
+#include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -23,14 +25,63 @@ struct Length {
   std::string to_string() const;
 };
 
-enum class VolumeChoice { Outside, Inside };
+// Which volume the wrap encloses: the outside of the input (wrap around it), the largest
+// volume the input encloses, or the volumes that contain the user's seed points
+// (material points).
+enum class VolumeChoice { Outside, Inside, SeedPoints };
+
+// A region of space with its own target cell size (spec stage 2: box, cone, sphere,
+// cylinder). Coordinates are in model units.
+struct ControlVolume {
+  enum class Shape { Box, Sphere, Cylinder, Cone };
+  Shape shape = Shape::Box;
+  Vec3 a{0, 0, 0};      // box: min corner; sphere: centre; cylinder, cone: start of the axis
+  Vec3 b{0, 0, 0};      // box: max corner; cylinder, cone: end of the axis
+  double radius = 0;    // sphere, cylinder; cone: radius at a
+  double radius_b = 0;  // cone: radius at b
+  Length size;          // cell size wanted inside it
+  std::string name;     // for messages and the report
+
+  // "box:X0,Y0,Z0,X1,Y1,Z1:SIZE", "sphere:X,Y,Z,R:SIZE", "cylinder:X0,Y0,Z0,X1,Y1,Z1,R:SIZE",
+  // "cone:X0,Y0,Z0,X1,Y1,Z1,R0,R1:SIZE". Throws Error(InvalidArgument).
+  static ControlVolume parse(const std::string& text);
+  std::string to_string() const;
+};
+
+// A target cell size for the cells an input part (STL solid, OBJ group) passes through.
+struct PartSize {
+  std::string part;
+  Length size;
+  static PartSize parse(const std::string& text);  // "NAME=SIZE"
+};
+
+// Parts kept apart: parts in different groups must not be fused by the wrap. One group
+// alone ("hot,cold") means every part of it against every other; "a,b:c,d" is a,b against c,d.
+struct ContactRule {
+  std::vector<std::vector<std::string>> groups;
+  static ContactRule parse(const std::string& text);
+  std::string to_string() const;
+};
+
+// "outside", "inside", or seed points "X,Y,Z" (several separated by ';').
+// Throws Error(InvalidArgument).
+void parse_volume_choice(const std::string& text, VolumeChoice& choice, std::vector<Vec3>& seed_points);
+std::string volume_choice_to_string(VolumeChoice choice, const std::vector<Vec3>& seed_points);
 
 struct WrapParams {
   Length base_size{1.0, true};     // edge of a level-0 cell
   int levels = 1;                  // most 2x2x2 refinements below the base size
   double feature_angle_deg = 30;   // dihedral angle (between normals) that makes an edge sharp
   VolumeChoice volume = VolumeChoice::Outside;
+  std::vector<Vec3> seed_points;   // VolumeChoice::SeedPoints: one or more material points
   int threads = 0;                 // 0: all cores
+
+  // User controls of the voxel stage (spec stage 2).
+  std::optional<Length> gap_closure;          // openings narrower than this do not let the volume through
+  std::vector<ControlVolume> control_volumes; // finer cells inside these regions
+  std::vector<PartSize> part_sizes;           // finer cells where these parts pass
+  std::vector<ContactRule> contact_prevention;  // parts kept apart by refining between them
+  std::optional<Length> contact_floor;        // smallest cell contact prevention may use (default: finest / 8)
 
   // Refinement criteria of a cell the input passes through (spec stage 2).
   int refine_max_triangles = 64;        // more triangles than this in a cell: refine
@@ -99,12 +150,44 @@ struct FeatureStats {
   size_t curves = 0, corners = 0, curves_captured = 0, corners_captured = 0, nodes_snapped = 0;
 };
 
+// What the flood fill found: does the input enclose anything at this cell size?
+struct VolumeReport {
+  size_t free_volumes = 0;         // connected volumes of cells the input does not touch
+  size_t enclosed_volumes = 0;     // of those, the ones that do not reach the outside and hold a whole base cell
+  double largest_enclosed = 0;     // model units cubed (cells, so approximate)
+  bool encloses_volume = false;    // the input, as given, is closed at this cell size
+  double chosen_volume = 0;        // model units cubed, before the surface is fitted
+  double gap_closure = 0;          // model units; 0: off
+};
+
+// A seed point's volume reached the outside or another seed point's volume.
+struct LeakReport {
+  bool detected = false;
+  std::string description;         // e.g. "seed point 1 reaches the outside"
+  Vec3 location{0, 0, 0};          // the narrowest passage on the widest way through
+  double width = 0;                // about twice the passage's clearance from the input
+  std::vector<Vec3> path;          // from the seed point out, through the passage
+};
+
+// Where contact prevention could not keep parts apart above its floor size.
+struct ContactReport {
+  size_t rules = 0;
+  double floor = 0;                // model units
+  size_t unresolved_cells = 0;     // cells at the floor still holding parts that must stay apart
+  std::vector<Vec3> unresolved_locations;  // one per cluster (at most 100)
+  size_t separate_bodies = 0;      // connected pieces of the wrap
+};
+
 struct WrapReport {
   MeshDiagnostics input;
   FeatureStats features;
   WrapParams params;
   double base_size = 0, finest_size = 0, diagonal = 0;
   std::vector<size_t> cells_per_level;  // cells the input passes through, per level
+  std::vector<std::pair<std::string, double>> control_sizes;  // control volumes / part sizes and their cell size
+  VolumeReport volumes;
+  LeakReport leak;
+  ContactReport contact;
   size_t manifold_fixes = 0;            // cells taken out of the volume to keep it manifold
   size_t nodes_held_back = 0;           // nodes kept off the input to stay valid
   MeshDiagnostics output;
@@ -119,8 +202,21 @@ struct WrapResult {
   WrapReport report;
 };
 
+// A wrap that stopped with a report worth keeping (a leak, a surface that failed
+// validation): the report so far comes with the error.
+class WrapFailure : public Error {
+ public:
+  WrapFailure(const std::string& message, WrapReport report)
+      : Error(ErrorKind::WrapFailed, message), report_(std::make_shared<WrapReport>(std::move(report))) {}
+  const WrapReport& report() const { return *report_; }
+
+ private:
+  std::shared_ptr<WrapReport> report_;
+};
+
 // Runs the whole pipeline. Throws Error: InvalidArgument (parameters), InvalidInput
-// (mesh unusable, e.g. no triangles left), WrapFailed (no valid surface), Cancelled.
+// (mesh unusable, e.g. no triangles left), WrapFailed (no valid surface; a WrapFailure
+// with the report so far when there is one, e.g. for a leak), Cancelled.
 WrapResult wrap(const Mesh& input, const WrapParams& params, ProgressSink* progress = nullptr);
 
 // Diagnostics of any mesh, welded exactly (exactly equal coordinates) first.
@@ -139,5 +235,13 @@ DistanceStats sharp_edge_distance(const Mesh& input, const Mesh& surface, double
 std::string to_json(const WrapReport& report, int indent = 2);
 std::string to_json(const MeshDiagnostics& diagnostics, int indent = 2);
 std::string to_json(const DistanceStats& distance, int indent = 2);
+
+// The leak as a small OBJ to load next to the input: an octahedron at the narrowest passage
+// (as wide as the passage) and the path from the seed point as a polyline.
+std::string leak_to_obj(const LeakReport& leak);
+
+// The leak of a JSON report (to_json(WrapReport)); not detected when there is none.
+// Throws Error(InvalidInput) for text that is not JSON.
+LeakReport leak_from_report_json(const std::string& report_json);
 
 }  // namespace vdbwrap

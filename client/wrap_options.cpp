@@ -1,0 +1,110 @@
+#include "wrap_options.h"
+
+#ifdef VDBWRAP_WITH_REMOTE
+#include "params_file.h"
+#endif
+
+namespace vdbwrap::cli {
+
+template <typename T>
+CLI::Option* WrapOptions::bind(CLI::App* cmd, const std::string& name, T& value, const std::string& help,
+                               std::function<void(WrapParams&)> apply) {
+  CLI::Option* opt = cmd->add_option(name, value, help);
+  bindings_.push_back({opt, std::move(apply)});
+  return opt;
+}
+
+void WrapOptions::add_to(CLI::App* cmd, const std::string& threads_help) {
+  cmd->add_option("--params", params_file_,
+                  "Parameter file (.json, .yaml, .yml) in the form of the API's WrapParameters message "
+                  "(proto/vdbwrap/v1/jobs.proto); options on the command line override it")
+      ->check(CLI::ExistingFile);
+  bind(cmd, "--base-size", base_size_, "Level-0 cell edge: model units (0.5) or percent of the bounding-box diagonal (1%)",
+       [this](WrapParams& p) { p.base_size = Length::parse(base_size_); })
+      ->capture_default_str();
+  bind(cmd, "--levels", cli_.levels, "Most 2x2x2 refinement levels below the base size by the refinement criteria (0-6)",
+       [this](WrapParams& p) { p.levels = cli_.levels; })
+      ->capture_default_str()
+      ->check(CLI::Range(0, 6));
+  bind(cmd, "--feature-angle", cli_.feature_angle_deg,
+       "Angle in degrees between adjacent triangles' normals that makes their edge sharp",
+       [this](WrapParams& p) { p.feature_angle_deg = cli_.feature_angle_deg; })
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 180.0));
+  bind(cmd, "--volume", volume_,
+       "Volume to wrap: outside (around the input), inside (the largest volume it encloses), or the volume(s) "
+       "holding seed points X,Y,Z (several separated by ';'); a seed point's volume reaching the outside is a leak",
+       [this](WrapParams& p) { parse_volume_choice(volume_, p.volume, p.seed_points); })
+      ->capture_default_str();
+  bind(cmd, "--gap-closure", gap_closure_,
+       "Openings narrower than this (model units or N%) do not let the volume through, whatever the cell size",
+       [this](WrapParams& p) { p.gap_closure = Length::parse(gap_closure_); });
+  bind(cmd, "--control-volume", control_volumes_,
+       "A region with its own cell size, repeatable: box:X0,Y0,Z0,X1,Y1,Z1:SIZE, sphere:X,Y,Z,R:SIZE, "
+       "cylinder:X0,Y0,Z0,X1,Y1,Z1,R:SIZE, cone:X0,Y0,Z0,X1,Y1,Z1,R0,R1:SIZE",
+       [this](WrapParams& p) {
+         p.control_volumes.clear();
+         for (const auto& s : control_volumes_) p.control_volumes.push_back(ControlVolume::parse(s));
+       })
+      ->take_all();
+  bind(cmd, "--part-size", part_sizes_, "Cell size where an input part (STL solid, OBJ group) passes, repeatable: NAME=SIZE",
+       [this](WrapParams& p) {
+         p.part_sizes.clear();
+         for (const auto& s : part_sizes_) p.part_sizes.push_back(PartSize::parse(s));
+       })
+      ->take_all();
+  bind(cmd, "--contact-prevention", contact_rules_,
+       "Keep parts apart, repeatable: hot,cold (every part of the list against every other) or a,b:c,d (group "
+       "against group); cells between them are refined down to --contact-floor",
+       [this](WrapParams& p) {
+         p.contact_prevention.clear();
+         for (const auto& s : contact_rules_) p.contact_prevention.push_back(ContactRule::parse(s));
+       })
+      ->take_all();
+  bind(cmd, "--contact-floor", contact_floor_, "Smallest cell contact prevention may use (default: the finest cell / 8)",
+       [this](WrapParams& p) { p.contact_floor = Length::parse(contact_floor_); });
+  bind(cmd, "--threads", cli_.threads, threads_help, [this](WrapParams& p) { p.threads = cli_.threads; })
+      ->capture_default_str()
+      ->check(CLI::NonNegativeNumber);
+  bind(cmd, "--refine-triangles", cli_.refine_max_triangles, "Refine a cell holding more input triangles than this",
+       [this](WrapParams& p) { p.refine_max_triangles = cli_.refine_max_triangles; })
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
+  bind(cmd, "--refine-normal-spread", cli_.refine_normal_spread_deg,
+       "Refine a cell whose input normals spread more than this many degrees",
+       [this](WrapParams& p) { p.refine_normal_spread_deg = cli_.refine_normal_spread_deg; })
+      ->capture_default_str();
+  bind(cmd, "--presmooth", cli_.presmooth_iterations,
+       "Smoothing iterations of the voxel surface before projection (untangles the staircase)",
+       [this](WrapParams& p) { p.presmooth_iterations = cli_.presmooth_iterations; })
+      ->capture_default_str()
+      ->check(CLI::Range(0, 100));
+  CLI::Option* nf = cmd->add_flag("--no-features", no_features_, "Do not snap the wrap onto sharp edges, boundaries and corners");
+  bindings_.push_back({nf, [this](WrapParams& p) { p.snap_features = !no_features_; }});
+  bind(cmd, "--corner-angle", cli_.corner_angle_deg, "Degrees a feature curve must turn at a point to make a corner there",
+       [this](WrapParams& p) { p.corner_angle_deg = cli_.corner_angle_deg; })
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 180.0));
+}
+
+WrapParams WrapOptions::resolve() const {
+  WrapParams p;
+  if (!params_file_.empty()) {
+#ifdef VDBWRAP_WITH_REMOTE
+    p = api::read_params_file(params_file_);
+#else
+    throw Error(ErrorKind::InvalidArgument, "--params: this vdbwrap was built without the API library (VDBWRAP_BUILD_SERVICE=OFF)");
+#endif
+  }
+  for (const Binding& b : bindings_) {
+    if (b.option->count() == 0) continue;
+    try {
+      b.apply(p);
+    } catch (const Error& e) {
+      throw Error(e.kind(), b.option->get_name() + ": " + e.what());
+    }
+  }
+  return p;
+}
+
+}  // namespace vdbwrap::cli

@@ -1,0 +1,111 @@
+#include "params_file.h"
+
+#include <google/protobuf/util/json_util.h>
+#include <yaml-cpp/yaml.h>
+
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <cctype>
+#include <charconv>
+#include <fstream>
+#include <sstream>
+
+#include "params_mapping.h"
+
+namespace vdbwrap::api {
+namespace {
+
+using nlohmann::json;
+
+[[noreturn]] void bad(const std::string& name, const std::string& what) {
+  throw Error(ErrorKind::InvalidArgument, name + ": " + what);
+}
+
+// YAML scalars carry no type: numbers and booleans are recognised, the rest are strings.
+json yaml_to_json(const YAML::Node& node) {
+  switch (node.Type()) {
+    case YAML::NodeType::Map: {
+      json j = json::object();
+      for (const auto& kv : node) j[kv.first.as<std::string>()] = yaml_to_json(kv.second);
+      return j;
+    }
+    case YAML::NodeType::Sequence: {
+      json j = json::array();
+      for (const auto& v : node) j.push_back(yaml_to_json(v));
+      return j;
+    }
+    case YAML::NodeType::Scalar: {
+      const std::string s = node.Scalar();
+      if (node.Tag() == "!") return s;  // quoted: a string
+      if (s == "true" || s == "True") return true;
+      if (s == "false" || s == "False") return false;
+      double v = 0;
+      auto [end, ec] = std::from_chars(s.data(), s.data() + s.size(), v);
+      if (!s.empty() && ec == std::errc() && end == s.data() + s.size()) return v;
+      return s;
+    }
+    default: return nullptr;
+  }
+}
+
+std::string upper(std::string s) {
+  std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return char(std::toupper(c)); });
+  return s;
+}
+
+// The short enum spellings of the command line ("inside", "box") as the API's names.
+void normalise_enums(json& j) {
+  if (!j.is_object()) return;
+  if (j.contains("volume") && j["volume"].is_string()) {
+    std::string v = j["volume"];
+    if (v.rfind("VOLUME_", 0) != 0) j["volume"] = "VOLUME_" + upper(v == "seed points" ? "seed_points" : v);
+  }
+  for (const char* key : {"control_volumes", "controlVolumes"})
+    if (j.contains(key) && j[key].is_array())
+      for (auto& cv : j[key])
+        if (cv.is_object() && cv.contains("shape") && cv["shape"].is_string()) {
+          std::string s = cv["shape"];
+          if (s.rfind("SHAPE_", 0) != 0) cv["shape"] = "SHAPE_" + upper(s);
+        }
+}
+
+}  // namespace
+
+v1::WrapParameters parse_params_text(const std::string& text, bool yaml, const std::string& name) {
+  json j;
+  try {
+    j = yaml ? yaml_to_json(YAML::Load(text)) : json::parse(text);
+  } catch (const YAML::Exception& e) {
+    bad(name, std::string("not valid YAML: ") + e.what());
+  } catch (const json::exception& e) {
+    bad(name, std::string("not valid JSON: ") + e.what());
+  }
+  if (j.is_null()) j = json::object();
+  if (!j.is_object()) bad(name, "expected a mapping of parameter names to values (the WrapParameters message)");
+  // A file may also nest the parameters under "params" (as in a JobSpec).
+  if (j.size() == 1 && j.contains("params") && j["params"].is_object()) j = j["params"];
+  normalise_enums(j);
+  v1::WrapParameters msg;
+  google::protobuf::util::JsonParseOptions options;
+  options.ignore_unknown_fields = false;
+  auto status = google::protobuf::util::JsonStringToMessage(j.dump(), &msg, options);
+  if (!status.ok()) bad(name, "not a WrapParameters message: " + std::string(status.message()));
+  return msg;
+}
+
+WrapParams read_params_file(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) bad(path, "cannot read the parameter file");
+  std::stringstream buf;
+  buf << in.rdbuf();
+  const bool yaml = path.size() >= 5 && (path.substr(path.size() - 5) == ".yaml" || path.substr(path.size() - 4) == ".yml");
+  v1::WrapParameters msg = parse_params_text(buf.str(), yaml, path);
+  try {
+    return to_wrap_params(msg);
+  } catch (const Error& e) {
+    bad(path, e.what());
+  }
+}
+
+}  // namespace vdbwrap::api
