@@ -63,6 +63,11 @@ void WrapOptions::add_to(CLI::App* cmd, const std::string& threads_help) {
       ->take_all();
   bind(cmd, "--contact-floor", contact_floor_, "Smallest cell contact prevention may use (default: the finest cell / 8)",
        [this](WrapParams& p) { p.contact_floor = Length::parse(contact_floor_); });
+  bind(cmd, "--coarsen-tolerance", cli_.coarsen_tolerance,
+       "Merge nodes on flat parts while new triangles stay within this fraction of the base size of the input (0: off)",
+       [this](WrapParams& p) { p.coarsen_tolerance = cli_.coarsen_tolerance; })
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 0.5));
   bind(cmd, "--threads", cli_.threads, threads_help, [this](WrapParams& p) { p.threads = cli_.threads; })
       ->capture_default_str()
       ->check(CLI::NonNegativeNumber);

@@ -84,6 +84,7 @@ json params_json(const WrapParams& p) {
               {"presmooth_iterations", p.presmooth_iterations},
               {"snap_features", p.snap_features},
               {"corner_angle_deg", p.corner_angle_deg},
+              {"coarsen_tolerance", p.coarsen_tolerance},
               {"float_coordinates", p.float_coordinates}};
 }
 json leak_json(const LeakReport& l) {
@@ -199,7 +200,7 @@ std::string to_json(const WrapReport& r, int indent) {
            {"unresolved_locations", r.contact.unresolved_locations},
            {"separate_bodies", r.contact.separate_bodies}}},
          {"control_sizes", sizes},
-         {"projection", {{"nodes_held_back", r.nodes_held_back}}},
+         {"projection", {{"nodes_held_back", r.nodes_held_back}, {"triangles_before_coarsening", r.triangles_before_coarsening}}},
          {"output", diag_json(r.output)},
          {"distance_output_to_input", dist_json(r.output_to_input)},
          {"distance_input_to_output", dist_json(r.input_to_output)},

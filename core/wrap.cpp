@@ -20,6 +20,7 @@
 #include "grid/refine.h"
 #include "grid/size_controls.h"
 #include "grid/volume_select.h"
+#include "post/coarsen.h"
 #include "prep/prepare.h"
 #include "vdbwrap/wrap.h"
 
@@ -36,6 +37,7 @@ void check_params(const WrapParams& p) {
   if (!(p.surface_offset >= 0 && p.surface_offset < 0.5)) bad("surface offset must be in [0, 0.5) of the finest cell");
   if (!(p.weld_tolerance >= 0 && p.weld_tolerance < 0.01)) bad("weld tolerance must be in [0, 0.01) of the diagonal");
   if (!(p.corner_angle_deg > 0 && p.corner_angle_deg < 180)) bad("corner angle must be between 0 and 180 degrees");
+  if (!(p.coarsen_tolerance >= 0 && p.coarsen_tolerance <= 0.5)) bad("coarsen tolerance must be in [0, 0.5] of the base size");
   if (p.volume == VolumeChoice::SeedPoints && p.seed_points.empty()) bad("volume by seed points needs at least one seed point");
   if (p.volume != VolumeChoice::SeedPoints && !p.seed_points.empty()) bad("seed points are given but the volume is not chosen by seed points");
   for (const Vec3& s : p.seed_points)
@@ -191,6 +193,16 @@ WrapResult run_pipeline(const Mesh& input, const WrapParams& params, ProgressSin
     report.features.curves_captured = fitted.snap.curves_captured;
     report.features.corners_captured = fitted.snap.corners_captured;
     report.features.nodes_snapped = fitted.snap.nodes_snapped;
+
+    report.triangles_before_coarsening = fitted.triangles.size();
+    if (params.coarsen_tolerance > 0) {
+      StageTimer coarsen_timer("coarsen", report.stages);
+      post::CoarsenParams cp;
+      cp.max_deviation = params.coarsen_tolerance * base;
+      cp.max_edge = 2.0 * base;
+      cp.min_area2 = 1e-6 * g.fine_size() * g.fine_size();
+      post::coarsen(fitted.points, fitted.triangles, fitted.snapped, index, prepared.origin, cp, progress);
+    }
 
     // Every output triangle carries the part of the input triangle nearest its centroid.
     Mesh& out = result.surface;

@@ -158,6 +158,11 @@ WrapParams to_wrap_params(const pb::WrapParameters& in) {
     p.surface_offset = s;
   }
   if (in.has_compute_distances()) p.compute_distances = in.compute_distances();
+  if (in.has_coarsen_tolerance()) {
+    double c = finite("coarsen_tolerance", in.coarsen_tolerance());
+    if (!(c >= 0 && c <= 0.5)) bad("coarsen_tolerance", "must be in [0, 0.5] of the base size");
+    p.coarsen_tolerance = c;
+  }
   return p;
 }
 
@@ -211,6 +216,7 @@ pb::WrapParameters to_proto(const WrapParams& in) {
   out.set_weld_tolerance(in.weld_tolerance);
   out.set_surface_offset(in.surface_offset);
   out.set_compute_distances(in.compute_distances);
+  out.set_coarsen_tolerance(in.coarsen_tolerance);
   return out;
 }
 

@@ -9,6 +9,7 @@
 
 #include "check/intersections.h"
 #include "common/grid_key.h"
+#include "common/triangle_buckets.h"
 #include "common/vec.h"
 #include "vdbwrap/errors.h"
 
@@ -59,64 +60,6 @@ class NodeBuckets {
   Key key(const Vec3& q) const { return grid_key(q, inv_); }
   const std::vector<Vec3>& p_;
   double sep2_, inv_;
-  std::unordered_map<Key, std::vector<uint32_t>, GridKeyHash> cells_;
-};
-
-// Triangles bucketed by bounding box on a uniform grid, so that the triangles around a few
-// moved nodes are tested against their neighbours only. Buckets may hold stale entries
-// (a triangle that moved away); bounding boxes are compared before any exact test.
-class TriangleBuckets {
- public:
-  TriangleBuckets(const std::vector<Vec3>& p, const std::vector<Tri>& tris, double cell) : p_(p), tris_(tris), inv_(1.0 / cell) {
-    boxes_.resize(tris.size());
-    seen_.assign(tris.size(), 0);
-    for (uint32_t f = 0; f < tris.size(); ++f) insert(f);
-  }
-  void update(uint32_t f) { insert(f); }
-  template <typename F>
-  void for_each_candidate(uint32_t f, F&& fn) {
-    ++stamp_;
-    const Box3& b = boxes_[f];
-    for_cells(b, [&](const Key& k) {
-      auto it = cells_.find(k);
-      if (it == cells_.end()) return;
-      for (uint32_t g : it->second) {
-        if (g == f || seen_[g] == stamp_) continue;
-        seen_[g] = stamp_;
-        const Box3& o = boxes_[g];
-        if (o.lo[0] > b.hi[0] || o.hi[0] < b.lo[0] || o.lo[1] > b.hi[1] || o.hi[1] < b.lo[1] || o.lo[2] > b.hi[2] ||
-            o.hi[2] < b.lo[2])
-          continue;
-        fn(g);
-      }
-    });
-  }
-
- private:
-  using Key = GridKey;
-  template <typename F>
-  void for_cells(const Box3& b, F&& fn) const {
-    int64_t lo[3], hi[3];
-    for (int k = 0; k < 3; ++k) lo[k] = int64_t(std::floor(b.lo[k] * inv_)), hi[k] = int64_t(std::floor(b.hi[k] * inv_));
-    for (int64_t x = lo[0]; x <= hi[0]; ++x)
-      for (int64_t y = lo[1]; y <= hi[1]; ++y)
-        for (int64_t z = lo[2]; z <= hi[2]; ++z) fn(Key{x, y, z});
-  }
-  void insert(uint32_t f) {
-    Box3 b;
-    for (uint32_t v : tris_[f]) b.add(p_[v]);
-    boxes_[f] = b;
-    for_cells(b, [&](const Key& k) {
-      auto& list = cells_[k];
-      if (list.empty() || list.back() != f) list.push_back(f);
-    });
-  }
-  const std::vector<Vec3>& p_;
-  const std::vector<Tri>& tris_;
-  double inv_;
-  std::vector<Box3> boxes_;
-  std::vector<uint32_t> seen_;
-  uint32_t stamp_ = 0;
   std::unordered_map<Key, std::vector<uint32_t>, GridKeyHash> cells_;
 };
 
@@ -393,6 +336,7 @@ FittedSurface fit_to_input(const extract::LatticeSurface& surf, const grid::Adap
   for (size_t i = 0; i < n; ++i)
     if (t[i] < 1.0 && norm2(target[i] - lattice[i]) > 0) ++out.held_back;
   if (progress) progress->progress("project", 1.0, std::to_string(out.held_back) + " nodes held back to stay valid");
+  out.snapped = std::move(snapped);
   return out;
 }
 

@@ -16,6 +16,7 @@ namespace vdbwrap::fit {
 struct FittedSurface {
   std::vector<Vec3> points;   // output (world) frame: local + origin
   std::vector<Tri> triangles;
+  std::vector<uint8_t> snapped;  // per point: on a feature curve (kept by later stages)
   size_t held_back = 0;       // nodes that could not go all the way to the input
   size_t validity_rounds = 0;
   SnapStats snap;

@@ -98,6 +98,10 @@ struct WrapParams {
   bool snap_features = true;
   double corner_angle_deg = 30;    // a feature curve turning more than this at a point has a corner there
 
+  // Coarsening (stage 4): nodes merged on flat parts while every new triangle stays within
+  // this fraction of the base size of the input; 0 turns it off.
+  double coarsen_tolerance = 0.02;
+
   // The output will be stored in single precision (binary STL): coordinates are rounded to
   // float during the validity loop, so the validity checked is that of what is written.
   bool float_coordinates = false;
@@ -190,6 +194,7 @@ struct WrapReport {
   ContactReport contact;
   size_t manifold_fixes = 0;            // cells taken out of the volume to keep it manifold
   size_t nodes_held_back = 0;           // nodes kept off the input to stay valid
+  size_t triangles_before_coarsening = 0;
   MeshDiagnostics output;
   DistanceStats output_to_input, input_to_output;
   DistanceStats sharp_edges_to_output;  // samples along the input's sharp edges (over 40 degrees)

@@ -1,0 +1,79 @@
+// Triangles bucketed by bounding box on a uniform grid: the neighbours of a few changed
+// triangles, for local intersection checks (projection's validity loop, coarsening).
+#pragma once
+#include <cmath>
+#include <cstdint>
+#include <unordered_map>
+#include <vector>
+
+#include "common/grid_key.h"
+#include "common/vec.h"
+
+namespace vdbwrap {
+
+// Triangles bucketed by bounding box on a uniform grid, so that the triangles around a few
+// moved nodes are tested against their neighbours only. Buckets may hold stale entries
+// (a triangle that moved away); bounding boxes are compared before any exact test.
+class TriangleBuckets {
+ public:
+  TriangleBuckets(const std::vector<Vec3>& p, const std::vector<Tri>& tris, double cell) : p_(p), tris_(tris), inv_(1.0 / cell) {
+    boxes_.resize(tris.size());
+    seen_.assign(tris.size(), 0);
+    for (uint32_t f = 0; f < tris.size(); ++f) insert(f);
+  }
+  void update(uint32_t f) { insert(f); }
+  // Triangles whose (bucketed) bounding box overlaps that of triangle f, f excluded.
+  template <typename F>
+  void for_each_candidate(uint32_t f, F&& fn) {
+    for_each_in_box(boxes_[f], [&](uint32_t g) {
+      if (g != f) fn(g);
+    });
+  }
+  // Triangles whose (bucketed) bounding box overlaps b.
+  template <typename F>
+  void for_each_in_box(const Box3& b, F&& fn) {
+    ++stamp_;
+    for_cells(b, [&](const Key& k) {
+      auto it = cells_.find(k);
+      if (it == cells_.end()) return;
+      for (uint32_t g : it->second) {
+        if (seen_[g] == stamp_) continue;
+        seen_[g] = stamp_;
+        const Box3& o = boxes_[g];
+        if (o.lo[0] > b.hi[0] || o.hi[0] < b.lo[0] || o.lo[1] > b.hi[1] || o.hi[1] < b.lo[1] || o.lo[2] > b.hi[2] ||
+            o.hi[2] < b.lo[2])
+          continue;
+        fn(g);
+      }
+    });
+  }
+
+ private:
+  using Key = GridKey;
+  template <typename F>
+  void for_cells(const Box3& b, F&& fn) const {
+    int64_t lo[3], hi[3];
+    for (int k = 0; k < 3; ++k) lo[k] = int64_t(std::floor(b.lo[k] * inv_)), hi[k] = int64_t(std::floor(b.hi[k] * inv_));
+    for (int64_t x = lo[0]; x <= hi[0]; ++x)
+      for (int64_t y = lo[1]; y <= hi[1]; ++y)
+        for (int64_t z = lo[2]; z <= hi[2]; ++z) fn(Key{x, y, z});
+  }
+  void insert(uint32_t f) {
+    Box3 b;
+    for (uint32_t v : tris_[f]) b.add(p_[v]);
+    boxes_[f] = b;
+    for_cells(b, [&](const Key& k) {
+      auto& list = cells_[k];
+      if (list.empty() || list.back() != f) list.push_back(f);
+    });
+  }
+  const std::vector<Vec3>& p_;
+  const std::vector<Tri>& tris_;
+  double inv_;
+  std::vector<Box3> boxes_;
+  std::vector<uint32_t> seen_;
+  uint32_t stamp_ = 0;
+  std::unordered_map<Key, std::vector<uint32_t>, GridKeyHash> cells_;
+};
+
+}  // namespace vdbwrap
