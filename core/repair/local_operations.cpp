@@ -21,7 +21,9 @@ bool has_vertex(const Tri& t, uint32_t v) { return t[0] == v || t[1] == v || t[2
 
 }  // namespace
 
-std::vector<Vec3> segment_triangle_points(const Vec3& a, const Vec3& b, const Vec3& p, const Vec3& q, const Vec3& r) {
+std::vector<Vec3> segment_triangle_points(const Vec3& a, const Vec3& b, const Vec3& p, const Vec3& q, const Vec3& r,
+                                          bool* coplanar) {
+  if (coplanar) *coplanar = false;
   Vec3 n = area_vector(p, q, r);
   double nn = norm(n);
   Vec3 ab = b - a;
@@ -35,6 +37,7 @@ std::vector<Vec3> segment_triangle_points(const Vec3& a, const Vec3& b, const Ve
   const Vec3 corner[3] = {p, q, r};
   if (std::fabs(da) <= tol && std::fabs(db) <= tol) {
     // Coplanar: clip the segment by the three inward half-planes of the triangle.
+    if (coplanar) *coplanar = true;
     double s0 = 0, s1 = 1;
     for (int k = 0; k < 3; ++k) {
       Vec3 m = cross(n, corner[(k + 1) % 3] - corner[k]);  // inward, in the plane
@@ -77,7 +80,9 @@ std::vector<Crossing> edge_crossings(const std::vector<Vec3>& points, const std:
         if (u == v || (has_vertex(y, u) && has_vertex(y, v))) continue;  // the common edge
         auto key = std::make_pair(edge_key(u, v), cut);
         if (found.count(key)) continue;
-        std::vector<Vec3> pts = segment_triangle_points(points[u], points[v], points[y[0]], points[y[1]], points[y[2]]);
+        bool coplanar = false;
+        std::vector<Vec3> pts =
+            segment_triangle_points(points[u], points[v], points[y[0]], points[y[1]], points[y[2]], &coplanar);
         // A shared vertex is where the two triangles are meant to meet: not a crossing.
         const double near = 1e-12 * norm(points[v] - points[u]);
         pts.erase(std::remove_if(pts.begin(), pts.end(),
@@ -87,7 +92,7 @@ std::vector<Crossing> edge_crossings(const std::vector<Vec3>& points, const std:
                                  }),
                   pts.end());
         if (pts.empty()) continue;
-        found.emplace(key, Crossing{std::min(u, v), std::max(u, v), cut, std::move(pts)});
+        found.emplace(key, Crossing{std::min(u, v), std::max(u, v), cut, std::move(pts), coplanar});
       }
     }
   }
@@ -105,29 +110,32 @@ double shift_fraction(double gap, double shortest, double longest, double alpha,
 
 std::vector<Move> plan_vertex_shifts(const std::vector<Vec3>& points, const std::vector<Tri>& triangles,
                                      const std::vector<uint32_t>& region, const std::vector<Crossing>& crossings,
-                                     const LocalParams& params) {
-  // Cutting edges (each once) and the crossing points along each.
-  std::unordered_map<uint64_t, std::vector<Vec3>> along;
-  for (const Crossing& c : crossings) {
-    auto& pts = along[edge_key(c.u, c.v)];
-    pts.insert(pts.end(), c.points.begin(), c.points.end());
-  }
+                                     const LocalParams& params, size_t extra) {
+  // Cutting edges (each once) and their crossings; an overlap in a plane keeps both ends
+  // (the one farther from the moving vertex is its crossing).
+  std::unordered_map<uint64_t, std::vector<const Crossing*>> along;
+  for (const Crossing& c : crossings) along[edge_key(c.u, c.v)].push_back(&c);
   const std::vector<uint32_t> region_vertices = vertices_of(triangles, region);
   std::unordered_map<uint32_t, int> cutting;  // vertex -> cutting edges on it
-  for (const auto& [key, pts] : along) {
+  for (const auto& [key, list] : along) {
     uint32_t u = uint32_t(key >> 32), v = uint32_t(key & 0xffffffffu);
     for (uint32_t w : {u, v})
       if (std::binary_search(region_vertices.begin(), region_vertices.end(), w)) ++cutting[w];
   }
-  int most = 0;
-  for (const auto& [v, count] : cutting) most = std::max(most, count);
-  if (most == 0) return {};
+  std::vector<std::pair<int, uint32_t>> ranked;  // (-count, vertex)
+  for (const auto& [v, count] : cutting) ranked.push_back({-count, v});
+  if (ranked.empty()) return {};
+  std::sort(ranked.begin(), ranked.end());
+  const int most = -ranked.front().first;
   std::vector<uint32_t> chosen;
-  for (const auto& [v, count] : cutting)
-    if (count == most) chosen.push_back(v);
-  std::sort(chosen.begin(), chosen.end());
-  if (chosen.size() > 4) chosen.resize(4);  // ties: a few candidates, the queue orders them
-
+  size_t primaries = 0;
+  for (const auto& [count, v] : ranked) {
+    if (-count == most) {
+      if (primaries < 4) chosen.push_back(v), ++primaries;  // ties: a few, the queue orders them
+    } else if (chosen.size() < primaries + extra) {
+      chosen.push_back(v);
+    }
+  }
   const EdgeRange range = edge_range(points, triangles, region);
   std::vector<Move> moves;
   for (uint32_t a : chosen) {
@@ -137,7 +145,16 @@ std::vector<Move> plan_vertex_shifts(const std::vector<Vec3>& points, const std:
       uint32_t u = uint32_t(key >> 32), v = uint32_t(key & 0xffffffffu);
       if (u != a && v != a) continue;
       uint32_t b = u == a ? v : u;
-      std::vector<Vec3> pts = raw;
+      std::vector<Vec3> pts;
+      for (const Crossing* c : raw) {
+        if (!c->coplanar) {
+          pts.insert(pts.end(), c->points.begin(), c->points.end());
+          continue;
+        }
+        pts.push_back(*std::max_element(c->points.begin(), c->points.end(), [&](const Vec3& p, const Vec3& q) {
+          return norm2(p - points[a]) < norm2(q - points[a]);
+        }));
+      }
       std::sort(pts.begin(), pts.end(),
                 [&](const Vec3& p, const Vec3& q) { return norm2(p - points[a]) < norm2(q - points[a]); });
       const Vec3& x1 = pts[0];
@@ -151,6 +168,7 @@ std::vector<Move> plan_vertex_shifts(const std::vector<Vec3>& points, const std:
     if (used == 0) continue;
     Move m;
     m.kind = Move::Kind::VertexShift;
+    m.primary = cutting[a] == most;
     m.positions.push_back({a, sum * (1.0 / used)});
     moves.push_back(std::move(m));
   }

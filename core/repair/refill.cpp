@@ -13,6 +13,7 @@
 #include <unordered_set>
 
 #include "check/intersections.h"
+#include "common/float_round.h"
 #include "common/vec.h"
 #include "fit/surface_index.h"
 
@@ -43,8 +44,6 @@ size_t edge_use(const std::vector<Tri>& triangles, const VertexFaces& faces, uin
   }
   return n;
 }
-
-float to_float(double x) { return static_cast<float>(x); }
 
 // Points spread over a triangle set: vertices, edge midpoints, centroids and a few more.
 std::vector<Vec3> samples_on(const std::vector<Vec3>& p, const std::vector<Tri>& tris) {
@@ -111,158 +110,175 @@ Refill refill_region(const std::vector<Vec3>& points, const std::vector<Tri>& tr
       if (!in_region(*f)) return fail("region vertex used outside the region");
   }
 
-  // 2. A local mesh: the ring of triangles around the hole gives the fairing its context.
-  SurfaceMesh sm;
-  std::unordered_map<uint32_t, SurfaceMesh::Vertex_index> local;
-  std::vector<uint32_t> global_of;  // local vertex index -> global id
-  auto vertex = [&](uint32_t g) {
-    auto it = local.find(g);
-    if (it != local.end()) return it->second;
-    auto v = sm.add_vertex(K::Point_3(points[g][0], points[g][1], points[g][2]));
-    local.emplace(g, v);
-    global_of.resize(std::max<size_t>(global_of.size(), v.idx() + 1));
-    global_of[v.idx()] = g;
-    return v;
+  // 2.-5. Fill, then check; a smooth refill first, then flatter ones (CAD regions: fairing
+  //        rounds sharp edges, the plain triangulation keeps planar pieces planar).
+  enum class Mode { RefineAndFair, Refine, Triangulate };
+  auto attempt = [&](Mode mode) -> Refill {
+    // 2. A local mesh: the ring of triangles around the hole gives the fairing its context.
+    SurfaceMesh sm;
+    std::unordered_map<uint32_t, SurfaceMesh::Vertex_index> local;
+    std::vector<uint32_t> global_of;  // local vertex index -> global id
+    auto vertex = [&](uint32_t g) {
+      auto it = local.find(g);
+      if (it != local.end()) return it->second;
+      auto v = sm.add_vertex(K::Point_3(points[g][0], points[g][1], points[g][2]));
+      local.emplace(g, v);
+      global_of.resize(std::max<size_t>(global_of.size(), v.idx() + 1));
+      global_of[v.idx()] = g;
+      return v;
+    };
+    std::vector<uint32_t> context;
+    for (uint32_t t : grow_ring(triangles, faces, region))
+      if (!in_region(t)) context.push_back(t);
+    for (uint32_t t : context) {
+      const Tri& tri = triangles[t];
+      if (tri[0] == tri[1] || tri[1] == tri[2] || tri[0] == tri[2]) continue;
+      if (sm.add_face(vertex(tri[0]), vertex(tri[1]), vertex(tri[2])) == SurfaceMesh::null_face())
+        return fail("the ring around the region is not manifold");
+    }
+    for (uint32_t g : loop)
+      if (!local.count(g)) return fail("contour vertex without a triangle outside the region");
+    // The border halfedge of the hole runs like the removed triangles: loop[0] -> loop[1].
+    auto h = sm.halfedge(local[loop[0]], local[loop[1]]);
+    if (h == SurfaceMesh::null_halfedge() || !sm.is_border(h)) return fail("hole not found in the local mesh");
+    {
+      size_t n = 0;
+      for (auto g : CGAL::halfedges_around_face(h, sm)) {
+        (void)g;
+        if (++n > loop.size()) break;
+      }
+      if (n != loop.size()) return fail("hole border differs from the contour (pinched ring)");
+    }
+
+    // 3. Fill (Liepa), refine, fair.
+    std::vector<SurfaceMesh::Face_index> patch_faces;
+    std::vector<SurfaceMesh::Vertex_index> patch_vertices;
+    if (mode == Mode::Triangulate)
+      PMP::triangulate_hole(sm, h, std::back_inserter(patch_faces), CGAL::parameters::use_delaunay_triangulation(true));
+    else
+      PMP::triangulate_and_refine_hole(sm, h, std::back_inserter(patch_faces), std::back_inserter(patch_vertices),
+                                       CGAL::parameters::use_delaunay_triangulation(true));
+    if (patch_faces.empty()) return fail("hole filling found no triangulation");
+    Refill out;
+    if (mode == Mode::RefineAndFair && !patch_vertices.empty())
+      out.faired = PMP::fair(sm, patch_vertices, CGAL::parameters::fairing_continuity(1));
+    if (mode == Mode::RefineAndFair && !out.faired) return fail("fairing failed");
+
+    // 4. Back to global indices: contour vertices keep theirs, new ones follow points.
+    const uint32_t base = uint32_t(points.size());
+    std::unordered_map<uint32_t, uint32_t> new_index;  // local index -> global-or-new index
+    for (auto v : patch_vertices) {
+      const auto& p = sm.point(v);
+      Vec3 q{p.x(), p.y(), p.z()};
+      if (params.float_coordinates) q = round_to_float(q);
+      if (!std::isfinite(q[0]) || !std::isfinite(q[1]) || !std::isfinite(q[2])) return fail("refill point not finite");
+      new_index[v.idx()] = base + uint32_t(out.new_points.size());
+      out.new_points.push_back(q);
+    }
+    for (auto f : patch_faces) {
+      Tri t;
+      int k = 0;
+      for (auto v : CGAL::vertices_around_face(sm.halfedge(f), sm)) {
+        if (k == 3) return fail("refill face is not a triangle");
+        auto it = new_index.find(v.idx());
+        if (it != new_index.end()) t[k++] = it->second;
+        else {
+          uint32_t g = global_of[v.idx()];
+          if (!on_contour.count(g)) return fail("refill uses a vertex off the contour");
+          t[k++] = g;
+        }
+      }
+      if (k != 3) return fail("refill face is not a triangle");
+      out.triangles.push_back(t);
+    }
+
+    // 5. Checks: non-degenerate; its border is the contour, same orientation; no edge that
+    //    already exists elsewhere; area change; distance to the surface it replaces.
+    std::vector<Vec3> all_points;  // contour/old points and new points, one index space
+    all_points.reserve(points.size() + out.new_points.size());
+    all_points = points;
+    all_points.insert(all_points.end(), out.new_points.begin(), out.new_points.end());
+    for (const Tri& t : out.triangles)
+      if (check::triangle_is_degenerate(all_points, t)) return fail("refill has a degenerate triangle");
+    std::unordered_map<uint64_t, std::pair<int, int>> patch_edges;  // count, net direction
+    for (const Tri& t : out.triangles)
+      for (int k = 0; k < 3; ++k) {
+        uint32_t u = t[k], v = t[(k + 1) % 3];
+        auto& e = patch_edges[edge_key(u, v)];
+        ++e.first;
+        e.second += u < v ? 1 : -1;
+      }
+    size_t border = 0;
+    for (const auto& [key, e] : patch_edges) {
+      uint32_t u = uint32_t(key >> 32), v = uint32_t(key & 0xffffffffu);
+      if (e.first > 2) return fail("refill has a non-manifold edge");
+      if (e.first == 2) {
+        if (e.second != 0) return fail("refill is not consistently oriented");
+        if (u < base && v < base && used.count(key) == 0 && edge_use(triangles, faces, u, v) > 0)
+          return fail("refill would make a non-manifold edge");
+        if (u < base && v < base) {
+          // A chord between contour vertices that is also a contour edge would close the hole wrongly.
+          auto it = used.find(key);
+          if (it != used.end() && it->second == 1) return fail("refill reuses a contour edge inside");
+        }
+        continue;
+      }
+      // Free edge of the patch: must be a contour edge, in the region's direction.
+      auto it = used.find(key);
+      if (it == used.end() || it->second != 1) return fail("refill leaves a free edge");
+      auto [a, b] = directed[key];
+      if ((a < b ? 1 : -1) != e.second) return fail("refill is oriented against the mesh");
+      ++border;
+    }
+    if (border != loop.size()) return fail("refill border differs from the contour");
+
+    std::vector<Tri> removed;
+    for (uint32_t t : region) removed.push_back(triangles[t]);
+    const double area_before = area_of(points, removed), area_after = area_of(all_points, out.triangles);
+    const double hi = std::max(area_before, area_after);
+    if (hi <= 0 || std::min(area_before, area_after) / hi < params.area_ratio) return fail("area change too large");
+
+    if (params.max_deviation > 0) {
+      const double bound2 = params.max_deviation * params.max_deviation;
+      // Refill -> input (or the removed surface when no input is given).
+      std::vector<Vec3> from_patch = samples_on(all_points, out.triangles);
+      if (original) {
+        for (const Vec3& s : from_patch)
+          if (original->squared_distance(s) > bound2) return fail("refill too far from the input");
+      } else {
+        fit::SurfaceIndex removed_index(points, removed);
+        for (const Vec3& s : from_patch)
+          if (removed_index.squared_distance(s) > bound2) return fail("refill too far from the removed surface");
+      }
+      // Removed surface -> refill.
+      fit::SurfaceIndex patch_index(all_points, out.triangles);
+      for (const Vec3& s : samples_on(points, removed))
+        if (patch_index.squared_distance(s) > bound2) return fail("removed surface too far from the refill");
+    }
+
+    // Each new triangle replaces the removed one nearest to it (its part goes on).
+    for (const Tri& t : out.triangles) {
+      Vec3 c = (all_points[t[0]] + all_points[t[1]] + all_points[t[2]]) * (1.0 / 3);
+      uint32_t best = region[0];
+      double best_d = INFINITY;
+      for (uint32_t r : region) {
+        const Tri& x = triangles[r];
+        double d = norm2((points[x[0]] + points[x[1]] + points[x[2]]) * (1.0 / 3) - c);
+        if (d < best_d) best_d = d, best = r;
+      }
+      out.replaces.push_back(best);
+    }
+    out.ok = true;
+    return out;
   };
-  std::vector<uint32_t> context;
-  for (uint32_t t : grow_ring(triangles, faces, region))
-    if (!in_region(t)) context.push_back(t);
-  for (uint32_t t : context) {
-    const Tri& tri = triangles[t];
-    if (tri[0] == tri[1] || tri[1] == tri[2] || tri[0] == tri[2]) continue;
-    if (sm.add_face(vertex(tri[0]), vertex(tri[1]), vertex(tri[2])) == SurfaceMesh::null_face())
-      return fail("the ring around the region is not manifold");
+  std::string why;
+  for (Mode mode : {Mode::RefineAndFair, Mode::Refine, Mode::Triangulate}) {
+    if (mode == Mode::RefineAndFair && !params.fair) continue;
+    Refill r = attempt(mode);
+    if (r.ok) return r;
+    why += (why.empty() ? "" : "; ") + r.why;
   }
-  for (uint32_t g : loop)
-    if (!local.count(g)) return fail("contour vertex without a triangle outside the region");
-  // The border halfedge of the hole runs like the removed triangles: loop[0] -> loop[1].
-  auto h = sm.halfedge(local[loop[0]], local[loop[1]]);
-  if (h == SurfaceMesh::null_halfedge() || !sm.is_border(h)) return fail("hole not found in the local mesh");
-  {
-    size_t n = 0;
-    for (auto g : CGAL::halfedges_around_face(h, sm)) {
-      (void)g;
-      if (++n > loop.size()) break;
-    }
-    if (n != loop.size()) return fail("hole border differs from the contour (pinched ring)");
-  }
-
-  // 3. Fill (Liepa), refine, fair.
-  std::vector<SurfaceMesh::Face_index> patch_faces;
-  std::vector<SurfaceMesh::Vertex_index> patch_vertices;
-  PMP::triangulate_and_refine_hole(sm, h, std::back_inserter(patch_faces), std::back_inserter(patch_vertices),
-                                   CGAL::parameters::use_delaunay_triangulation(true));
-  if (patch_faces.empty()) return fail("hole filling found no triangulation");
-  Refill out;
-  if (params.fair && !patch_vertices.empty())
-    out.faired = PMP::fair(sm, patch_vertices, CGAL::parameters::fairing_continuity(1));
-
-  // 4. Back to global indices: contour vertices keep theirs, new ones follow points.
-  const uint32_t base = uint32_t(points.size());
-  std::unordered_map<uint32_t, uint32_t> new_index;  // local index -> global-or-new index
-  for (auto v : patch_vertices) {
-    const auto& p = sm.point(v);
-    Vec3 q{p.x(), p.y(), p.z()};
-    if (params.float_coordinates) q = {to_float(q[0]), to_float(q[1]), to_float(q[2])};
-    if (!std::isfinite(q[0]) || !std::isfinite(q[1]) || !std::isfinite(q[2])) return fail("refill point not finite");
-    new_index[v.idx()] = base + uint32_t(out.new_points.size());
-    out.new_points.push_back(q);
-  }
-  for (auto f : patch_faces) {
-    Tri t;
-    int k = 0;
-    for (auto v : CGAL::vertices_around_face(sm.halfedge(f), sm)) {
-      if (k == 3) return fail("refill face is not a triangle");
-      auto it = new_index.find(v.idx());
-      if (it != new_index.end()) t[k++] = it->second;
-      else {
-        uint32_t g = global_of[v.idx()];
-        if (!on_contour.count(g)) return fail("refill uses a vertex off the contour");
-        t[k++] = g;
-      }
-    }
-    if (k != 3) return fail("refill face is not a triangle");
-    out.triangles.push_back(t);
-  }
-
-  // 5. Checks: non-degenerate; its border is the contour, same orientation; no edge that
-  //    already exists elsewhere; area change; distance to the surface it replaces.
-  std::vector<Vec3> all_points;  // contour/old points and new points, one index space
-  all_points.reserve(points.size() + out.new_points.size());
-  all_points = points;
-  all_points.insert(all_points.end(), out.new_points.begin(), out.new_points.end());
-  for (const Tri& t : out.triangles)
-    if (check::triangle_is_degenerate(all_points, t)) return fail("refill has a degenerate triangle");
-  std::unordered_map<uint64_t, std::pair<int, int>> patch_edges;  // count, net direction
-  for (const Tri& t : out.triangles)
-    for (int k = 0; k < 3; ++k) {
-      uint32_t u = t[k], v = t[(k + 1) % 3];
-      auto& e = patch_edges[edge_key(u, v)];
-      ++e.first;
-      e.second += u < v ? 1 : -1;
-    }
-  size_t border = 0;
-  for (const auto& [key, e] : patch_edges) {
-    uint32_t u = uint32_t(key >> 32), v = uint32_t(key & 0xffffffffu);
-    if (e.first > 2) return fail("refill has a non-manifold edge");
-    if (e.first == 2) {
-      if (e.second != 0) return fail("refill is not consistently oriented");
-      if (u < base && v < base && used.count(key) == 0 && edge_use(triangles, faces, u, v) > 0)
-        return fail("refill would make a non-manifold edge");
-      if (u < base && v < base) {
-        // A chord between contour vertices that is also a contour edge would close the hole wrongly.
-        auto it = used.find(key);
-        if (it != used.end() && it->second == 1) return fail("refill reuses a contour edge inside");
-      }
-      continue;
-    }
-    // Free edge of the patch: must be a contour edge, in the region's direction.
-    auto it = used.find(key);
-    if (it == used.end() || it->second != 1) return fail("refill leaves a free edge");
-    auto [a, b] = directed[key];
-    if ((a < b ? 1 : -1) != e.second) return fail("refill is oriented against the mesh");
-    ++border;
-  }
-  if (border != loop.size()) return fail("refill border differs from the contour");
-
-  std::vector<Tri> removed;
-  for (uint32_t t : region) removed.push_back(triangles[t]);
-  const double area_before = area_of(points, removed), area_after = area_of(all_points, out.triangles);
-  const double hi = std::max(area_before, area_after);
-  if (hi <= 0 || std::min(area_before, area_after) / hi < params.area_ratio) return fail("area change too large");
-
-  if (params.max_deviation > 0) {
-    const double bound2 = params.max_deviation * params.max_deviation;
-    // Refill -> input (or the removed surface when no input is given).
-    std::vector<Vec3> from_patch = samples_on(all_points, out.triangles);
-    if (original) {
-      for (const Vec3& s : from_patch)
-        if (original->squared_distance(s) > bound2) return fail("refill too far from the input");
-    } else {
-      fit::SurfaceIndex removed_index(points, removed);
-      for (const Vec3& s : from_patch)
-        if (removed_index.squared_distance(s) > bound2) return fail("refill too far from the removed surface");
-    }
-    // Removed surface -> refill.
-    fit::SurfaceIndex patch_index(all_points, out.triangles);
-    for (const Vec3& s : samples_on(points, removed))
-      if (patch_index.squared_distance(s) > bound2) return fail("removed surface too far from the refill");
-  }
-
-  // Each new triangle replaces the removed one nearest to it (its part goes on).
-  for (const Tri& t : out.triangles) {
-    Vec3 c = (all_points[t[0]] + all_points[t[1]] + all_points[t[2]]) * (1.0 / 3);
-    uint32_t best = region[0];
-    double best_d = INFINITY;
-    for (uint32_t r : region) {
-      const Tri& x = triangles[r];
-      double d = norm2((points[x[0]] + points[x[1]] + points[x[2]]) * (1.0 / 3) - c);
-      if (d < best_d) best_d = d, best = r;
-    }
-    out.replaces.push_back(best);
-  }
-  out.ok = true;
-  return out;
+  return fail(why);
 }
 
 }  // namespace vdbwrap::local_repair

@@ -17,6 +17,7 @@
 #include <unordered_set>
 
 #include "check/intersections.h"
+#include "common/float_round.h"
 #include "common/stage_timer.h"
 #include "common/vec.h"
 #include "fit/surface_index.h"
@@ -51,8 +52,6 @@ void validate(const RepairParams& p) {
   if (p.small_piece_triangles < 0) bad("small piece triangles must not be negative");
   if (!(p.small_piece_area >= 0 && p.small_piece_area <= 1)) bad("small piece area must be in [0, 1]");
 }
-
-Vec3 round_to_float(const Vec3& p) { return {double(float(p[0])), double(float(p[1])), double(float(p[2]))}; }
 
 
 bool touches(const TrianglePair& p, const std::unordered_set<uint32_t>& set) { return set.count(p.a) || set.count(p.b); }
@@ -140,7 +139,7 @@ RegionPlan plan_region(const Work& w, const VertexFaces& faces, std::vector<uint
   for (const auto& p : w.pairs)
     if (in.count(p.a) || in.count(p.b)) pairs.push_back(p);
   auto crossings = local_repair::edge_crossings(w.points, w.tris, pairs);
-  std::vector<Move> moves = local_repair::plan_vertex_shifts(w.points, w.tris, plan.triangles, crossings, lp);
+  std::vector<Move> moves = local_repair::plan_vertex_shifts(w.points, w.tris, plan.triangles, crossings, lp, 8);
   for (Move& m : local_repair::plan_triangle_shifts(w.points, w.tris, plan.triangles, pairs, crossings, lp)) moves.push_back(std::move(m));
   for (Move& m : moves) {
     bool ok = true;
@@ -150,12 +149,18 @@ RegionPlan plan_region(const Work& w, const VertexFaces& faces, std::vector<uint
       ok &= norm(pos - w.origin[v]) <= max_dev;  // --max-deviation, from where the vertex started
       ok &= pos != w.points[v];
     }
-    if (!ok) continue;
+    if (!ok) {
+      if (std::getenv("VDBWRAP_REPAIR_DEBUG")) std::fprintf(stderr, "move %d: beyond max deviation\n", int(m.kind));
+      continue;
+    }
     local_repair::measure_move(w.points, w.tris, faces, m);
     if (m.area_ratio >= params.area_ratio) plan.queue.push_back(std::move(m));
+    else if (std::getenv("VDBWRAP_REPAIR_DEBUG")) std::fprintf(stderr, "move %d: area ratio %.3f\n", int(m.kind), m.area_ratio);
   }
-  std::stable_sort(plan.queue.begin(), plan.queue.end(),
-                   [](const Move& a, const Move& b) { return a.volume_change < b.volume_change; });
+  // The paper's operations by increasing volume change, then the other vertices' shifts.
+  std::stable_sort(plan.queue.begin(), plan.queue.end(), [](const Move& a, const Move& b) {
+    return a.primary != b.primary ? a.primary : a.volume_change < b.volume_change;
+  });
   return plan;
 }
 
@@ -233,6 +238,8 @@ std::vector<TrianglePair> judge(Work& w, std::vector<Trial>& trials, const std::
         }
       }
       if (!ok) {
+        if (std::getenv("VDBWRAP_REPAIR_DEBUG"))
+          std::fprintf(stderr, "trial refused: pairs %zu -> %zu\n", pb.size(), pa.size());
         t.accepted = false;
         undo(i);
         any_rejected = true;
@@ -492,23 +499,24 @@ void remove_small_pieces(Work& w, const RepairParams& params, double max_dev, Re
 
 // ---------------------------------------------------------------------------------------
 
+// The live triangles and the points they use, points in their order (an untouched welded
+// mesh comes out as it went in).
 Mesh compact(const Work& w, const Mesh& input) {
   Mesh out;
   std::vector<uint32_t> remap(w.points.size(), UINT32_MAX);
-  bool parts = !input.triangle_part.empty();
+  for (const Tri& t : w.tris)
+    if (!local_repair::is_dead(t))
+      for (uint32_t v : t) remap[v] = 0;
+  for (size_t v = 0; v < w.points.size(); ++v)
+    if (remap[v] == 0) {
+      remap[v] = uint32_t(out.points.size());
+      out.points.push_back(w.points[v]);
+    }
+  const bool parts = !input.triangle_part.empty();
   for (size_t t = 0; t < w.tris.size(); ++t) {
     const Tri& tri = w.tris[t];
     if (local_repair::is_dead(tri)) continue;
-    Tri o;
-    for (int k = 0; k < 3; ++k) {
-      uint32_t& r = remap[tri[k]];
-      if (r == UINT32_MAX) {
-        r = uint32_t(out.points.size());
-        out.points.push_back(w.points[tri[k]]);
-      }
-      o[k] = r;
-    }
-    out.triangles.push_back(o);
+    out.triangles.push_back({remap[tri[0]], remap[tri[1]], remap[tri[2]]});
     if (parts) out.triangle_part.push_back(w.part[t]);
   }
   out.part_names = input.part_names;
