@@ -45,13 +45,18 @@ size_t edge_use(const std::vector<Tri>& triangles, const VertexFaces& faces, uin
   return n;
 }
 
-// Points spread over a triangle set: vertices, edge midpoints, centroids and a few more.
+// Points spread over a triangle set: a barycentric grid of 15 per triangle (corners, edges
+// in quarters, inside).
 std::vector<Vec3> samples_on(const std::vector<Vec3>& p, const std::vector<Tri>& tris) {
+  constexpr int n = 4;
   std::vector<Vec3> out;
-  static const double bary[][3] = {{1, 0, 0},       {0, 1, 0},       {0, 0, 1},         {.5, .5, 0},       {0, .5, .5},
-                                   {.5, 0, .5},     {1. / 3, 1. / 3, 1. / 3}, {.6, .2, .2}, {.2, .6, .2}, {.2, .2, .6}};
+  out.reserve(tris.size() * 15);
   for (const Tri& t : tris)
-    for (const auto& w : bary) out.push_back(p[t[0]] * w[0] + p[t[1]] * w[1] + p[t[2]] * w[2]);
+    for (int i = 0; i <= n; ++i)
+      for (int j = 0; i + j <= n; ++j) {
+        double u = double(i) / n, v = double(j) / n;
+        out.push_back(p[t[0]] * u + p[t[1]] * v + p[t[2]] * (1 - u - v));
+      }
   return out;
 }
 
@@ -68,8 +73,8 @@ Refill refill_region(const std::vector<Vec3>& points, const std::vector<Tri>& tr
   if (region.empty()) return fail("empty region");
   auto in_region = [&](uint32_t t) { return std::binary_search(region.begin(), region.end(), t); };
 
-  // 1. The contour: region edges used once in the region, each with exactly one triangle
-  //    outside it (a mesh border or a non-manifold edge cannot be refilled from a loop).
+  // 1. The contour: region edges used once in the region, each with one triangle outside it
+  //    or none (the mesh's own border, kept as it is); a non-manifold edge stops the refill.
   std::unordered_map<uint64_t, int> used;
   std::unordered_map<uint64_t, std::pair<uint32_t, uint32_t>> directed;
   for (uint32_t t : region) {
@@ -82,13 +87,15 @@ Refill refill_region(const std::vector<Vec3>& points, const std::vector<Tri>& tr
     }
   }
   std::unordered_map<uint32_t, uint32_t> next;  // contour, in the region's orientation
+  bool open = false;                             // part of the contour is the mesh's border
   for (const auto& [key, count] : used) {
     uint32_t u = uint32_t(key >> 32), v = uint32_t(key & 0xffffffffu);
     size_t total = edge_use(triangles, faces, u, v);
     if (count > 2) return fail("non-manifold edge inside the region");
     if (count == 2 && total != 2) return fail("region edge shared with triangles outside it");
     if (count == 1) {
-      if (total != 2) return fail(total == 1 ? "region touches the mesh border" : "non-manifold edge on the contour");
+      if (total > 2) return fail("non-manifold edge on the contour");
+      open |= total == 1;
       auto [a, b] = directed[key];
       if (!next.emplace(a, b).second) return fail("contour is not a simple loop");
     }
@@ -108,6 +115,123 @@ Refill refill_region(const std::vector<Vec3>& points, const std::vector<Tri>& tr
     if (on_contour.count(v)) continue;
     for (const uint32_t* f = faces.begin(v); f != faces.end(v); ++f)
       if (!in_region(*f)) return fail("region vertex used outside the region");
+  }
+
+  // 5. Checks: the same for every way of filling.
+  //    Non-degenerate; its border is the contour, same orientation; no edge that already
+  //    exists elsewhere; area change; distance to the surface it replaces.
+  auto finish = [&](Refill out) -> Refill {
+    const uint32_t base = uint32_t(points.size());
+    // The patch on its own points (contour vertices and new ones), to measure it.
+    std::vector<Vec3> patch_points;
+    std::vector<Tri> patch;
+    {
+      std::unordered_map<uint32_t, uint32_t> at;
+      for (const Tri& t : out.triangles) {
+        Tri l;
+        for (int k = 0; k < 3; ++k) {
+          auto [it, added] = at.emplace(t[k], uint32_t(patch_points.size()));
+          if (added) patch_points.push_back(t[k] < base ? points[t[k]] : out.new_points[t[k] - base]);
+          l[k] = it->second;
+        }
+        patch.push_back(l);
+      }
+    }
+    for (const Tri& t : patch)
+      if (check::triangle_is_degenerate(patch_points, t)) return fail("refill has a degenerate triangle");
+    std::unordered_map<uint64_t, std::pair<int, int>> patch_edges;  // count, net direction
+    for (const Tri& t : out.triangles)
+      for (int k = 0; k < 3; ++k) {
+        uint32_t u = t[k], v = t[(k + 1) % 3];
+        auto& e = patch_edges[edge_key(u, v)];
+        ++e.first;
+        e.second += u < v ? 1 : -1;
+      }
+    size_t border = 0;
+    for (const auto& [key, e] : patch_edges) {
+      uint32_t u = uint32_t(key >> 32), v = uint32_t(key & 0xffffffffu);
+      if (e.first > 2) return fail("refill has a non-manifold edge");
+      if (e.first == 2) {
+        if (e.second != 0) return fail("refill is not consistently oriented");
+        if (u < base && v < base && used.count(key) == 0 && edge_use(triangles, faces, u, v) > 0)
+          return fail("refill would make a non-manifold edge");
+        if (u < base && v < base) {
+          // A chord between contour vertices that is also a contour edge would close the hole wrongly.
+          auto it = used.find(key);
+          if (it != used.end() && it->second == 1) return fail("refill reuses a contour edge inside");
+        }
+        continue;
+      }
+      // Free edge of the patch: must be a contour edge, in the region's direction.
+      auto it = used.find(key);
+      if (it == used.end() || it->second != 1) return fail("refill leaves a free edge");
+      auto [a, b] = directed[key];
+      if ((a < b ? 1 : -1) != e.second) return fail("refill is oriented against the mesh");
+      ++border;
+    }
+    if (border != loop.size()) return fail("refill border differs from the contour");
+
+    std::vector<Tri> removed;
+    for (uint32_t t : region) removed.push_back(triangles[t]);
+    const double area_before = area_of(points, removed), area_after = area_of(patch_points, patch);
+    const double hi = std::max(area_before, area_after);
+    if (hi <= 0 || std::min(area_before, area_after) / hi < params.area_ratio) return fail("area change too large");
+
+    if (params.max_deviation > 0) {
+      const double bound2 = params.max_deviation * params.max_deviation;
+      // Refill -> input (or the removed surface when no input is given).
+      std::vector<Vec3> from_patch = samples_on(patch_points, patch);
+      if (original) {
+        for (const Vec3& s : from_patch)
+          if (original->squared_distance(s) > bound2) return fail("refill too far from the input");
+      } else {
+        fit::SurfaceIndex removed_index(points, removed);
+        for (const Vec3& s : from_patch)
+          if (removed_index.squared_distance(s) > bound2) return fail("refill too far from the removed surface");
+      }
+      // Removed surface -> refill.
+      fit::SurfaceIndex patch_index(patch_points, patch);
+      for (const Vec3& s : samples_on(points, removed))
+        if (patch_index.squared_distance(s) > bound2) return fail("removed surface too far from the refill");
+    }
+
+    // Each new triangle replaces the removed one nearest to it (its part goes on).
+    for (const Tri& t : patch) {
+      Vec3 c = (patch_points[t[0]] + patch_points[t[1]] + patch_points[t[2]]) * (1.0 / 3);
+      uint32_t best = region[0];
+      double best_d = INFINITY;
+      for (uint32_t r : region) {
+        const Tri& x = triangles[r];
+        double d = norm2((points[x[0]] + points[x[1]] + points[x[2]]) * (1.0 / 3) - c);
+        if (d < best_d) best_d = d, best = r;
+      }
+      out.replaces.push_back(best);
+    }
+    out.ok = true;
+    return out;
+  };
+
+  // Along the mesh's border there is no ring to fair against: the contour alone is
+  // triangulated (minimal area, Liepa), tried both ways round.
+  if (open) {
+    std::vector<K::Point_3> polyline;
+    for (uint32_t g : loop) polyline.emplace_back(points[g][0], points[g][1], points[g][2]);
+    std::vector<CGAL::Triple<int, int, int>> tris;
+    PMP::triangulate_hole_polyline(polyline, std::back_inserter(tris));
+    if (tris.empty()) return fail("hole filling found no triangulation");
+    std::string why;
+    for (bool flip : {false, true}) {
+      Refill out;
+      for (const auto& t : tris) {
+        Tri tri{loop[size_t(t.first)], loop[size_t(t.second)], loop[size_t(t.third)]};
+        if (flip) std::swap(tri[1], tri[2]);
+        out.triangles.push_back(tri);
+      }
+      Refill r = finish(std::move(out));
+      if (r.ok) return r;
+      why = r.why;
+    }
+    return fail(why);
   }
 
   // 2.-5. Fill, then check; a smooth refill first, then flatter ones (CAD regions: fairing
@@ -192,91 +316,15 @@ Refill refill_region(const std::vector<Vec3>& points, const std::vector<Tri>& tr
       out.triangles.push_back(t);
     }
 
-    // 5. Checks: non-degenerate; its border is the contour, same orientation; no edge that
-    //    already exists elsewhere; area change; distance to the surface it replaces.
-    std::vector<Vec3> all_points;  // contour/old points and new points, one index space
-    all_points.reserve(points.size() + out.new_points.size());
-    all_points = points;
-    all_points.insert(all_points.end(), out.new_points.begin(), out.new_points.end());
-    for (const Tri& t : out.triangles)
-      if (check::triangle_is_degenerate(all_points, t)) return fail("refill has a degenerate triangle");
-    std::unordered_map<uint64_t, std::pair<int, int>> patch_edges;  // count, net direction
-    for (const Tri& t : out.triangles)
-      for (int k = 0; k < 3; ++k) {
-        uint32_t u = t[k], v = t[(k + 1) % 3];
-        auto& e = patch_edges[edge_key(u, v)];
-        ++e.first;
-        e.second += u < v ? 1 : -1;
-      }
-    size_t border = 0;
-    for (const auto& [key, e] : patch_edges) {
-      uint32_t u = uint32_t(key >> 32), v = uint32_t(key & 0xffffffffu);
-      if (e.first > 2) return fail("refill has a non-manifold edge");
-      if (e.first == 2) {
-        if (e.second != 0) return fail("refill is not consistently oriented");
-        if (u < base && v < base && used.count(key) == 0 && edge_use(triangles, faces, u, v) > 0)
-          return fail("refill would make a non-manifold edge");
-        if (u < base && v < base) {
-          // A chord between contour vertices that is also a contour edge would close the hole wrongly.
-          auto it = used.find(key);
-          if (it != used.end() && it->second == 1) return fail("refill reuses a contour edge inside");
-        }
-        continue;
-      }
-      // Free edge of the patch: must be a contour edge, in the region's direction.
-      auto it = used.find(key);
-      if (it == used.end() || it->second != 1) return fail("refill leaves a free edge");
-      auto [a, b] = directed[key];
-      if ((a < b ? 1 : -1) != e.second) return fail("refill is oriented against the mesh");
-      ++border;
-    }
-    if (border != loop.size()) return fail("refill border differs from the contour");
-
-    std::vector<Tri> removed;
-    for (uint32_t t : region) removed.push_back(triangles[t]);
-    const double area_before = area_of(points, removed), area_after = area_of(all_points, out.triangles);
-    const double hi = std::max(area_before, area_after);
-    if (hi <= 0 || std::min(area_before, area_after) / hi < params.area_ratio) return fail("area change too large");
-
-    if (params.max_deviation > 0) {
-      const double bound2 = params.max_deviation * params.max_deviation;
-      // Refill -> input (or the removed surface when no input is given).
-      std::vector<Vec3> from_patch = samples_on(all_points, out.triangles);
-      if (original) {
-        for (const Vec3& s : from_patch)
-          if (original->squared_distance(s) > bound2) return fail("refill too far from the input");
-      } else {
-        fit::SurfaceIndex removed_index(points, removed);
-        for (const Vec3& s : from_patch)
-          if (removed_index.squared_distance(s) > bound2) return fail("refill too far from the removed surface");
-      }
-      // Removed surface -> refill.
-      fit::SurfaceIndex patch_index(all_points, out.triangles);
-      for (const Vec3& s : samples_on(points, removed))
-        if (patch_index.squared_distance(s) > bound2) return fail("removed surface too far from the refill");
-    }
-
-    // Each new triangle replaces the removed one nearest to it (its part goes on).
-    for (const Tri& t : out.triangles) {
-      Vec3 c = (all_points[t[0]] + all_points[t[1]] + all_points[t[2]]) * (1.0 / 3);
-      uint32_t best = region[0];
-      double best_d = INFINITY;
-      for (uint32_t r : region) {
-        const Tri& x = triangles[r];
-        double d = norm2((points[x[0]] + points[x[1]] + points[x[2]]) * (1.0 / 3) - c);
-        if (d < best_d) best_d = d, best = r;
-      }
-      out.replaces.push_back(best);
-    }
-    out.ok = true;
-    return out;
+    return finish(std::move(out));
   };
+
   std::string why;
   for (Mode mode : {Mode::RefineAndFair, Mode::Refine, Mode::Triangulate}) {
     if (mode == Mode::RefineAndFair && !params.fair) continue;
     Refill r = attempt(mode);
     if (r.ok) return r;
-    why += (why.empty() ? "" : "; ") + r.why;
+    if (why.find(r.why) == std::string::npos) why += (why.empty() ? "" : "; ") + r.why;
   }
   return fail(why);
 }

@@ -7,8 +7,6 @@
 
 #include <algorithm>
 #include <chrono>
-#include <cstdio>
-#include <cstdlib>
 #include <cmath>
 #include <map>
 #include <numeric>
@@ -127,6 +125,7 @@ double shortest_edge(const Work& w) {
 
 struct RegionPlan {
   std::vector<uint32_t> triangles;
+  size_t too_far = 0, area_refused = 0;  // candidates dropped by --max-deviation and eps_S
   std::vector<Move> queue;  // passing the area criterion and the deviation bound, by volume change
 };
 
@@ -150,12 +149,12 @@ RegionPlan plan_region(const Work& w, const VertexFaces& faces, std::vector<uint
       ok &= pos != w.points[v];
     }
     if (!ok) {
-      if (std::getenv("VDBWRAP_REPAIR_DEBUG")) std::fprintf(stderr, "move %d: beyond max deviation\n", int(m.kind));
+      ++plan.too_far;
       continue;
     }
     local_repair::measure_move(w.points, w.tris, faces, m);
     if (m.area_ratio >= params.area_ratio) plan.queue.push_back(std::move(m));
-    else if (std::getenv("VDBWRAP_REPAIR_DEBUG")) std::fprintf(stderr, "move %d: area ratio %.3f\n", int(m.kind), m.area_ratio);
+    else ++plan.area_refused;
   }
   // The paper's operations by increasing volume change, then the other vertices' shifts.
   std::stable_sort(plan.queue.begin(), plan.queue.end(), [](const Move& a, const Move& b) {
@@ -238,8 +237,6 @@ std::vector<TrianglePair> judge(Work& w, std::vector<Trial>& trials, const std::
         }
       }
       if (!ok) {
-        if (std::getenv("VDBWRAP_REPAIR_DEBUG"))
-          std::fprintf(stderr, "trial refused: pairs %zu -> %zu\n", pb.size(), pa.size());
         t.accepted = false;
         undo(i);
         any_rejected = true;
@@ -273,6 +270,10 @@ void run_local(Work& w, const RepairParams& params, const local_repair::LocalPar
     std::vector<RegionPlan> plans(regions.size());
     tbb::parallel_for(size_t(0), regions.size(),
                       [&](size_t i) { plans[i] = plan_region(w, faces, std::move(regions[i]), lp, params, max_dev); });
+    for (const auto& p : plans) {
+      if (p.too_far) report.refusals["local operation: would move a vertex beyond --max-deviation"] += p.too_far;
+      if (p.area_refused) report.refusals["local operation: area criterion (eps_S)"] += p.area_refused;
+    }
     std::vector<uint8_t> done(plans.size(), 0);
     size_t accepted_this_iteration = 0;
     size_t longest = 0;
@@ -308,7 +309,10 @@ void run_local(Work& w, const RepairParams& params, const local_repair::LocalPar
       });
       std::unordered_set<uint32_t> changed;
       for (size_t j = 0; j < who.size(); ++j) {
-        if (!trials[j].accepted) continue;
+        if (!trials[j].accepted) {
+          ++report.refusals["local operation: intersections not fewer, or new ones"];
+          continue;
+        }
         changed.insert(trials[j].changed.begin(), trials[j].changed.end());
         for (uint32_t t : trials[j].changed) w.touched[t] = 1;
         done[who[j]] = 1;
@@ -364,7 +368,7 @@ void run_refill(Work& w, const RepairParams& params, double max_dev, const fit::
     for (size_t i = 0; i < regions.size(); ++i) {
       if (!fills[i].ok) {
         ++report.refill_failures;
-        if (std::getenv("VDBWRAP_REPAIR_DEBUG")) std::fprintf(stderr, "refill refused (%zu triangles): %s\n", regions[i].size(), fills[i].why.c_str());
+        ++report.refusals["refill: " + fills[i].why];
         continue;
       }
       const local_repair::Refill& f = fills[i];
@@ -426,6 +430,7 @@ void run_refill(Work& w, const RepairParams& params, double max_dev, const fit::
         changed.insert(trials[k].changed.begin(), trials[k].changed.end());
       } else {
         ++report.refill_failures;
+        ++report.refusals["refill: intersections not fewer, or new ones"];
       }
     }
     w.update_pairs(changed, found);
@@ -608,8 +613,10 @@ RepairResult run_repair(const Mesh& input, const RepairParams& params, ProgressS
   }
   if (params.compute_distances) {
     StageTimer timer("distances", report.stages);
-    report.output_to_input = sampled_distance(result.mesh, input);
-    report.input_to_output = sampled_distance(input, result.mesh);
+    // Every vertex is a sample (the largest moves are at vertices); area samples every 1/400
+    // of the diagonal in between keep this quick on large meshes.
+    report.output_to_input = sampled_distance(result.mesh, input, 400);
+    report.input_to_output = sampled_distance(input, result.mesh, 400);
     if (report.diagonal > 0)
       report.deviation = std::max(report.output_to_input.max, report.input_to_output.max) / report.diagonal;
   }

@@ -4,6 +4,7 @@
 // Usable on any input (CAD tessellations, scans, the wrap's own output).
 #pragma once
 #include <cstddef>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -67,6 +68,8 @@ struct RepairReport {
   size_t local_iterations_run = 0, vertex_shifts = 0, triangle_shifts = 0;
   size_t refill_iterations_run = 0, refills = 0, refill_failures = 0;
   size_t pieces_removed = 0, piece_triangles_removed = 0;
+  // Why operations and refills were refused (reason -> how often): what stood in the way.
+  std::map<std::string, size_t> refusals;
 
   MeshDiagnostics before, after;
   DistanceStats output_to_input, input_to_output;
