@@ -559,6 +559,7 @@ RepairResult run_repair(const Mesh& input, const RepairParams& params, ProgressS
   }
   check_cancel(progress);
   Work w = make_work(input, params.float_coordinates);
+  const std::vector<Tri> input_tris = w.tris;  // the input's triangles (ids stay: deleted ones die in place)
   report.diagonal = report.before.diagonal;
   report.max_deviation = params.max_deviation.resolve(report.diagonal);
   report.accuracy = params.accuracy > 0 ? params.accuracy : std::max(1e-16, 0.05 * shortest_edge(w));
@@ -613,10 +614,21 @@ RepairResult run_repair(const Mesh& input, const RepairParams& params, ProgressS
   }
   if (params.compute_distances) {
     StageTimer timer("distances", report.stages);
-    // Every vertex is a sample (the largest moves are at vertices); area samples every 1/400
-    // of the diagonal in between keep this quick on large meshes.
-    report.output_to_input = sampled_distance(result.mesh, input, 400);
-    report.input_to_output = sampled_distance(input, result.mesh, 400);
+    // Metro-style, from the surface the repair changed (elsewhere input and output are the
+    // same surface, at distance 0) to the whole other surface, both ways.
+    Mesh before{w.origin, input_tris, {}, {}}, after{w.points, {}, {}, {}};
+    Mesh changed_before{w.origin, {}, {}, {}}, changed_after{w.points, {}, {}, {}};
+    for (size_t t = 0; t < w.tris.size(); ++t) {
+      const bool dead = local_repair::is_dead(w.tris[t]);
+      if (!dead) after.triangles.push_back(w.tris[t]);
+      if (t < input_tris.size() && (dead || w.touched[t])) changed_before.triangles.push_back(input_tris[t]);
+      if (!dead && w.touched[t]) changed_after.triangles.push_back(w.tris[t]);
+    }
+    // Every vertex is a sample (the largest moves are at vertices), area samples every 1/400
+    // of the diagonal in between.
+    report.output_to_input = sampled_distance(changed_after, before, 400);
+    report.input_to_output = sampled_distance(changed_before, after, 400);
+    report.output_to_input.diagonal = report.input_to_output.diagonal = report.diagonal;
     if (report.diagonal > 0)
       report.deviation = std::max(report.output_to_input.max, report.input_to_output.max) / report.diagonal;
   }

@@ -72,6 +72,8 @@ struct RepairReport {
   std::map<std::string, size_t> refusals;
 
   MeshDiagnostics before, after;
+  // Sampled (Metro-style) distances from the triangles the repair changed (moved, new or
+  // deleted) to the whole other surface; everywhere else the two are the same surface.
   DistanceStats output_to_input, input_to_output;
   double deviation = 0;  // two-sided max distance, as a fraction of the input's diagonal
   std::vector<StageStats> stages;
