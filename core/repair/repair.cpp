@@ -140,14 +140,32 @@ RegionPlan plan_region(const Work& w, const VertexFaces& faces, std::vector<uint
   auto crossings = local_repair::edge_crossings(w.points, w.tris, pairs);
   std::vector<Move> moves = local_repair::plan_vertex_shifts(w.points, w.tris, plan.triangles, crossings, lp, 8);
   for (Move& m : local_repair::plan_triangle_shifts(w.points, w.tris, plan.triangles, pairs, crossings, lp)) moves.push_back(std::move(m));
+  // A move reaching beyond --max-deviation (from where its vertices started) is also tried
+  // cut short at the bound, after the others: it often still clears the crossing.
+  const size_t planned = moves.size();
+  for (size_t i = 0; i < planned; ++i) {
+    bool far = false;
+    for (const auto& [v, pos] : moves[i].positions) far |= norm(pos - w.origin[v]) > max_dev;
+    if (!far) continue;
+    Move cut = moves[i];
+    cut.primary = false;
+    for (auto& [v, pos] : cut.positions) {
+      const Vec3 d = pos - w.origin[v];
+      const double len = norm(d);
+      if (len > 0.98 * max_dev) pos = w.origin[v] + d * (0.98 * max_dev / len);
+    }
+    moves.push_back(std::move(cut));
+  }
   for (Move& m : moves) {
     bool ok = true;
     for (auto& [v, pos] : m.positions) {
       if (params.float_coordinates) pos = round_to_float(pos);
       ok &= std::isfinite(pos[0]) && std::isfinite(pos[1]) && std::isfinite(pos[2]);
       ok &= norm(pos - w.origin[v]) <= max_dev;  // --max-deviation, from where the vertex started
-      ok &= pos != w.points[v];
     }
+    bool moves_something = false;
+    for (const auto& [v, pos] : m.positions) moves_something |= pos != w.points[v];
+    if (!moves_something) continue;
     if (!ok) {
       ++plan.too_far;
       continue;
@@ -156,7 +174,8 @@ RegionPlan plan_region(const Work& w, const VertexFaces& faces, std::vector<uint
     if (m.area_ratio >= params.area_ratio) plan.queue.push_back(std::move(m));
     else ++plan.area_refused;
   }
-  // The paper's operations by increasing volume change, then the other vertices' shifts.
+  // The paper's operations by increasing volume change, then the other vertices' shifts and
+  // the moves cut short.
   std::stable_sort(plan.queue.begin(), plan.queue.end(), [](const Move& a, const Move& b) {
     return a.primary != b.primary ? a.primary : a.volume_change < b.volume_change;
   });
