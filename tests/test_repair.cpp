@@ -319,6 +319,12 @@ TEST(Repair, IsotropicSphereWithNoiseEverywhereIsFullyRepaired) {
   std::normal_distribution<double> gauss(0, 0.3 * edge);
   for (Vec3& p : m.points)
     for (double& c : p) c += gauss(rng);
+  // Two parts, north and south: refilled triangles must take the part they replace.
+  m.part_names = {"north", "south"};
+  auto centroid = [](const Mesh& mesh, const Tri& t) {
+    return (mesh.points[t[0]] + mesh.points[t[1]] + mesh.points[t[2]]) * (1.0 / 3);
+  };
+  for (const Tri& t : m.triangles) m.triangle_part.push_back(centroid(m, t)[2] >= 0 ? 0 : 1);
   MeshDiagnostics before = diagnose(m);
   ASSERT_GE(before.intersecting_pairs, 10u);
   RepairParams p;
@@ -332,6 +338,19 @@ TEST(Repair, IsotropicSphereWithNoiseEverywhereIsFullyRepaired) {
   auto verdict = vdbwrap::testing::valid_closed_surface(r.mesh);
   EXPECT_TRUE(verdict.ok) << verdict.why;
   EXPECT_LE(r.report.deviation, 0.021);
+  ASSERT_EQ(r.mesh.triangle_part.size(), r.mesh.triangles.size());
+  EXPECT_EQ(r.mesh.part_names, m.part_names);
+  for (size_t t = 0; t < r.mesh.triangles.size(); ++t) {
+    Vec3 c = centroid(r.mesh, r.mesh.triangles[t]);
+    if (std::fabs(c[2]) < 0.15) continue;  // near the seam the nearest input triangle may be across it
+    size_t best = 0;
+    double best_d = INFINITY;
+    for (size_t u = 0; u < m.triangles.size(); ++u) {
+      double d = norm2(centroid(m, m.triangles[u]) - c);
+      if (d < best_d) best_d = d, best = u;
+    }
+    EXPECT_EQ(r.mesh.triangle_part[t], m.triangle_part[best]) << "triangle " << t;
+  }
 }
 
 TEST(Repair, CadPlateDentIsRepairedWithinThePapersDeviation) {
