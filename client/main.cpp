@@ -1,6 +1,7 @@
 // vdbwrap: the command-line client. A thin layer over the core API: parse options, read,
-// call wrap() or diagnose(), write, report. Exit codes: 0 ok, 2 bad arguments, 3 unreadable
-// or invalid input, 4 no valid surface produced, 5 output not written, 1 internal error.
+// call wrap(), repair() or diagnose(), write, report. Exit codes: 0 ok, 2 bad arguments, 3 unreadable
+// or invalid input, 4 no valid surface produced (repair: intersections left, output written),
+// 5 output not written, 1 internal error.
 #include <CLI/CLI.hpp>
 
 #include <cstdio>
@@ -13,6 +14,7 @@
 #include "remote.h"  // submit, wait, jobs, cancel (gRPC job service)
 #endif
 #include "io/mesh_io.h"
+#include "vdbwrap/repair.h"
 #include "vdbwrap/wrap.h"
 
 namespace {
@@ -51,6 +53,35 @@ void print_diagnostics(const std::string& name, const MeshDiagnostics& d) {
   std::printf("  verdict: %s\n", d.valid_closed_surface() ? "valid closed surface (watertight)" : "NOT a valid closed surface");
 }
 
+void print_repair_report(const std::string& output, const RepairReport& r) {
+  std::printf("repair of %zu triangles -> %s\n", r.before.triangles, output.c_str());
+  std::printf("  regions of intersecting triangles: %zu found, %zu fixed by local operations, %zu fixed by refill, "
+              "%zu left unfixed\n",
+              r.regions_found, r.fixed_by_local, r.fixed_by_refill, r.left_unfixed);
+  std::printf("  local operations: %zu iterations, %zu vertex shifts, %zu triangle shifts; refill: %zu iterations, "
+              "%zu refills, %zu refused\n",
+              r.local_iterations_run, r.vertex_shifts, r.triangle_shifts, r.refill_iterations_run, r.refills,
+              r.refill_failures);
+  for (const auto& [why, count] : r.refusals) std::printf("  refused %zux: %s\n", count, why.c_str());
+  if (r.pieces_removed > 0)
+    std::printf("  small pieces removed: %zu (%zu triangles)\n", r.pieces_removed, r.piece_triangles_removed);
+  std::printf("  intersecting pairs %zu -> %zu, border edges %zu -> %zu, non-manifold edges %zu -> %zu, triangles %zu -> %zu\n",
+              r.before.intersecting_pairs, r.after.intersecting_pairs, r.before.border_edges, r.after.border_edges,
+              r.before.nonmanifold_edges, r.after.nonmanifold_edges, r.before.triangles, r.after.triangles);
+  if (r.output_to_input.samples > 0)
+    std::printf("  largest deviation from the input (two-sided, sampled): %s of the diagonal %.6g (bound %s)\n",
+                percent(r.deviation * r.diagonal, r.diagonal).c_str(), r.diagonal,
+                percent(r.max_deviation, r.diagonal).c_str());
+  for (size_t i = 0; i < r.unfixed.size() && i < 20; ++i) {
+    const auto& u = r.unfixed[i];
+    std::printf("  unfixed region %zu: %zu triangles, %zu pairs, around (%.6g, %.6g, %.6g), box (%.6g, %.6g, %.6g)-(%.6g, %.6g, %.6g)\n",
+                i + 1, u.triangles, u.pairs, u.center[0], u.center[1], u.center[2], u.bbox_min[0], u.bbox_min[1],
+                u.bbox_min[2], u.bbox_max[0], u.bbox_max[1], u.bbox_max[2]);
+  }
+  if (r.unfixed.size() > 20) std::printf("  ... %zu more unfixed regions in the JSON report\n", r.unfixed.size() - 20);
+  std::printf("  %.2fs; %s\n", r.total_seconds, r.all_fixed() ? "no intersections left" : "INTERSECTIONS LEFT");
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -81,6 +112,55 @@ int main(int argc, char** argv) {
   bool require_valid = false;
   check_cmd->add_flag("--require-valid", require_valid,
                       "Exit with code 4 unless the mesh is a valid closed surface (for scripts)");
+
+  // repair
+  auto* repair_cmd = app.add_subcommand(
+      "repair", "Repair the self-intersections of INPUT locally (no re-wrap) and write OUTPUT");
+  repair_cmd->footer(
+      "Exit codes: 0 no intersections left; 4 intersections left (OUTPUT and the report are still written, the\n"
+      "report lists the unfixed regions); 2 bad arguments; 3 unreadable or invalid input; 5 output not written.");
+  std::string repair_input, repair_output, repair_report, max_deviation = "0.5%";
+  RepairParams rparams;
+  bool repair_quiet = false, no_fair = false, keep_pieces = false;
+  repair_cmd->add_option("input", repair_input, "Input mesh (.stl .obj .off .ply)")->required();
+  repair_cmd->add_option("-o,--output", repair_output, "Output mesh; the format follows the extension")->required();
+  repair_cmd->add_option("--report", repair_report, "Write a JSON report (regions, diagnostics before/after, deviation)");
+  repair_cmd->add_option("--max-deviation", max_deviation,
+                         "How far any vertex or refill may end from the input: model units (0.05) or percent of the "
+                         "bounding-box diagonal (0.5%)")
+      ->capture_default_str();
+  repair_cmd->add_option("--local-iterations", rparams.local_iterations, "Iterations of part 1 (vertex/triangle shifts)")
+      ->capture_default_str()
+      ->check(CLI::Range(0, 1000));
+  repair_cmd->add_option("--alpha", rparams.alpha, "Vertex shift: clearance past the crossing, share of the gap")
+      ->capture_default_str();
+  repair_cmd->add_option("--beta", rparams.beta, "Vertex shift: alpha x gap must stay under beta x the longest region edge")
+      ->capture_default_str();
+  repair_cmd->add_option("--delta", rparams.delta, "Triangle shift: eps_move = delta x accuracy ...")->capture_default_str();
+  repair_cmd->add_option("--gamma", rparams.gamma, "... capped at gamma x the longest region edge")->capture_default_str();
+  repair_cmd->add_option("--area-ratio", rparams.area_ratio,
+                         "eps_S: least min/max area ratio of the triangles a local operation changes")
+      ->capture_default_str();
+  repair_cmd->add_option("--accuracy", rparams.accuracy,
+                         "Model accuracy in model units (0: 0.05 x the shortest edge)")
+      ->capture_default_str();
+  repair_cmd->add_option("--refill-iterations", rparams.refill_iterations, "Iterations of part 2 (remove and refill)")
+      ->capture_default_str()
+      ->check(CLI::Range(0, 100));
+  repair_cmd->add_option("--refill-area-ratio", rparams.refill_area_ratio,
+                         "Least min/max area ratio of a removed region and its refill")
+      ->capture_default_str();
+  repair_cmd->add_flag("--no-fair", no_fair, "Refine refills but do not fair them");
+  repair_cmd->add_flag("--keep-small-pieces", keep_pieces, "Do not delete small pieces the repair leaves behind");
+  repair_cmd->add_option("--small-piece-triangles", rparams.small_piece_triangles,
+                         "A leftover piece is small with at most this many triangles ...")
+      ->capture_default_str();
+  repair_cmd->add_option("--small-piece-area", rparams.small_piece_area, "... and at most this fraction of the total area")
+      ->capture_default_str();
+  repair_cmd->add_option("--threads", rparams.threads, "Worker threads (0: all cores)")
+      ->capture_default_str()
+      ->check(CLI::NonNegativeNumber);
+  repair_cmd->add_flag("-q,--quiet", repair_quiet, "No progress on stderr");
 
 #ifdef VDBWRAP_WITH_REMOTE
   vdbwrap::remote::RemoteCommands remote(app);
@@ -135,6 +215,24 @@ int main(int argc, char** argv) {
                      percent(r.output_to_input.p95, r.diagonal).c_str(), r.total_seconds,
                      report_path.empty() ? "" : "; report ", report_path.c_str());
       return 0;
+    }
+    if (*repair_cmd) {
+      rparams.max_deviation = Length::parse(max_deviation);
+      rparams.fair = !no_fair;
+      rparams.remove_small_pieces = !keep_pieces;
+      // Binary STL stores floats: repair what will be written.
+      rparams.float_coordinates = io::format_from_extension(repair_output) == io::Format::Stl;
+      if (io::format_from_extension(repair_output) == io::Format::Unknown)
+        throw Error(ErrorKind::InvalidArgument, repair_output + ": unknown output format (use .stl, .obj, .off or .ply)");
+      cli::StderrProgress progress(repair_quiet);
+      progress.progress("read", 0.0, repair_input);
+      Mesh mesh = io::read_mesh(repair_input);
+      RepairResult result = repair(mesh, rparams, &progress);
+      progress.progress("write", 0.0, repair_output);
+      io::write_mesh(result.mesh, repair_output);
+      if (!repair_report.empty()) write_text(repair_report, to_json(result.report));
+      print_repair_report(repair_output, result.report);
+      return result.report.all_fixed() ? 0 : exit_code(ErrorKind::WrapFailed);
     }
     if (*check_cmd) {
       Mesh mesh = io::read_mesh(check_input);

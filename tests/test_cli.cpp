@@ -220,4 +220,59 @@ TEST_F(Cli, ParameterFilesInJsonAndYamlAndTheCommandLineOverrides) {
   CliRun part = run("wrap " + in + " -o " + out + " --params " + unknown_part);
   EXPECT_EQ(part.code, 2);
   EXPECT_NE(part.err.find("warm"), std::string::npos) << part.err;
+
+// ---- repair ---------------------------------------------------------------------------
+
+namespace {
+std::string read_text(const fs::path& p) {
+  std::ifstream in(p);
+  return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+}
+}  // namespace
+
+TEST_F(Cli, RepairFixesADentAndReportsIt) {
+  Mesh m = vdbwrap::testing::cylinder_mesh({0, 0, 0}, 1.0, 0.02, 128);
+  m.points[1][2] = -0.004;  // the top hub through the bottom
+  std::string in = (dir / "dent.obj").string();
+  io::write_mesh(m, in);
+  CliRun r = run("repair " + in + " -o " + (dir / "fixed.stl").string() + " --report " + (dir / "r.json").string());
+  ASSERT_EQ(r.code, 0) << r.err;
+  Mesh out = io::read_mesh((dir / "fixed.stl").string());  // single precision, as written
+  EXPECT_EQ(diagnose(out).intersecting_pairs, 0u);
+  std::string json = read_text(dir / "r.json");
+  EXPECT_NE(json.find("\"all_fixed\": true"), std::string::npos) << json;
+  EXPECT_NE(json.find("\"found\": 1"), std::string::npos);
+  EXPECT_NE(json.find("\"left_unfixed\": 0"), std::string::npos);
+  EXPECT_NE(json.find("max_deviation_fraction_of_diagonal"), std::string::npos);
+}
+
+TEST_F(Cli, RepairWithIntersectionsLeftExitsFourAndStillWrites) {
+  // A pin pushed into a plate: the two solids cross along a curve, beyond local repair.
+  Mesh m;
+  vdbwrap::testing::add_cylinder(m, {0, 0, 0}, 1.0, 0.02, 128, 0);
+  vdbwrap::testing::add_cylinder(m, {0.3, 0.2, 0.015}, 0.1, 0.3, 32, 1);
+  std::string in = (dir / "pin.ply").string();
+  io::write_mesh(m, in);
+  CliRun r = run("repair " + in + " -o " + (dir / "out.ply").string() + " --report " + (dir / "r.json").string());
+  EXPECT_EQ(r.code, 4) << r.err;
+  Mesh out = io::read_mesh((dir / "out.ply").string());
+  EXPECT_EQ(out.part_names.size(), 2u);
+  std::string json = read_text(dir / "r.json");
+  EXPECT_NE(json.find("\"all_fixed\": false"), std::string::npos) << json;
+  EXPECT_NE(json.find("\"left_unfixed\": 1"), std::string::npos) << json;
+  EXPECT_NE(json.find("\"center\""), std::string::npos) << json;  // where the unfixed region is
+}
+
+TEST_F(Cli, RepairErrors) {
+  CliRun missing = run("repair " + (dir / "nope.stl").string() + " -o " + (dir / "o.stl").string());
+  EXPECT_EQ(missing.code, 3);
+  EXPECT_NE(missing.err.find("nope.stl"), std::string::npos) << missing.err;
+  EXPECT_EQ(run("repair " + file("empty.stl", "") + " -o " + (dir / "o.stl").string()).code, 3);
+  std::string in = vdbwrap::testing::data_path("fuze.obj");
+  EXPECT_EQ(run("repair " + in + " -o " + (dir / "o.xyz").string()).code, 2);
+  EXPECT_EQ(run("repair " + in + " -o " + (dir / "o.stl").string() + " --max-deviation -1").code, 2);
+  EXPECT_EQ(run("repair " + in + " -o " + (dir / "o.stl").string() + " --area-ratio 2").code, 2);
+  EXPECT_EQ(run("repair " + in).code, 2);  // no output
+  CliRun ok = run("repair " + in + " -o " + (dir / "o.obj").string());  // clean: nothing to do
+  EXPECT_EQ(ok.code, 0) << ok.err;
 }

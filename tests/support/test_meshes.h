@@ -133,4 +133,72 @@ inline SurfaceVerdict valid_closed_surface(const Mesh& unwelded) {
   return out;
 }
 
+// Icosphere (subdivided icosahedron, projected): an isotropic mesh.
+inline Mesh icosphere_mesh(double r, int level) {
+  const double t = (1 + std::sqrt(5.0)) / 2;
+  Mesh m;
+  m.points = {{-1, t, 0}, {1, t, 0}, {-1, -t, 0}, {1, -t, 0}, {0, -1, t}, {0, 1, t},
+              {0, -1, -t}, {0, 1, -t}, {t, 0, -1}, {t, 0, 1}, {-t, 0, -1}, {-t, 0, 1}};
+  m.triangles = {{0, 11, 5}, {0, 5, 1},  {0, 1, 7},  {0, 7, 10}, {0, 10, 11}, {1, 5, 9}, {5, 11, 4},
+                 {11, 10, 2}, {10, 7, 6}, {7, 1, 8}, {3, 9, 4},  {3, 4, 2},   {3, 2, 6}, {3, 6, 8},
+                 {3, 8, 9},  {4, 9, 5},  {2, 4, 11}, {6, 2, 10}, {8, 6, 7},   {9, 8, 1}};
+  for (int l = 0; l < level; ++l) {
+    std::map<std::pair<uint32_t, uint32_t>, uint32_t> mid;
+    auto middle = [&](uint32_t a, uint32_t b) {
+      auto key = std::make_pair(std::min(a, b), std::max(a, b));
+      auto it = mid.find(key);
+      if (it != mid.end()) return it->second;
+      const Vec3 &p = m.points[a], &q = m.points[b];
+      m.points.push_back({(p[0] + q[0]) / 2, (p[1] + q[1]) / 2, (p[2] + q[2]) / 2});
+      return mid[key] = uint32_t(m.points.size() - 1);
+    };
+    std::vector<Tri> next;
+    for (const Tri& f : m.triangles) {
+      uint32_t ab = middle(f[0], f[1]), bc = middle(f[1], f[2]), ca = middle(f[2], f[0]);
+      next.push_back({f[0], ab, ca});
+      next.push_back({f[1], bc, ab});
+      next.push_back({f[2], ca, bc});
+      next.push_back({ab, bc, ca});
+    }
+    m.triangles = std::move(next);
+  }
+  for (Vec3& p : m.points) {
+    double n = std::sqrt(p[0] * p[0] + p[1] * p[1] + p[2] * p[2]);
+    for (double& c : p) c *= r / n;
+  }
+  return m;
+}
+
+// Closed cylinder tessellated like a CAD export: caps are fans of long thin wedges around a
+// hub, the side one ring of long thin quads (two triangles each).
+inline void add_cylinder(Mesh& m, const Vec3& base, double r, double h, int segments, int32_t part = 0) {
+  const uint32_t o = uint32_t(m.points.size());
+  m.points.push_back(base);
+  m.points.push_back({base[0], base[1], base[2] + h});
+  for (int z = 0; z < 2; ++z)
+    for (int k = 0; k < segments; ++k) {
+      double a = 2 * M_PI * k / segments;
+      m.points.push_back({base[0] + r * std::cos(a), base[1] + r * std::sin(a), base[2] + z * h});
+    }
+  auto b = [&](int k) { return o + 2 + uint32_t(k % segments); };
+  auto t = [&](int k) { return o + 2 + uint32_t(segments + k % segments); };
+  for (int k = 0; k < segments; ++k) {
+    m.triangles.push_back({o, b(k + 1), b(k)});
+    m.triangles.push_back({o + 1, t(k), t(k + 1)});
+    m.triangles.push_back({b(k), b(k + 1), t(k + 1)});
+    m.triangles.push_back({b(k), t(k + 1), t(k)});
+  }
+  if (part > 0 || !m.triangle_part.empty()) {
+    m.triangle_part.resize(m.triangles.size() - 4 * size_t(segments), 0);
+    m.triangle_part.resize(m.triangles.size(), part);
+    while (int32_t(m.part_names.size()) <= part) m.part_names.push_back("part" + std::to_string(m.part_names.size()));
+  }
+}
+
+inline Mesh cylinder_mesh(const Vec3& base, double r, double h, int segments) {
+  Mesh m;
+  add_cylinder(m, base, r, h, segments);
+  return m;
+}
+
 }  // namespace vdbwrap::testing

@@ -1,0 +1,15 @@
+// Rounding coordinates to single precision (binary STL stores floats).
+#pragma once
+#include "vdbwrap/mesh.h"
+
+namespace vdbwrap {
+
+// Through a volatile float: GCC 12 at -O2/-O3 folds double(float(x)) away when it vectorizes
+// two of the three coordinates (SLP), so the plain idiom leaves x and y unrounded.
+inline double round_to_float(double x) {
+  volatile float f = static_cast<float>(x);
+  return static_cast<double>(f);
+}
+inline Vec3 round_to_float(const Vec3& p) { return {round_to_float(p[0]), round_to_float(p[1]), round_to_float(p[2])}; }
+
+}  // namespace vdbwrap

@@ -1,0 +1,43 @@
+// Part 2 of the repair: remove a region and fill its hole from the contour vertices (Liepa
+// 2003: minimal-area triangulation, then refinement), fair the new vertices (bi-Laplacian,
+// Botsch & Sorkine 2008), and check the result. A pure function: the mesh is not touched.
+#pragma once
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "repair/regions.h"
+#include "vdbwrap/mesh.h"
+
+namespace vdbwrap::fit {
+class SurfaceIndex;
+}
+
+namespace vdbwrap::local_repair {
+
+struct RefillParams {
+  double area_ratio = 0.5;      // min/max of the region's and the refill's area must reach this
+  double max_deviation = 0;     // model units; 0: no bound
+  bool fair = true;
+  bool float_coordinates = false;
+};
+
+struct Refill {
+  bool ok = false;
+  std::string why;                 // when not ok
+  std::vector<Vec3> new_points;    // to append to the mesh's points
+  // New triangles: an index below points.size() is a contour vertex, one at or above it is
+  // new_points[index - points.size()].
+  std::vector<Tri> triangles;
+  std::vector<uint32_t> replaces;  // per new triangle, the nearest removed triangle (for its part)
+  bool faired = false;
+};
+
+// The refill of `region` (sorted live triangle ids). `original`, when given, is the input
+// surface: new points must stay within max_deviation of it, as the removed surface must
+// stay within max_deviation of the refill.
+Refill refill_region(const std::vector<Vec3>& points, const std::vector<Tri>& triangles, const VertexFaces& faces,
+                     const std::vector<uint32_t>& region, const RefillParams& params,
+                     const fit::SurfaceIndex* original = nullptr);
+
+}  // namespace vdbwrap::local_repair

@@ -1,0 +1,667 @@
+// The repair pipeline (spec: "Intersection repair"): find the intersecting pairs, group them
+// into regions, part 1 (vertex and triangle shifts), part 2 (remove and refill), removal of
+// small leftovers, then the report. Every change is kept only where the region's
+// intersection count drops and no new intersecting pair appears.
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <map>
+#include <numeric>
+#include <set>
+#include <unordered_map>
+#include <unordered_set>
+
+#include "check/intersections.h"
+#include "common/float_round.h"
+#include "common/stage_timer.h"
+#include "common/vec.h"
+#include "fit/surface_index.h"
+#include "repair/local_operations.h"
+#include "repair/refill.h"
+#include "repair/regions.h"
+#include "vdbwrap/repair.h"
+
+namespace vdbwrap {
+namespace {
+
+using check::TrianglePair;
+using local_repair::Move;
+using local_repair::VertexFaces;
+
+void check_cancel(ProgressSink* progress) {
+  if (progress && progress->cancelled()) throw Error(ErrorKind::Cancelled, "cancelled");
+}
+
+void validate(const RepairParams& p) {
+  auto bad = [](const std::string& what) { throw Error(ErrorKind::InvalidArgument, "repair: " + what); };
+  if (p.local_iterations < 0 || p.local_iterations > 1000) bad("local iterations must be 0..1000");
+  if (p.refill_iterations < 0 || p.refill_iterations > 100) bad("refill iterations must be 0..100");
+  if (!(p.alpha > 0 && p.alpha < 1)) bad("alpha must be in (0, 1)");
+  if (!(p.beta > 0)) bad("beta must be positive");
+  if (!(p.delta > 0)) bad("delta must be positive");
+  if (!(p.gamma > 0)) bad("gamma must be positive");
+  if (!(p.area_ratio > 0 && p.area_ratio <= 1)) bad("area ratio (eps_S) must be in (0, 1]");
+  if (!(p.refill_area_ratio > 0 && p.refill_area_ratio <= 1)) bad("refill area ratio must be in (0, 1]");
+  if (!(p.accuracy >= 0) || !std::isfinite(p.accuracy)) bad("accuracy must be 0 (automatic) or positive");
+  if (!(p.max_deviation.value > 0) || !std::isfinite(p.max_deviation.value)) bad("max deviation must be positive");
+  if (p.small_piece_triangles < 0) bad("small piece triangles must not be negative");
+  if (!(p.small_piece_area >= 0 && p.small_piece_area <= 1)) bad("small piece area must be in [0, 1]");
+}
+
+
+bool touches(const TrianglePair& p, const std::unordered_set<uint32_t>& set) { return set.count(p.a) || set.count(p.b); }
+
+// The mesh being repaired. Deleted triangles keep their slot (local_repair::dead_triangle).
+struct Work {
+  std::vector<Vec3> points, origin;  // origin: where each vertex started (new ones: where made)
+  std::vector<Tri> tris;
+  std::vector<int32_t> part;         // per triangle
+  std::vector<int32_t> region_of;    // per triangle: the input region it belongs to, or -1
+  std::vector<uint8_t> touched;      // per triangle: changed by the repair
+  std::vector<TrianglePair> pairs;   // current intersecting pairs (a < b), sorted
+
+  void set_pairs(std::vector<TrianglePair> p) {
+    p.erase(std::remove_if(p.begin(), p.end(), [](const TrianglePair& x) { return x.a == x.b; }), p.end());
+    std::sort(p.begin(), p.end(), [](const TrianglePair& u, const TrianglePair& v) { return u.a != v.a ? u.a < v.a : u.b < v.b; });
+    pairs = std::move(p);
+  }
+  // Replaces the pairs touching `changed` by `found` (the pairs found again around them).
+  void update_pairs(const std::unordered_set<uint32_t>& changed, const std::vector<TrianglePair>& found) {
+    std::vector<TrianglePair> p;
+    for (const auto& x : pairs)
+      if (!touches(x, changed)) p.push_back(x);
+    p.insert(p.end(), found.begin(), found.end());
+    set_pairs(std::move(p));
+  }
+};
+
+// Exact weld (bit-identical points merge), parts per triangle, finite coordinates.
+Work make_work(const Mesh& input, bool float_coordinates) {
+  Work w;
+  std::map<Vec3, uint32_t> index;
+  std::vector<uint32_t> remap(input.points.size());
+  for (size_t i = 0; i < input.points.size(); ++i) {
+    Vec3 p = input.points[i];
+    if (!std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2]))
+      throw Error(ErrorKind::InvalidInput, "repair: point " + std::to_string(i) + " is not finite");
+    if (float_coordinates) p = round_to_float(p);
+    auto [it, added] = index.emplace(p, uint32_t(w.points.size()));
+    if (added) w.points.push_back(p);
+    remap[i] = it->second;
+  }
+  for (size_t t = 0; t < input.triangles.size(); ++t) {
+    Tri tri = input.triangles[t];
+    for (uint32_t& v : tri) {
+      if (v >= remap.size())
+        throw Error(ErrorKind::InvalidInput, "repair: triangle " + std::to_string(t) + " has a vertex index out of range");
+      v = remap[v];
+    }
+    if (local_repair::is_dead(tri)) continue;  // all three corners equal: nothing there
+    w.tris.push_back(tri);
+    w.part.push_back(input.part_of(t));
+  }
+  if (w.tris.empty()) throw Error(ErrorKind::InvalidInput, "repair: the mesh has no triangles");
+  w.origin = w.points;
+  w.region_of.assign(w.tris.size(), -1);
+  w.touched.assign(w.tris.size(), 0);
+  return w;
+}
+
+double shortest_edge(const Work& w) {
+  double lo = INFINITY;
+  for (const Tri& t : w.tris)
+    for (int k = 0; k < 3; ++k) {
+      double len = norm(w.points[t[(k + 1) % 3]] - w.points[t[k]]);
+      if (len > 0) lo = std::min(lo, len);
+    }
+  return std::isfinite(lo) ? lo : 0;
+}
+
+// ---------------------------------------------------------------------------------------
+// Part 1: local operations.
+
+struct RegionPlan {
+  std::vector<uint32_t> triangles;
+  size_t too_far = 0, area_refused = 0;  // candidates dropped by --max-deviation and eps_S
+  std::vector<Move> queue;  // passing the area criterion and the deviation bound, by volume change
+};
+
+RegionPlan plan_region(const Work& w, const VertexFaces& faces, std::vector<uint32_t> region,
+                       const local_repair::LocalParams& lp, const RepairParams& params, double max_dev) {
+  RegionPlan plan;
+  plan.triangles = std::move(region);
+  std::unordered_set<uint32_t> in(plan.triangles.begin(), plan.triangles.end());
+  std::vector<TrianglePair> pairs;
+  for (const auto& p : w.pairs)
+    if (in.count(p.a) || in.count(p.b)) pairs.push_back(p);
+  auto crossings = local_repair::edge_crossings(w.points, w.tris, pairs);
+  std::vector<Move> moves = local_repair::plan_vertex_shifts(w.points, w.tris, plan.triangles, crossings, lp, 8);
+  for (Move& m : local_repair::plan_triangle_shifts(w.points, w.tris, plan.triangles, pairs, crossings, lp)) moves.push_back(std::move(m));
+  // A move reaching beyond --max-deviation (from where its vertices started) is also tried
+  // cut short at the bound, after the others: it often still clears the crossing.
+  const size_t planned = moves.size();
+  for (size_t i = 0; i < planned; ++i) {
+    bool far = false;
+    for (const auto& [v, pos] : moves[i].positions) far |= norm(pos - w.origin[v]) > max_dev;
+    if (!far) continue;
+    Move cut = moves[i];
+    cut.primary = false;
+    for (auto& [v, pos] : cut.positions) {
+      const Vec3 d = pos - w.origin[v];
+      const double len = norm(d);
+      if (len > 0.98 * max_dev) pos = w.origin[v] + d * (0.98 * max_dev / len);
+    }
+    moves.push_back(std::move(cut));
+  }
+  for (Move& m : moves) {
+    bool ok = true;
+    for (auto& [v, pos] : m.positions) {
+      if (params.float_coordinates) pos = round_to_float(pos);
+      ok &= std::isfinite(pos[0]) && std::isfinite(pos[1]) && std::isfinite(pos[2]);
+      ok &= norm(pos - w.origin[v]) <= max_dev;  // --max-deviation, from where the vertex started
+    }
+    bool moves_something = false;
+    for (const auto& [v, pos] : m.positions) moves_something |= pos != w.points[v];
+    if (!moves_something) continue;
+    if (!ok) {
+      ++plan.too_far;
+      continue;
+    }
+    local_repair::measure_move(w.points, w.tris, faces, m);
+    if (m.area_ratio >= params.area_ratio) plan.queue.push_back(std::move(m));
+    else ++plan.area_refused;
+  }
+  // The paper's operations by increasing volume change, then the other vertices' shifts and
+  // the moves cut short.
+  std::stable_sort(plan.queue.begin(), plan.queue.end(), [](const Move& a, const Move& b) {
+    return a.primary != b.primary ? a.primary : a.volume_change < b.volume_change;
+  });
+  return plan;
+}
+
+// One trial: a change per region applied at once, judged per region.
+struct Trial {
+  std::vector<uint32_t> watched;  // triangles whose pairs decide (region + changed)
+  std::vector<uint32_t> changed;  // triangles the change made or moved
+  std::vector<uint32_t> gone;     // triangles it deleted (their old pairs go with them)
+  std::unordered_set<uint32_t> partners_allowed;  // refill: the outside triangles it may still meet
+  bool refill = false;
+  bool accepted = true;
+};
+
+// Judges every trial: the intersecting pairs around its triangles must drop in number, none
+// may be new (refills: new triangles may only meet what the region met before), and no
+// triangle may become degenerate. Returns the pairs found around the accepted trials'
+// changed triangles. `undo(i)` takes trial i back; rejected trials are undone here.
+template <typename Undo>
+std::vector<TrianglePair> judge(Work& w, std::vector<Trial>& trials, const std::unordered_set<uint32_t>& degenerate_before,
+                                Undo undo) {
+  std::set<std::pair<uint32_t, uint32_t>> before;
+  for (const auto& p : w.pairs) before.insert({p.a, p.b});
+  std::vector<TrianglePair> found;
+  for (int round = 0;; ++round) {
+    std::vector<uint32_t> changed;
+    for (const Trial& t : trials)
+      if (t.accepted) changed.insert(changed.end(), t.changed.begin(), t.changed.end());
+    std::sort(changed.begin(), changed.end());
+    changed.erase(std::unique(changed.begin(), changed.end()), changed.end());
+    found = check::find_intersecting_pairs_with(w.points, w.tris, changed);
+    std::unordered_set<uint32_t> changed_set(changed.begin(), changed.end());
+    for (const Trial& t : trials)
+      if (t.accepted) changed_set.insert(t.gone.begin(), t.gone.end());
+    // Degenerate triangles come back as (t, t): new ones fail their trial.
+    std::unordered_set<uint32_t> new_degenerate;
+    std::vector<TrianglePair> real;
+    for (const auto& p : found) {
+      if (p.a == p.b) {
+        if (!degenerate_before.count(p.a)) new_degenerate.insert(p.a);
+      } else {
+        real.push_back(p);
+      }
+    }
+    // The pairs after the trials: the old ones away from the change, plus those found.
+    std::unordered_map<uint32_t, std::vector<uint32_t>> after;  // triangle -> partners
+    for (const auto& p : w.pairs)
+      if (!touches(p, changed_set)) after[p.a].push_back(p.b), after[p.b].push_back(p.a);
+    for (const auto& p : real) after[p.a].push_back(p.b), after[p.b].push_back(p.a);
+    std::unordered_map<uint32_t, std::vector<uint32_t>> prior;
+    for (const auto& p : w.pairs) prior[p.a].push_back(p.b), prior[p.b].push_back(p.a);
+
+    bool any_rejected = false;
+    for (size_t i = 0; i < trials.size(); ++i) {
+      Trial& t = trials[i];
+      if (!t.accepted) continue;
+      std::unordered_set<uint32_t> watched(t.watched.begin(), t.watched.end());
+      std::set<std::pair<uint32_t, uint32_t>> pb, pa;
+      for (uint32_t x : t.watched) {
+        if (auto it = prior.find(x); it != prior.end())
+          for (uint32_t y : it->second) pb.insert({std::min(x, y), std::max(x, y)});
+        if (auto it = after.find(x); it != after.end())
+          for (uint32_t y : it->second) pa.insert({std::min(x, y), std::max(x, y)});
+      }
+      bool ok = pa.size() < pb.size();
+      for (uint32_t x : t.changed) ok &= !new_degenerate.count(x);
+      for (const auto& pr : pa) {
+        if (!ok) break;
+        if (t.refill) {
+          // New triangles only meet triangles outside that the region met before.
+          bool a_in = watched.count(pr.first) > 0, b_in = watched.count(pr.second) > 0;
+          if (a_in && b_in) ok = false;
+          else ok = t.partners_allowed.count(a_in ? pr.second : pr.first) > 0;
+        } else {
+          ok = before.count(pr) > 0;
+        }
+      }
+      if (!ok) {
+        t.accepted = false;
+        undo(i);
+        any_rejected = true;
+      }
+    }
+    if (!any_rejected) break;  // undone trials may have met accepted ones: check again
+  }
+  std::vector<TrianglePair> out;
+  for (const auto& p : found)
+    if (p.a != p.b) out.push_back(p);
+  return out;
+}
+
+std::unordered_set<uint32_t> degenerate_among(const Work& w, const std::vector<uint32_t>& tris) {
+  std::unordered_set<uint32_t> out;
+  for (uint32_t t : tris)
+    if (!local_repair::is_dead(w.tris[t]) && check::triangle_is_degenerate(w.points, w.tris[t])) out.insert(t);
+  return out;
+}
+
+void run_local(Work& w, const RepairParams& params, const local_repair::LocalParams& lp, double max_dev, RepairReport& report,
+               ProgressSink* progress) {
+  for (int iter = 0; iter < params.local_iterations && !w.pairs.empty(); ++iter) {
+    check_cancel(progress);
+    if (progress)
+      progress->progress("repair: local operations", double(iter) / params.local_iterations,
+                         std::to_string(w.pairs.size()) + " intersecting pairs");
+    report.local_iterations_run = size_t(iter + 1);
+    const VertexFaces faces = local_repair::vertex_faces(w.points.size(), w.tris);
+    auto regions = local_repair::group_regions(w.tris, local_repair::triangles_of(w.pairs), w.pairs);
+    std::vector<RegionPlan> plans(regions.size());
+    tbb::parallel_for(size_t(0), regions.size(),
+                      [&](size_t i) { plans[i] = plan_region(w, faces, std::move(regions[i]), lp, params, max_dev); });
+    for (const auto& p : plans) {
+      if (p.too_far) report.refusals["local operation: would move a vertex beyond --max-deviation"] += p.too_far;
+      if (p.area_refused) report.refusals["local operation: area criterion (eps_S)"] += p.area_refused;
+    }
+    std::vector<uint8_t> done(plans.size(), 0);
+    size_t accepted_this_iteration = 0;
+    size_t longest = 0;
+    for (const auto& p : plans) longest = std::max(longest, p.queue.size());
+    // Round k applies each unresolved region's k-th operation, all regions at once.
+    for (size_t k = 0; k < longest; ++k) {
+      check_cancel(progress);
+      std::vector<size_t> who;
+      std::vector<Trial> trials;
+      std::vector<std::vector<std::pair<uint32_t, Vec3>>> saved;
+      for (size_t i = 0; i < plans.size(); ++i) {
+        if (done[i] || k >= plans[i].queue.size()) continue;
+        const Move& m = plans[i].queue[k];
+        Trial t;
+        t.changed = local_repair::triangles_moved(faces, m);
+        t.watched = t.changed;
+        t.watched.insert(t.watched.end(), plans[i].triangles.begin(), plans[i].triangles.end());
+        who.push_back(i);
+        trials.push_back(std::move(t));
+        saved.emplace_back();
+      }
+      if (trials.empty()) break;
+      std::vector<uint32_t> all_changed;
+      for (const auto& t : trials) all_changed.insert(all_changed.end(), t.changed.begin(), t.changed.end());
+      const auto degenerate_before = degenerate_among(w, all_changed);
+      for (size_t j = 0; j < who.size(); ++j)
+        for (const auto& [v, pos] : plans[who[j]].queue[k].positions) {
+          saved[j].push_back({v, w.points[v]});
+          w.points[v] = pos;
+        }
+      auto found = judge(w, trials, degenerate_before, [&](size_t j) {
+        for (const auto& [v, pos] : saved[j]) w.points[v] = pos;
+      });
+      std::unordered_set<uint32_t> changed;
+      for (size_t j = 0; j < who.size(); ++j) {
+        if (!trials[j].accepted) {
+          ++report.refusals["local operation: intersections not fewer, or new ones"];
+          continue;
+        }
+        changed.insert(trials[j].changed.begin(), trials[j].changed.end());
+        for (uint32_t t : trials[j].changed) w.touched[t] = 1;
+        done[who[j]] = 1;
+        ++accepted_this_iteration;
+        if (plans[who[j]].queue[k].kind == Move::Kind::VertexShift) ++report.vertex_shifts;
+        else ++report.triangle_shifts;
+      }
+      w.update_pairs(changed, found);
+    }
+    if (accepted_this_iteration == 0) break;  // nothing moved: the next iteration would be the same
+  }
+}
+
+// ---------------------------------------------------------------------------------------
+// Part 2: remove and refill.
+
+void run_refill(Work& w, const RepairParams& params, double max_dev, const fit::SurfaceIndex& original,
+                RepairReport& report, ProgressSink* progress) {
+  std::vector<uint32_t> T = local_repair::triangles_of(w.pairs);
+  local_repair::RefillParams rp;
+  rp.area_ratio = params.refill_area_ratio;
+  rp.max_deviation = max_dev;
+  rp.fair = params.fair;
+  rp.float_coordinates = params.float_coordinates;
+  for (int j = 0; j < params.refill_iterations && !w.pairs.empty(); ++j) {
+    check_cancel(progress);
+    if (progress)
+      progress->progress("repair: remove and refill", double(j) / params.refill_iterations,
+                         std::to_string(w.pairs.size()) + " intersecting pairs");
+    report.refill_iterations_run = size_t(j + 1);
+    VertexFaces faces = local_repair::vertex_faces(w.points.size(), w.tris);
+    T.erase(std::remove_if(T.begin(), T.end(), [&](uint32_t t) { return local_repair::is_dead(w.tris[t]); }), T.end());
+    T = local_repair::grow_ring(w.tris, faces, T);
+    auto regions = local_repair::group_regions(w.tris, T, {});
+    // Only regions that still hold an intersecting triangle are refilled.
+    std::unordered_set<uint32_t> intersecting;
+    for (const auto& p : w.pairs) intersecting.insert(p.a), intersecting.insert(p.b);
+    regions.erase(std::remove_if(regions.begin(), regions.end(),
+                                 [&](const std::vector<uint32_t>& r) {
+                                   return std::none_of(r.begin(), r.end(), [&](uint32_t t) { return intersecting.count(t) > 0; });
+                                 }),
+                  regions.end());
+    std::vector<local_repair::Refill> fills(regions.size());
+    tbb::parallel_for(size_t(0), regions.size(), [&](size_t i) {
+      fills[i] = local_repair::refill_region(w.points, w.tris, faces, regions[i], rp, &original);
+    });
+
+    // Apply every refill that was built; judge them together.
+    const uint32_t seen = uint32_t(w.points.size());  // refills number new points from here
+    std::vector<Trial> trials;
+    std::vector<size_t> who;
+    std::vector<std::vector<Tri>> removed;
+    for (size_t i = 0; i < regions.size(); ++i) {
+      if (!fills[i].ok) {
+        ++report.refill_failures;
+        ++report.refusals["refill: " + fills[i].why];
+        continue;
+      }
+      const local_repair::Refill& f = fills[i];
+      // The new triangles belong to the input region most of the removed ones came from.
+      int32_t tag = -1;
+      {
+        std::map<int32_t, size_t> votes;
+        for (uint32_t t : regions[i])
+          if (w.region_of[t] >= 0) ++votes[w.region_of[t]];
+        size_t most = 0;
+        for (const auto& [r, n] : votes)
+          if (n > most) most = n, tag = r;
+      }
+      Trial trial;
+      trial.refill = true;
+      std::unordered_set<uint32_t> region_set(regions[i].begin(), regions[i].end());
+      for (const auto& p : w.pairs) {
+        bool a_in = region_set.count(p.a) > 0, b_in = region_set.count(p.b) > 0;
+        if (a_in != b_in) trial.partners_allowed.insert(a_in ? p.b : p.a);
+      }
+      const uint32_t point_base = uint32_t(w.points.size());
+      w.points.insert(w.points.end(), f.new_points.begin(), f.new_points.end());
+      w.origin.insert(w.origin.end(), f.new_points.begin(), f.new_points.end());
+      removed.emplace_back();
+      for (uint32_t t : regions[i]) {
+        removed.back().push_back(w.tris[t]);
+        w.tris[t] = local_repair::dead_triangle();
+      }
+      for (size_t k = 0; k < f.triangles.size(); ++k) {
+        Tri t = f.triangles[k];
+        for (uint32_t& v : t)
+          if (v >= seen) v = point_base + (v - seen);
+        uint32_t id = uint32_t(w.tris.size());
+        w.tris.push_back(t);
+        w.part.push_back(w.part[f.replaces[k]]);
+        w.region_of.push_back(tag);
+        w.touched.push_back(1);
+        trial.changed.push_back(id);
+      }
+      trial.gone = regions[i];
+      trial.watched = regions[i];
+      trial.watched.insert(trial.watched.end(), trial.changed.begin(), trial.changed.end());
+      trials.push_back(std::move(trial));
+      who.push_back(i);
+    }
+    if (trials.empty()) continue;
+    auto found = judge(w, trials, {}, [&](size_t k) {
+      // Put the region back; its new triangles die (their points stay unused until compaction).
+      for (uint32_t t : trials[k].changed) w.tris[t] = local_repair::dead_triangle();
+      const auto& region = regions[who[k]];
+      for (size_t q = 0; q < region.size(); ++q) w.tris[region[q]] = removed[k][q];
+    });
+    std::unordered_set<uint32_t> changed;
+    for (size_t k = 0; k < trials.size(); ++k) {
+      const auto& region = regions[who[k]];
+      if (trials[k].accepted) {
+        ++report.refills;
+        changed.insert(region.begin(), region.end());
+        changed.insert(trials[k].changed.begin(), trials[k].changed.end());
+      } else {
+        ++report.refill_failures;
+        ++report.refusals["refill: intersections not fewer, or new ones"];
+      }
+    }
+    w.update_pairs(changed, found);
+  }
+}
+
+// ---------------------------------------------------------------------------------------
+// Small pieces the repair left behind.
+
+void remove_small_pieces(Work& w, const RepairParams& params, double max_dev, RepairReport& report) {
+  const size_t n = w.points.size();
+  std::vector<uint32_t> parent(n);
+  std::iota(parent.begin(), parent.end(), 0);
+  auto find = [&](uint32_t x) {
+    while (parent[x] != x) x = parent[x] = parent[parent[x]];
+    return x;
+  };
+  double total_area = 0;
+  for (const Tri& t : w.tris) {
+    if (local_repair::is_dead(t)) continue;
+    parent[find(t[0])] = find(t[1]);
+    parent[find(t[1])] = find(t[2]);
+    total_area += 0.5 * norm(area_vector(w.points[t[0]], w.points[t[1]], w.points[t[2]]));
+  }
+  struct Piece {
+    std::vector<uint32_t> tris;
+    double area = 0;
+    bool touched = false;
+  };
+  std::unordered_map<uint32_t, Piece> pieces;
+  std::unordered_set<uint32_t> intersecting;
+  for (const auto& p : w.pairs) intersecting.insert(p.a), intersecting.insert(p.b);
+  for (uint32_t t = 0; t < w.tris.size(); ++t) {
+    const Tri& tri = w.tris[t];
+    if (local_repair::is_dead(tri)) continue;
+    Piece& p = pieces[find(tri[0])];
+    p.tris.push_back(t);
+    p.area += 0.5 * norm(area_vector(w.points[tri[0]], w.points[tri[1]], w.points[tri[2]]));
+    p.touched |= w.touched[t] || intersecting.count(t);
+  }
+  if (pieces.size() < 2) return;
+  std::vector<uint32_t> doomed, kept;
+  for (const auto& [root, p] : pieces) {
+    bool small = p.tris.size() <= size_t(params.small_piece_triangles) && p.area <= params.small_piece_area * total_area;
+    (small && p.touched ? doomed : kept).insert((small && p.touched ? doomed : kept).end(), p.tris.begin(), p.tris.end());
+  }
+  if (doomed.empty() || kept.empty()) return;
+  // A piece goes only when all of it lies within the deviation bound of what stays.
+  std::vector<Tri> kept_tris;
+  for (uint32_t t : kept) kept_tris.push_back(w.tris[t]);
+  fit::SurfaceIndex rest(w.points, kept_tris);
+  for (const auto& [root, p] : pieces) {
+    bool small = p.tris.size() <= size_t(params.small_piece_triangles) && p.area <= params.small_piece_area * total_area;
+    if (!(small && p.touched)) continue;
+    bool near = true;
+    for (uint32_t t : p.tris)
+      for (uint32_t v : w.tris[t]) near &= std::sqrt(rest.squared_distance(w.points[v])) <= max_dev;
+    if (!near) continue;
+    ++report.pieces_removed;
+    report.piece_triangles_removed += p.tris.size();
+    for (uint32_t t : p.tris) w.tris[t] = local_repair::dead_triangle();
+  }
+  std::unordered_set<uint32_t> gone;
+  for (uint32_t t = 0; t < w.tris.size(); ++t)
+    if (local_repair::is_dead(w.tris[t])) gone.insert(t);
+  std::vector<TrianglePair> p;
+  for (const auto& x : w.pairs)
+    if (!touches(x, gone)) p.push_back(x);
+  w.set_pairs(std::move(p));
+}
+
+// ---------------------------------------------------------------------------------------
+
+// The live triangles and the points they use, points in their order (an untouched welded
+// mesh comes out as it went in).
+Mesh compact(const Work& w, const Mesh& input) {
+  Mesh out;
+  std::vector<uint32_t> remap(w.points.size(), UINT32_MAX);
+  for (const Tri& t : w.tris)
+    if (!local_repair::is_dead(t))
+      for (uint32_t v : t) remap[v] = 0;
+  for (size_t v = 0; v < w.points.size(); ++v)
+    if (remap[v] == 0) {
+      remap[v] = uint32_t(out.points.size());
+      out.points.push_back(w.points[v]);
+    }
+  const bool parts = !input.triangle_part.empty();
+  for (size_t t = 0; t < w.tris.size(); ++t) {
+    const Tri& tri = w.tris[t];
+    if (local_repair::is_dead(tri)) continue;
+    out.triangles.push_back({remap[tri[0]], remap[tri[1]], remap[tri[2]]});
+    if (parts) out.triangle_part.push_back(w.part[t]);
+  }
+  out.part_names = input.part_names;
+  return out;
+}
+
+std::vector<RepairRegion> describe_regions(const Work& w) {
+  std::vector<RepairRegion> out;
+  for (const auto& region : local_repair::group_regions(w.tris, local_repair::triangles_of(w.pairs), w.pairs)) {
+    RepairRegion r;
+    r.triangles = region.size();
+    std::unordered_set<uint32_t> in(region.begin(), region.end());
+    for (const auto& p : w.pairs) r.pairs += in.count(p.a) ? 1 : 0;
+    Box3 box;
+    for (uint32_t t : region)
+      for (uint32_t v : w.tris[t]) box.add(w.points[v]);
+    r.bbox_min = box.lo;
+    r.bbox_max = box.hi;
+    r.center = box.center();
+    out.push_back(r);
+  }
+  return out;
+}
+
+RepairResult run_repair(const Mesh& input, const RepairParams& params, ProgressSink* progress) {
+  validate(params);
+  const auto start = std::chrono::steady_clock::now();
+  RepairResult result;
+  RepairReport& report = result.report;
+  report.params = params;
+  {
+    StageTimer timer("diagnose input", report.stages);
+    if (progress) progress->progress("repair: diagnose input", 0.0, "checking the input");
+    report.before = diagnose(input, true);
+  }
+  check_cancel(progress);
+  Work w = make_work(input, params.float_coordinates);
+  const std::vector<Tri> input_tris = w.tris;  // the input's triangles (ids stay: deleted ones die in place)
+  report.diagonal = report.before.diagonal;
+  report.max_deviation = params.max_deviation.resolve(report.diagonal);
+  report.accuracy = params.accuracy > 0 ? params.accuracy : std::max(1e-16, 0.05 * shortest_edge(w));
+  local_repair::LocalParams lp{params.alpha, params.beta, params.delta, params.gamma, report.accuracy};
+
+  {
+    StageTimer timer("find intersections", report.stages);
+    w.set_pairs(check::find_intersecting_pairs(w.points, w.tris));
+    auto regions = local_repair::group_regions(w.tris, local_repair::triangles_of(w.pairs), w.pairs);
+    for (size_t r = 0; r < regions.size(); ++r)
+      for (uint32_t t : regions[r]) w.region_of[t] = int32_t(r);
+    report.regions_found = regions.size();
+  }
+  auto clean_regions = [&]() {
+    std::vector<uint8_t> clean(report.regions_found, 1);
+    for (const auto& p : w.pairs)
+      for (uint32_t t : {p.a, p.b})
+        if (w.region_of[t] >= 0) clean[size_t(w.region_of[t])] = 0;
+    return clean;
+  };
+  {
+    StageTimer timer("local operations", report.stages);
+    run_local(w, params, lp, report.max_deviation, report, progress);
+  }
+  const auto clean_after_local = clean_regions();
+  if (!w.pairs.empty() && params.refill_iterations > 0) {
+    StageTimer timer("remove and refill", report.stages);
+    Mesh original{w.origin, {}, {}, {}};
+    for (const Tri& t : w.tris)
+      if (!local_repair::is_dead(t)) original.triangles.push_back(t);
+    // The input surface as it came (vertices at their starting places).
+    fit::SurfaceIndex index(w.origin, original.triangles);
+    run_refill(w, params, report.max_deviation, index, report, progress);
+  }
+  if (params.remove_small_pieces) {
+    StageTimer timer("remove small pieces", report.stages);
+    remove_small_pieces(w, params, report.max_deviation, report);
+  }
+  const auto clean_at_end = clean_regions();
+  for (size_t r = 0; r < report.regions_found; ++r) {
+    if (clean_after_local[r]) ++report.fixed_by_local;
+    else if (clean_at_end[r]) ++report.fixed_by_refill;
+    else ++report.left_unfixed;
+  }
+  report.unfixed = describe_regions(w);
+  result.mesh = compact(w, input);
+  check_cancel(progress);
+  {
+    StageTimer timer("diagnose output", report.stages);
+    if (progress) progress->progress("repair: diagnose output", 0.0, "checking the result");
+    report.after = diagnose(result.mesh, true);
+  }
+  if (params.compute_distances) {
+    StageTimer timer("distances", report.stages);
+    // Metro-style, from the surface the repair changed (elsewhere input and output are the
+    // same surface, at distance 0) to the whole other surface, both ways.
+    Mesh before{w.origin, input_tris, {}, {}}, after{w.points, {}, {}, {}};
+    Mesh changed_before{w.origin, {}, {}, {}}, changed_after{w.points, {}, {}, {}};
+    for (size_t t = 0; t < w.tris.size(); ++t) {
+      const bool dead = local_repair::is_dead(w.tris[t]);
+      if (!dead) after.triangles.push_back(w.tris[t]);
+      if (t < input_tris.size() && (dead || w.touched[t])) changed_before.triangles.push_back(input_tris[t]);
+      if (!dead && w.touched[t]) changed_after.triangles.push_back(w.tris[t]);
+    }
+    // Every vertex is a sample (the largest moves are at vertices), area samples every 1/400
+    // of the diagonal in between.
+    report.output_to_input = sampled_distance(changed_after, before, 400);
+    report.input_to_output = sampled_distance(changed_before, after, 400);
+    report.output_to_input.diagonal = report.input_to_output.diagonal = report.diagonal;
+    if (report.diagonal > 0)
+      report.deviation = std::max(report.output_to_input.max, report.input_to_output.max) / report.diagonal;
+  }
+  report.total_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return result;
+}
+
+}  // namespace
+
+RepairResult repair(const Mesh& input, const RepairParams& params, ProgressSink* progress) {
+  // A task arena per job, as in wrap(): its thread limit holds for this job only.
+  if (params.threads <= 0) return run_repair(input, params, progress);
+  tbb::task_arena arena(params.threads);
+  return arena.execute([&] { return run_repair(input, params, progress); });
+}
+
+}  // namespace vdbwrap

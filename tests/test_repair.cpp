@@ -1,0 +1,495 @@
+// Intersection repair (spec: "Intersection repair"): each local operation on a known
+// configuration, the refill of a region, and whole repairs with counts before and after.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <random>
+
+#include "check/intersections.h"
+#include "common/vec.h"
+#include "repair/local_operations.h"
+#include "repair/refill.h"
+#include "repair/regions.h"
+#include "test_meshes.h"
+#include "vdbwrap/repair.h"
+
+using namespace vdbwrap;
+using namespace vdbwrap::local_repair;
+
+namespace {
+
+bool any_intersection(const Mesh& m) { return !check::find_intersecting_pairs(m.points, m.triangles).empty(); }
+
+// A tetrahedron (4 outward triangles) with its apex at `apex` over the base triangle at height z.
+void add_tetra(Mesh& m, const Vec3& apex, double z, double size) {
+  uint32_t o = uint32_t(m.points.size());
+  m.points.push_back({apex[0] - size, apex[1] - size, z});
+  m.points.push_back({apex[0] + size, apex[1] - size, z});
+  m.points.push_back({apex[0], apex[1] + size, z});
+  m.points.push_back(apex);
+  m.triangles.push_back({o, o + 2, o + 1});  // base, facing +z (apex below)
+  m.triangles.push_back({o, o + 1, o + 3});
+  m.triangles.push_back({o + 1, o + 2, o + 3});
+  m.triangles.push_back({o + 2, o, o + 3});
+}
+
+void apply(Mesh& m, const Move& move) {
+  for (const auto& [v, p] : move.positions) m.points[v] = p;
+}
+
+// The pairs and regions of a mesh, as the repair sees them.
+struct Found {
+  std::vector<check::TrianglePair> pairs;
+  std::vector<std::vector<uint32_t>> regions;
+};
+Found find(const Mesh& m) {
+  Found f;
+  f.pairs = check::find_intersecting_pairs(m.points, m.triangles);
+  f.regions = group_regions(m.triangles, triangles_of(f.pairs), f.pairs);
+  return f;
+}
+
+// Some vertices of a sphere pushed along the surface in random directions (seeded), past
+// their neighbours: local folds.
+Mesh dented_sphere(int level, int count, double amount, unsigned seed) {
+  Mesh m = vdbwrap::testing::icosphere_mesh(1.0, level);
+  const double edge = norm(m.points[m.triangles[0][1]] - m.points[m.triangles[0][0]]);
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> gauss(0, 1);
+  std::uniform_int_distribution<size_t> pick(0, m.points.size() - 1);
+  for (int i = 0; i < count; ++i) {
+    Vec3 d{gauss(rng), gauss(rng), gauss(rng)};
+    Vec3& p = m.points[pick(rng)];
+    const Vec3 n = normalized(p);
+    p = normalized(p + normalized(d - n * dot(d, n)) * (amount * edge));  // back on the sphere
+  }
+  return m;
+}
+
+// A CAD-like plate (thin cylinder, fans and long thin side quads) with local defects: the top
+// hub pushed through the bottom (a dent), and a small pin standing on the plate's top face
+// (coplanar overlapping triangles where it touches).
+Mesh plate_with_defects(bool dent, bool pin_on_top) {
+  Mesh m;
+  vdbwrap::testing::add_cylinder(m, {0, 0, 0}, 1.0, 0.02, 128, 0);
+  if (dent) m.points[1][2] = -0.004;  // hub of the top cap, 0.004 through the bottom
+  if (pin_on_top) vdbwrap::testing::add_cylinder(m, {0.3, 0.2, 0.02}, 0.1, 0.3, 32, 1);
+  return m;
+}
+
+size_t border_edges(const Mesh& m) { return diagnose(m, false).border_edges; }
+size_t nonmanifold_edges(const Mesh& m) { return diagnose(m, false).nonmanifold_edges; }
+
+void print(const RepairReport& r, const std::string& name) {
+  std::printf("[%s] regions %zu: local %zu, refill %zu, left %zu; pairs %zu -> %zu; deviation %.5f of the diagonal; "
+              "shifts %zu+%zu, refills %zu (refused %zu); %.2fs\n",
+              name.c_str(), r.regions_found, r.fixed_by_local, r.fixed_by_refill, r.left_unfixed,
+              r.before.intersecting_pairs, r.after.intersecting_pairs, r.deviation, r.vertex_shifts, r.triangle_shifts,
+              r.refills, r.refill_failures, r.total_seconds);
+}
+
+}  // namespace
+
+// ---- building blocks ------------------------------------------------------------------
+
+TEST(RepairRegions, PairsAndSharedVerticesMakeRegions) {
+  Mesh m;
+  add_tetra(m, {0, 0, -0.1}, 0.5, 0.3);   // apex through the sheet below
+  vdbwrap::testing::add_box(m, {-1, -1, -0.01}, {1, 1, 0.0});
+  add_tetra(m, {5, 5, -0.1}, 0.5, 0.3);   // far away: a second, separate region
+  vdbwrap::testing::add_box(m, {4, 4, -0.01}, {6, 6, 0.0});
+  Found f = find(m);
+  ASSERT_FALSE(f.pairs.empty());
+  ASSERT_EQ(f.regions.size(), 2u);
+  for (const auto& region : f.regions)
+    for (const auto& p : f.pairs)
+      EXPECT_EQ(std::binary_search(region.begin(), region.end(), p.a), std::binary_search(region.begin(), region.end(), p.b));
+}
+
+TEST(RepairLocal, SegmentTrianglePoints) {
+  const Vec3 p{0, 0, 0}, q{1, 0, 0}, r{0, 1, 0};
+  auto cross = segment_triangle_points({0.2, 0.2, -1}, {0.2, 0.2, 1}, p, q, r);
+  ASSERT_EQ(cross.size(), 1u);
+  EXPECT_NEAR(cross[0][2], 0.0, 1e-12);
+  EXPECT_TRUE(segment_triangle_points({2, 2, -1}, {2, 2, 1}, p, q, r).empty());
+  bool coplanar = false;
+  auto overlap = segment_triangle_points({-1, 0.25, 0}, {2, 0.25, 0}, p, q, r, &coplanar);
+  ASSERT_EQ(overlap.size(), 2u);
+  EXPECT_TRUE(coplanar);
+  EXPECT_NEAR(overlap[0][0], 0.0, 1e-12);
+  EXPECT_NEAR(overlap[1][0], 0.75, 1e-12);
+}
+
+TEST(RepairLocal, ShiftFractionFollowsThePaper) {
+  // 0.5 d <= l: the middle; l < alpha d < beta L: alpha; otherwise l / d.
+  EXPECT_DOUBLE_EQ(shift_fraction(1.0, 0.6, 10, 0.25, 0.1), 0.5);
+  EXPECT_DOUBLE_EQ(shift_fraction(1.0, 0.1, 10, 0.25, 0.1), 0.25);
+  EXPECT_DOUBLE_EQ(shift_fraction(1.0, 0.1, 1, 0.25, 0.1), 0.1);
+  EXPECT_DOUBLE_EQ(move_epsilon(1e-3, 10, 0.5, 0.001), 5e-4);
+  EXPECT_DOUBLE_EQ(move_epsilon(1.0, 10, 0.5, 0.001), 0.01);
+}
+
+TEST(RepairLocal, VertexShiftPullsAPiercingApexBack) {
+  Mesh m;
+  add_tetra(m, {0.1, 0.05, -0.05}, 0.5, 0.4);
+  vdbwrap::testing::add_box(m, {-1, -1, -0.3}, {1, 1, 0.0});  // the apex pierces the box's top by 0.05
+  Found f = find(m);
+  ASSERT_EQ(f.regions.size(), 1u);
+  auto crossings = edge_crossings(m.points, m.triangles, f.pairs);
+  ASSERT_FALSE(crossings.empty());
+  auto moves = plan_vertex_shifts(m.points, m.triangles, f.regions[0], crossings, LocalParams{});
+  ASSERT_FALSE(moves.empty());
+  const Move& shift = moves.front();
+  ASSERT_EQ(shift.positions.size(), 1u);
+  EXPECT_EQ(shift.positions[0].first, 3u);  // the apex: on all three cutting edges
+  EXPECT_GT(shift.positions[0].second[2], 0.0);  // back above the sheet, short of the base
+  EXPECT_LT(shift.positions[0].second[2], 0.5);
+  apply(m, shift);
+  EXPECT_FALSE(any_intersection(m));
+}
+
+TEST(RepairLocal, TriangleShiftClearsTheEdgesThatCutIt) {
+  // A small free triangle that one edge of a tetrahedron passes through.
+  Mesh m;
+  add_tetra(m, {0, 0, -0.5}, 0.5, 0.5);
+  // The edge apex -> (0.5, -0.5, 0.5) passes z = 0 at (0.25, -0.25).
+  m.points.push_back({0.2, -0.3, 0.0});
+  m.points.push_back({0.3, -0.3, 0.0});
+  m.points.push_back({0.25, -0.2, 0.0});
+  m.triangles.push_back({4, 5, 6});
+  Found f = find(m);
+  ASSERT_FALSE(f.pairs.empty());
+  auto crossings = edge_crossings(m.points, m.triangles, f.pairs);
+  auto moves = plan_triangle_shifts(m.points, m.triangles, f.regions[0], f.pairs, crossings, LocalParams{});
+  ASSERT_EQ(moves.size(), 2u);
+  for (const Move& shift : moves) {
+    Mesh moved = m;
+    apply(moved, shift);
+    for (const auto& [v, p] : shift.positions) EXPECT_GE(v, 4u);  // only the small triangle moves
+    EXPECT_TRUE(check::find_intersecting_pairs_with(moved.points, moved.triangles, {4}).empty());
+  }
+}
+
+TEST(RepairLocal, AreaCriterionMeasuresTheModifiedTriangles) {
+  Mesh m = vdbwrap::testing::icosphere_mesh(1.0, 2);
+  VertexFaces faces = vertex_faces(m.points.size(), m.triangles);
+  Move tiny, far;
+  tiny.positions = {{0, m.points[0] * 1.001}};
+  far.positions = {{0, m.points[0] * 1.5}};
+  measure_move(m.points, m.triangles, faces, tiny);
+  measure_move(m.points, m.triangles, faces, far);
+  EXPECT_GT(tiny.area_ratio, 0.95);
+  EXPECT_LT(far.area_ratio, 0.95);  // would be refused at eps_S = 0.95
+  EXPECT_GT(far.volume_change, tiny.volume_change);
+}
+
+TEST(Repair, AreaCriterionRefusesEveryMoveWhenNoAreaChangeIsAllowed) {
+  Mesh m = plate_with_defects(true, false);
+  RepairParams p;
+  p.refill_iterations = 0;
+  p.compute_distances = false;
+  RepairResult loose = repair(m, p);
+  EXPECT_GT(loose.report.vertex_shifts + loose.report.triangle_shifts, 0u);
+  p.area_ratio = 1.0;  // every move changes some area a little
+  RepairResult strict = repair(m, p);
+  EXPECT_EQ(strict.report.vertex_shifts + strict.report.triangle_shifts, 0u);
+  EXPECT_EQ(strict.report.left_unfixed, strict.report.regions_found);
+  EXPECT_EQ(strict.mesh.points.size(), loose.mesh.points.size());
+}
+
+TEST(RepairRefill, RefilledRegionClosesTheHoleWithoutIntersections) {
+  Mesh m = vdbwrap::testing::icosphere_mesh(1.0, 3);
+  // Fold: push a vertex through its ring to the other side of a neighbour.
+  const uint32_t v = m.triangles[100][0];
+  const Vec3 toward = m.points[m.triangles[100][1]];
+  m.points[v] = m.points[v] + (toward - m.points[v]) * 1.4;
+  Found f = find(m);
+  ASSERT_FALSE(f.pairs.empty());
+  VertexFaces faces = vertex_faces(m.points.size(), m.triangles);
+  std::vector<uint32_t> region = grow_ring(m.triangles, faces, triangles_of(f.pairs));
+  RefillParams rp;
+  rp.area_ratio = 0.5;
+  Refill fill = refill_region(m.points, m.triangles, faces, region, rp);
+  ASSERT_TRUE(fill.ok) << fill.why;
+  EXPECT_FALSE(fill.triangles.empty());
+  EXPECT_EQ(fill.replaces.size(), fill.triangles.size());
+  // Put it in: the sphere must be closed, manifold and free of intersections again.
+  Mesh out;
+  out.points = m.points;
+  out.points.insert(out.points.end(), fill.new_points.begin(), fill.new_points.end());
+  for (uint32_t t = 0; t < m.triangles.size(); ++t)
+    if (!std::binary_search(region.begin(), region.end(), t)) out.triangles.push_back(m.triangles[t]);
+  out.triangles.insert(out.triangles.end(), fill.triangles.begin(), fill.triangles.end());
+  // The folded vertex went with the region: drop the points no triangle uses.
+  {
+    std::vector<uint32_t> remap(out.points.size(), UINT32_MAX);
+    std::vector<Vec3> used;
+    for (Tri& t : out.triangles)
+      for (uint32_t& v : t) {
+        if (remap[v] == UINT32_MAX) remap[v] = uint32_t(used.size()), used.push_back(out.points[v]);
+        v = remap[v];
+      }
+    EXPECT_LT(used.size(), out.points.size());
+    out.points = used;
+  }
+  auto verdict = vdbwrap::testing::valid_closed_surface(out);
+  EXPECT_TRUE(verdict.ok) << verdict.why;
+}
+
+TEST(RepairRefill, RegionOnTheMeshBorderKeepsTheBorder) {
+  // A flat grid (open surface) with a vertex folded over its neighbour next to the border.
+  Mesh m;
+  const int n = 8;
+  for (int j = 0; j <= n; ++j)
+    for (int i = 0; i <= n; ++i) m.points.push_back({double(i), double(j), 0.0});
+  auto at = [&](int i, int j) { return uint32_t(j * (n + 1) + i); };
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i) {
+      m.triangles.push_back({at(i, j), at(i + 1, j), at(i + 1, j + 1)});
+      m.triangles.push_back({at(i, j), at(i + 1, j + 1), at(i, j + 1)});
+    }
+  const size_t border_before = diagnose(m, false).border_edges;
+  m.points[at(4, 1)] = {5.4, 1.3, 0.0};  // past its right-hand neighbour, in the plane
+  Found f = find(m);
+  ASSERT_FALSE(f.pairs.empty());
+  VertexFaces faces = vertex_faces(m.points.size(), m.triangles);
+  std::vector<uint32_t> region = grow_ring(m.triangles, faces, triangles_of(f.pairs));
+  Refill fill = refill_region(m.points, m.triangles, faces, region, RefillParams{});
+  ASSERT_TRUE(fill.ok) << fill.why;
+  Mesh out;
+  out.points = m.points;
+  for (uint32_t t = 0; t < m.triangles.size(); ++t)
+    if (!std::binary_search(region.begin(), region.end(), t)) out.triangles.push_back(m.triangles[t]);
+  out.triangles.insert(out.triangles.end(), fill.triangles.begin(), fill.triangles.end());
+  EXPECT_FALSE(any_intersection(out));
+  MeshDiagnostics d = diagnose(out, false);
+  EXPECT_EQ(d.border_edges, border_before);  // the same border, no new free edge
+  EXPECT_EQ(d.nonmanifold_edges, 0u);
+  EXPECT_EQ(d.misoriented_edges, 0u);
+}
+
+TEST(RepairRefill, NonManifoldRegionIsRefused) {
+  Mesh m = vdbwrap::testing::icosphere_mesh(1.0, 2);
+  m.triangles.push_back(m.triangles[0]);  // a third triangle on triangle 0's edges
+  m.triangles.back()[2] = m.triangles[5][0] == m.triangles[0][0] ? m.triangles[6][1] : m.triangles[5][0];
+  VertexFaces faces = vertex_faces(m.points.size(), m.triangles);
+  std::vector<uint32_t> region = grow_ring(m.triangles, faces, {0});
+  Refill fill = refill_region(m.points, m.triangles, faces, region, RefillParams{});
+  EXPECT_FALSE(fill.ok);
+  EXPECT_NE(fill.why.find("non-manifold"), std::string::npos) << fill.why;
+}
+
+// ---- whole repairs --------------------------------------------------------------------
+
+TEST(Repair, CleanMeshIsLeftAlone) {
+  Mesh m = vdbwrap::testing::icosphere_mesh(1.0, 3);
+  RepairResult r = repair(m, RepairParams{});
+  EXPECT_EQ(r.report.regions_found, 0u);
+  EXPECT_TRUE(r.report.all_fixed());
+  EXPECT_EQ(r.mesh.points, m.points);
+  EXPECT_EQ(r.mesh.triangles, m.triangles);
+  EXPECT_LT(r.report.deviation, 1e-12);
+}
+
+TEST(Repair, IsotropicSphereWithFoldsIsFullyRepaired) {
+  for (unsigned seed : {1u, 2u, 3u}) {
+    Mesh m = dented_sphere(4, 40, 1.2, seed);
+    RepairParams p;
+    RepairResult r = repair(m, p);
+    print(r.report, "sphere seed " + std::to_string(seed));
+    ASSERT_GT(r.report.regions_found, 0u);
+    EXPECT_EQ(r.report.left_unfixed, 0u) << "seed " << seed;
+    EXPECT_EQ(r.report.fixed_by_local + r.report.fixed_by_refill, r.report.regions_found);
+    EXPECT_EQ(r.report.after.intersecting_pairs, 0u);
+    EXPECT_FALSE(any_intersection(r.mesh));
+    auto verdict = vdbwrap::testing::valid_closed_surface(r.mesh);
+    EXPECT_TRUE(verdict.ok) << verdict.why;
+    EXPECT_LE(r.report.deviation, 1.05 * p.max_deviation.value / 100);
+  }
+}
+
+TEST(Repair, IsotropicSphereWithNoiseEverywhereIsFullyRepaired) {
+  // Every vertex moved by Gaussian noise (0.3 of the edge length per coordinate): folds all
+  // over. The noise itself reaches ~1.3 % of the diagonal, so no smooth refill lies within the
+  // default bound of the noisy input: the bound is raised to 2 %, the deviation checked to it.
+  Mesh m = vdbwrap::testing::icosphere_mesh(1.0, 4);
+  const double edge = norm(m.points[m.triangles[0][1]] - m.points[m.triangles[0][0]]);
+  std::mt19937 rng(7);
+  std::normal_distribution<double> gauss(0, 0.3 * edge);
+  for (Vec3& p : m.points)
+    for (double& c : p) c += gauss(rng);
+  // Two parts, north and south: refilled triangles must take the part they replace.
+  m.part_names = {"north", "south"};
+  auto centroid = [](const Mesh& mesh, const Tri& t) {
+    return (mesh.points[t[0]] + mesh.points[t[1]] + mesh.points[t[2]]) * (1.0 / 3);
+  };
+  for (const Tri& t : m.triangles) m.triangle_part.push_back(centroid(m, t)[2] >= 0 ? 0 : 1);
+  MeshDiagnostics before = diagnose(m);
+  ASSERT_GE(before.intersecting_pairs, 10u);
+  RepairParams p;
+  p.max_deviation = Length{2.0, true};
+  RepairResult r = repair(m, p);
+  print(r.report, "noisy sphere");
+  EXPECT_GE(r.report.regions_found, 5u);
+  EXPECT_EQ(r.report.left_unfixed, 0u);
+  EXPECT_GT(r.report.fixed_by_refill, 0u);  // part 2 is needed here
+  EXPECT_FALSE(any_intersection(r.mesh));
+  auto verdict = vdbwrap::testing::valid_closed_surface(r.mesh);
+  EXPECT_TRUE(verdict.ok) << verdict.why;
+  EXPECT_LE(r.report.deviation, 0.021);
+  ASSERT_EQ(r.mesh.triangle_part.size(), r.mesh.triangles.size());
+  EXPECT_EQ(r.mesh.part_names, m.part_names);
+  for (size_t t = 0; t < r.mesh.triangles.size(); ++t) {
+    Vec3 c = centroid(r.mesh, r.mesh.triangles[t]);
+    if (std::fabs(c[2]) < 0.15) continue;  // near the seam the nearest input triangle may be across it
+    size_t best = 0;
+    double best_d = INFINITY;
+    for (size_t u = 0; u < m.triangles.size(); ++u) {
+      double d = norm2(centroid(m, m.triangles[u]) - c);
+      if (d < best_d) best_d = d, best = u;
+    }
+    EXPECT_EQ(r.mesh.triangle_part[t], m.triangle_part[best]) << "triangle " << t;
+  }
+}
+
+TEST(Repair, CadPlateDentIsRepairedWithinThePapersDeviation) {
+  Mesh m = plate_with_defects(true, false);
+  RepairResult r = repair(m, RepairParams{});
+  print(r.report, "plate dent");
+  ASSERT_EQ(r.report.regions_found, 1u);
+  EXPECT_TRUE(r.report.all_fixed());
+  EXPECT_FALSE(any_intersection(r.mesh));
+  EXPECT_EQ(border_edges(r.mesh), 0u);
+  EXPECT_EQ(nonmanifold_edges(r.mesh), 0u);
+  EXPECT_LE(r.report.deviation, 0.0086);
+  EXPECT_GT(r.report.deviation, 0.0);
+}
+
+TEST(Repair, CoplanarOverlapOfAPinOnAPlateIsRepairedAndPartsSurvive) {
+  Mesh m = plate_with_defects(false, true);
+  ASSERT_TRUE(any_intersection(m));
+  RepairResult r = repair(m, RepairParams{});
+  print(r.report, "pin on plate");
+  EXPECT_TRUE(r.report.all_fixed());
+  EXPECT_FALSE(any_intersection(r.mesh));
+  EXPECT_EQ(border_edges(r.mesh), 0u);
+  EXPECT_EQ(nonmanifold_edges(r.mesh), 0u);
+  EXPECT_LE(r.report.deviation, 0.0086);
+  ASSERT_EQ(r.mesh.triangle_part.size(), r.mesh.triangles.size());
+  EXPECT_EQ(r.mesh.part_names, m.part_names);
+  EXPECT_EQ(std::count(r.mesh.triangle_part.begin(), r.mesh.triangle_part.end(), 1),
+            std::count(m.triangle_part.begin(), m.triangle_part.end(), 1));
+}
+
+TEST(Repair, TessellatedMeshWithSeveralLocalDefectsMeetsTheTargets) {
+  // One CAD-like mesh, several local defects: two dented plates, a pin standing on a third
+  // (coplanar overlapping triangles), a fold on the rim of a fourth. The paper's floor: 79 % of the
+  // regions of tessellated meshes; the issue's target: 90 %, deviation <= 0.0086 d.
+  Mesh m = plate_with_defects(true, false);
+  vdbwrap::testing::add_cylinder(m, {3, 0, 0}, 1.0, 0.02, 128, 1);
+  vdbwrap::testing::add_cylinder(m, {3.3, 0.2, 0.02}, 0.1, 0.3, 32, 2);  // pin standing on the second plate
+  vdbwrap::testing::add_cylinder(m, {0, 3, 0}, 1.0, 0.02, 128, 3);
+  {
+    const uint32_t base = uint32_t(m.points.size() - (2 + 2 * 128));
+    m.points[base + 1][2] = -0.003;  // the third plate's dent
+  }
+  vdbwrap::testing::add_cylinder(m, {3, 3, 0}, 1.0, 0.02, 128, 4);
+  {
+    // The fourth plate: a top rim vertex slid along the rim past its neighbour (a fold).
+    const uint32_t rim0 = uint32_t(m.points.size() - 128);
+    const double a = 2 * M_PI * 1.3 / 128;
+    m.points[rim0] = {3 + std::cos(a), 3 + std::sin(a), 0.02};
+  }
+  MeshDiagnostics before = diagnose(m);
+  ASSERT_GT(before.intersecting_pairs, 0u);
+  RepairResult r = repair(m, RepairParams{});
+  print(r.report, "tessellated");
+  ASSERT_EQ(r.report.regions_found, 4u);
+  EXPECT_GT(r.report.fixed_by_refill, 0u);  // the fold needs part 2
+  EXPECT_GE(double(r.report.fixed_by_local + r.report.fixed_by_refill), 0.9 * double(r.report.regions_found));
+  EXPECT_LE(r.report.deviation, 0.0086);
+  EXPECT_LE(border_edges(r.mesh), before.border_edges);
+  EXPECT_LE(nonmanifold_edges(r.mesh), before.nonmanifold_edges);
+  EXPECT_LT(r.report.after.intersecting_pairs, before.intersecting_pairs);
+}
+
+TEST(Repair, PinPushedIntoAPlateIsAtLeastNotMadeWorse) {
+  // Two closed solids crossing along a whole curve: not a local defect. What must hold: no new
+  // free or non-manifold edges, fewer or as many intersections, the bound on deviation.
+  Mesh m;
+  vdbwrap::testing::add_cylinder(m, {0, 0, 0}, 1.0, 0.02, 128, 0);
+  vdbwrap::testing::add_cylinder(m, {0.3, 0.2, 0.015}, 0.1, 0.3, 32, 1);
+  MeshDiagnostics before = diagnose(m);
+  ASSERT_GT(before.intersecting_pairs, 0u);
+  RepairParams p;
+  RepairResult r = repair(m, p);
+  print(r.report, "pin pushed in");
+  EXPECT_EQ(border_edges(r.mesh), 0u);
+  EXPECT_EQ(nonmanifold_edges(r.mesh), 0u);
+  EXPECT_LE(r.report.after.intersecting_pairs, before.intersecting_pairs);
+  EXPECT_LE(r.report.deviation, 1.05 * p.max_deviation.value / 100);
+  EXPECT_EQ(r.report.unfixed.size() > 0, r.report.left_unfixed > 0);
+}
+
+TEST(Repair, SinglePrecisionRepairStaysRepairedInFloats) {
+  Mesh m = plate_with_defects(true, false);
+  RepairParams p;
+  p.float_coordinates = true;
+  RepairResult r = repair(m, p);
+  for (const Vec3& q : r.mesh.points)
+    for (double c : q) EXPECT_EQ(c, double(float(c)));
+  EXPECT_TRUE(r.report.all_fixed());
+  EXPECT_FALSE(any_intersection(r.mesh));
+}
+
+TEST(Repair, BadParametersAndInputAreErrors) {
+  Mesh m = vdbwrap::testing::icosphere_mesh(1.0, 1);
+  auto kind_of = [&](const Mesh& mesh, const RepairParams& p) {
+    try {
+      repair(mesh, p);
+    } catch (const Error& e) {
+      return e.kind();
+    }
+    return ErrorKind::Internal;
+  };
+  RepairParams p;
+  p.area_ratio = 1.5;
+  EXPECT_EQ(kind_of(m, p), ErrorKind::InvalidArgument);
+  p = RepairParams{};
+  p.max_deviation.value = -1;
+  EXPECT_EQ(kind_of(m, p), ErrorKind::InvalidArgument);
+  EXPECT_EQ(kind_of(Mesh{}, RepairParams{}), ErrorKind::InvalidInput);
+  Mesh bad = m;
+  bad.points[0][0] = NAN;
+  EXPECT_EQ(kind_of(bad, RepairParams{}), ErrorKind::InvalidInput);
+}
+
+TEST(Repair, CancellationStopsTheRepair) {
+  struct Cancel : ProgressSink {
+    void progress(const std::string&, double, const std::string&) override {}
+    bool cancelled() override { return true; }
+  } cancel;
+  Mesh m = dented_sphere(3, 4, 1.2, 1);
+  try {
+    repair(m, RepairParams{}, &cancel);
+    FAIL() << "not cancelled";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.kind(), ErrorKind::Cancelled);
+  }
+}
+
+TEST(Repair, ReportJsonListsRegionsAndDiagnostics) {
+  Mesh m = plate_with_defects(true, false);
+  RepairParams p;
+  p.local_iterations = 0;
+  p.refill_iterations = 0;  // nothing may change: the region is left and must be listed
+  RepairResult r = repair(m, p);
+  EXPECT_EQ(r.report.left_unfixed, 1u);
+  ASSERT_EQ(r.report.unfixed.size(), 1u);
+  EXPECT_NEAR(r.report.unfixed[0].center[0], 0.0, 0.2);
+  std::string json = to_json(r.report);
+  for (const char* key : {"\"found\": 1", "\"left_unfixed\": 1", "\"unfixed_regions\"", "\"bbox_min\"", "\"before\"",
+                          "\"after\"", "\"max_deviation_fraction_of_diagonal\"", "\"border_edges\"", "\"intersecting_pairs\""})
+    EXPECT_NE(json.find(key), std::string::npos) << key;
+}
