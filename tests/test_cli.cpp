@@ -220,6 +220,7 @@ TEST_F(Cli, ParameterFilesInJsonAndYamlAndTheCommandLineOverrides) {
   CliRun part = run("wrap " + in + " -o " + out + " --params " + unknown_part);
   EXPECT_EQ(part.code, 2);
   EXPECT_NE(part.err.find("warm"), std::string::npos) << part.err;
+}
 
 // ---- repair ---------------------------------------------------------------------------
 

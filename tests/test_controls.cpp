@@ -18,6 +18,7 @@ WrapParams quick(const std::string& base = "1%") {
   WrapParams p;
   p.base_size = Length::parse(base);
   p.compute_distances = false;
+  p.coarsen_tolerance = 0;  // triangle counts here measure refinement
   return p;
 }
 

@@ -1,0 +1,48 @@
+// Coarsening (stage 4): fewer triangles on flat parts, the surface still valid, still close
+// to the input, the feature edges still on it.
+#include <gtest/gtest.h>
+
+#include "common/vec.h"
+#include "test_meshes.h"
+#include "vdbwrap/wrap.h"
+
+using namespace vdbwrap;
+using namespace vdbwrap::testing;
+
+namespace {
+
+// A cube turned by arbitrary angles, so nothing lines up with the grid.
+Mesh rotated_cube() {
+  Mesh m = box_mesh({-0.5, -0.5, -0.5}, {0.5, 0.5, 0.5});
+  const double a = 0.37, b = 0.61;
+  for (Vec3& p : m.points) {
+    Vec3 q{p[0] * std::cos(a) - p[1] * std::sin(a), p[0] * std::sin(a) + p[1] * std::cos(a), p[2]};
+    p = {q[0], q[1] * std::cos(b) - q[2] * std::sin(b), q[1] * std::sin(b) + q[2] * std::cos(b)};
+  }
+  return m;
+}
+
+}  // namespace
+
+TEST(Coarsen, FewerTrianglesSameValidityDistanceAndEdges) {
+  for (const Mesh& m : {rotated_cube(), sphere_mesh(1.0, 48, 96)}) {
+    WrapParams fine;
+    fine.coarsen_tolerance = 0;
+    WrapParams coarse;  // the default tolerance
+    ASSERT_GT(coarse.coarsen_tolerance, 0);
+    WrapResult a = wrap(m, fine), b = wrap(m, coarse);
+    auto va = valid_closed_surface(a.surface), vb = valid_closed_surface(b.surface);
+    EXPECT_TRUE(va.ok) << va.why;
+    EXPECT_TRUE(vb.ok) << vb.why;
+    EXPECT_LT(double(b.surface.triangles.size()), 0.6 * double(a.surface.triangles.size()))
+        << a.surface.triangles.size() << " -> " << b.surface.triangles.size();
+    EXPECT_EQ(b.report.triangles_before_coarsening, a.surface.triangles.size());
+    // Every new triangle's samples stay within the tolerance: the distance to the input grows
+    // by at most that much.
+    const double tolerance = coarse.coarsen_tolerance * b.report.base_size;
+    EXPECT_LE(b.report.output_to_input.max, a.report.output_to_input.max + tolerance);
+    EXPECT_LE(b.report.input_to_output.p95, a.report.input_to_output.p95 + tolerance);
+    // Snapped feature nodes are never removed: the cube's edges stay where they were.
+    EXPECT_LE(b.report.sharp_edges_to_output.mean, a.report.sharp_edges_to_output.mean + 1e-4 * b.report.diagonal);
+  }
+}
