@@ -84,6 +84,9 @@ void WrapOptions::add_to(CLI::App* cmd, const std::string& threads_help) {
        [this](WrapParams& p) { p.presmooth_iterations = cli_.presmooth_iterations; })
       ->capture_default_str()
       ->check(CLI::Range(0, 100));
+  CLI::Option* nd = cmd->add_flag("--no-distances", no_distances_,
+                                  "Skip the sampled distances of the report (timing runs: they cost as much as a stage)");
+  bindings_.push_back({nd, [this](WrapParams& p) { p.compute_distances = !no_distances_; }});
   CLI::Option* nf = cmd->add_flag("--no-features", no_features_, "Do not snap the wrap onto sharp edges, boundaries and corners");
   bindings_.push_back({nf, [this](WrapParams& p) { p.snap_features = !no_features_; }});
   bind(cmd, "--corner-angle", cli_.corner_angle_deg, "Degrees a feature curve must turn at a point to make a corner there",

@@ -6,6 +6,7 @@
 #include <CGAL/AABB_triangle_primitive.h>
 #include <CGAL/Simple_cartesian.h>
 
+#include <algorithm>
 #include <cmath>
 
 namespace vdbwrap::fit {
@@ -47,6 +48,10 @@ SurfaceIndex::Hit SurfaceIndex::closest(const Vec3& q) const {
   double len = std::sqrt(n.squared_length());
   hit.normal = len > 0 ? Vec3{n.x() / len, n.y() / len, n.z() / len} : Vec3{0, 0, 0};
   return hit;
+}
+
+bool SurfaceIndex::within(const Vec3& q, double radius) const {
+  return impl_->tree.do_intersect(K::Sphere_3(K::Point_3(q[0], q[1], q[2]), radius * radius));
 }
 
 }  // namespace vdbwrap::fit

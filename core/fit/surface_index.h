@@ -23,6 +23,8 @@ class SurfaceIndex {
   };
   Hit closest(const Vec3& query) const;
   double squared_distance(const Vec3& query) const { return closest(query).squared_distance; }
+  // Is the input within `radius` of the query? (Much cheaper than closest() for small radii.)
+  bool within(const Vec3& query, double radius) const;
 
  private:
   struct Impl;

@@ -85,7 +85,7 @@ class Coarsener {
     double l2 = norm2(p_[a] - p_[b]);
     if (l2 <= prm_.max_edge * prm_.max_edge) queue_.push({l2, a, b, stamp_[a], stamp_[b]});
   }
-  bool near_input(const Vec3& q) const { return input_.squared_distance(q - origin_) <= dev2_; }
+  bool near_input(const Vec3& q) const { return input_.within(q - origin_, prm_.max_deviation); }
 
   // Merges u into v when every check passes.
   bool collapse(uint32_t u, uint32_t v) {
