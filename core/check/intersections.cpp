@@ -96,18 +96,15 @@ std::vector<TrianglePair> find_intersecting_pairs(const std::vector<Vec3>& point
     auto bb = p[tri[0]].bbox() + p[tri[1]].bbox() + p[tri[2]].bbox();
     boxes.emplace_back(bb, t);
   }
-  std::vector<std::pair<uint32_t, uint32_t>> candidates;
-  CGAL::box_self_intersection_d(boxes.begin(), boxes.end(), [&](const Box& a, const Box& b) {
-    candidates.emplace_back(uint32_t(a.handle()), uint32_t(b.handle()));
-  });
-  std::vector<uint8_t> hit(candidates.size(), 0);
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, candidates.size(), 256), [&](const tbb::blocked_range<size_t>& r) {
-    for (size_t i = r.begin(); i != r.end(); ++i)
-      hit[i] = triangles_intersect(p, triangles[candidates[i].first], triangles[candidates[i].second]) ? 1 : 0;
+  // Exact tests inside the (parallel) box callback: fans and long thin CAD triangles give
+  // hundreds of millions of overlapping boxes, too many to store as candidates first.
+  tbb::enumerable_thread_specific<std::vector<TrianglePair>> found;
+  CGAL::box_self_intersection_d<CGAL::Parallel_if_available_tag>(boxes.begin(), boxes.end(), [&](const Box& a, const Box& b) {
+    const uint32_t x = uint32_t(a.handle()), y = uint32_t(b.handle());
+    if (triangles_intersect(p, triangles[x], triangles[y])) found.local().push_back({std::min(x, y), std::max(x, y)});
   });
   std::vector<TrianglePair> out;
-  for (size_t i = 0; i < candidates.size(); ++i)
-    if (hit[i]) out.push_back({std::min(candidates[i].first, candidates[i].second), std::max(candidates[i].first, candidates[i].second)});
+  for (const auto& local : found) out.insert(out.end(), local.begin(), local.end());
   std::sort(out.begin(), out.end(), [](const TrianglePair& u, const TrianglePair& v) { return u.a != v.a ? u.a < v.a : u.b < v.b; });
   return out;
 }
@@ -134,20 +131,13 @@ std::vector<TrianglePair> find_intersecting_pairs_with(const std::vector<Vec3>& 
     }
     some.emplace_back(box_of(t), t);
   }
-  std::vector<std::pair<uint32_t, uint32_t>> candidates;
-  CGAL::box_intersection_d(some.begin(), some.end(), all.begin(), all.end(), [&](const Box& a, const Box& b) {
-    if (a.handle() != b.handle()) candidates.emplace_back(uint32_t(a.handle()), uint32_t(b.handle()));
+  tbb::enumerable_thread_specific<std::vector<TrianglePair>> found;
+  CGAL::box_intersection_d<CGAL::Parallel_if_available_tag>(some.begin(), some.end(), all.begin(), all.end(), [&](const Box& a, const Box& b) {
+    const uint32_t x = uint32_t(a.handle()), y = uint32_t(b.handle());
+    if (x == y || is_degenerate(p, triangles[y])) return;
+    if (triangles_intersect(p, triangles[x], triangles[y])) found.local().push_back({std::min(x, y), std::max(x, y)});
   });
-  std::vector<uint8_t> hit(candidates.size(), 0);
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, candidates.size(), 256), [&](const tbb::blocked_range<size_t>& r) {
-    for (size_t i = r.begin(); i != r.end(); ++i) {
-      const Tri& y = triangles[candidates[i].second];
-      if (is_degenerate(p, y)) continue;
-      hit[i] = triangles_intersect(p, triangles[candidates[i].first], y) ? 1 : 0;
-    }
-  });
-  for (size_t i = 0; i < candidates.size(); ++i)
-    if (hit[i]) out.push_back({std::min(candidates[i].first, candidates[i].second), std::max(candidates[i].first, candidates[i].second)});
+  for (const auto& local : found) out.insert(out.end(), local.begin(), local.end());
   std::sort(out.begin(), out.end(), [](const TrianglePair& u, const TrianglePair& v) { return u.a != v.a ? u.a < v.a : u.b < v.b; });
   out.erase(std::unique(out.begin(), out.end(), [](const TrianglePair& u, const TrianglePair& v) { return u.a == v.a && u.b == v.b; }),
             out.end());
