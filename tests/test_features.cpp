@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 
 #include "fit/features.h"
 #include "io/mesh_io.h"
@@ -135,6 +136,24 @@ TEST_P(CorpusFeatures, EdgesStayOnTheWrap) {
   EXPECT_LE(on.edges.mean, 0.0004 * diag) << "mean " << 100 * on.edges.mean / diag << "%";
   EXPECT_LE(on.edges.p95, 0.0025 * diag) << "p95 " << 100 * on.edges.p95 / diag << "%";
   const std::string name = GetParam();
+#ifdef VDBWRAP_ALPHA_WRAP_RUNNER
+  // No larger than CGAL's alpha wrap at alpha = diag/100 (the bound).
+  {
+    const std::string out = ::testing::TempDir() + "alpha_" + test_name_of(name) + ".stl";
+    const std::string cmd = std::string(VDBWRAP_ALPHA_WRAP_RUNNER) + " " + data_path(name) + " " + out;
+    FILE* pipe = ::popen(cmd.c_str(), "r");
+    ASSERT_NE(pipe, nullptr);
+    char line[512] = {0};
+    std::string text;
+    while (std::fgets(line, sizeof line, pipe)) text += line;
+    ASSERT_EQ(::pclose(pipe), 0) << text;
+    const size_t at = text.find("\"triangles\":");
+    ASSERT_NE(at, std::string::npos) << text;
+    const size_t alpha_triangles = std::stoul(text.substr(at + 12));
+    EXPECT_LE(on.report.output.triangles, alpha_triangles) << "vdbwrap " << on.report.output.triangles << " alpha wrap " << alpha_triangles;
+    std::remove(out.c_str());
+  }
+#endif
   if (name == "busted.STL" || name == "20mm-xyz-cube.stl" || name == "1002_tray_bottom.STL") {
     EXPECT_LE(on.edges.mean, 0.0001 * diag) << "mean " << 100 * on.edges.mean / diag << "%";
     EXPECT_LE(on.edges.p95, 0.0005 * diag) << "p95 " << 100 * on.edges.p95 / diag << "%";

@@ -69,7 +69,7 @@ class Coarsener {
       queue_.pop();
       if (progress && (++popped & 0x3FFF) == 0 && progress->cancelled()) throw Error(ErrorKind::Cancelled, "cancelled");
       if (!vertex_alive_[e.a] || !vertex_alive_[e.b] || stamp_[e.a] != e.sa || stamp_[e.b] != e.sb) continue;
-      bool done = (!locked_[e.a] && collapse(e.a, e.b)) || (!locked_[e.b] && collapse(e.b, e.a));
+      bool done = (removable(e.a, e.b) && collapse(e.a, e.b)) || (removable(e.b, e.a) && collapse(e.b, e.a));
       if (done) ++collapses;
     }
     return collapses;
@@ -85,6 +85,21 @@ class Coarsener {
     double l2 = norm2(p_[a] - p_[b]);
     if (l2 <= prm_.max_edge * prm_.max_edge) queue_.push({l2, a, b, stamp_[a], stamp_[b]});
   }
+  // A free node may always go. A node on a feature curve may go only into a neighbour on the
+  // same straight run of the curve: it has exactly two feature neighbours, v and one more, and
+  // the chain through it is nearly straight, so the chain keeps following the curve.
+  bool removable(uint32_t u, uint32_t v) const {
+    if (!locked_[u]) return true;
+    if (!locked_[v]) return false;
+    std::vector<uint32_t> chain;
+    for (uint32_t w : neighbours(u))
+      if (locked_[w]) chain.push_back(w);
+    if (chain.size() != 2) return false;
+    const uint32_t w = chain[0] == v ? chain[1] : chain[0];
+    const Vec3 a = normalized(p_[v] - p_[u]), b = normalized(p_[w] - p_[u]);
+    return dot(a, b) < -std::cos(prm_.max_chain_turn_deg * M_PI / 180.0);
+  }
+
   bool near_input(const Vec3& q) const { return input_.within(q - origin_, prm_.max_deviation); }
 
   // Merges u into v when every check passes.

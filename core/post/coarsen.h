@@ -2,7 +2,7 @@
 // triangles the input's shape needs on flat parts. Half-edge collapses (a vertex merged into
 // a neighbour, no new positions, so every kept node stays where projection put it) remove
 // them while the surface stays closed, 2-manifold, free of self-intersections and close to
-// the input; nodes snapped onto feature curves are never removed.
+// the input; nodes snapped onto feature curves go only along straight runs of their chain.
 #pragma once
 #include <cstdint>
 #include <vector>
@@ -18,6 +18,7 @@ struct CoarsenParams {
   double min_area2 = 0;            // smallest doubled triangle area allowed
   double max_normal_turn_deg = 25; // a triangle may turn at most this much
   double min_angle_deg = 18;       // smallest angle of a new triangle (unless the old one was worse)
+  double max_chain_turn_deg = 8;   // a feature node goes only where its chain turns less than this
 };
 
 struct CoarsenStats {
