@@ -91,3 +91,26 @@ TEST(Prepare, RejectsInputWithNothingUsable) {
   flat.triangles = {{0, 1, 2}};
   EXPECT_THROW(prep::prepare(flat, WrapParams{}, nullptr), Error);
 }
+
+TEST(Intersections, FansMeetOnlyAtTheirCentreUnlessTheyOverlapOrFold) {
+  // A flat fan of 64 triangles (a cylinder cap) and a cone fan: no pair intersects.
+  for (double height : {0.0, 0.3}) {
+    Mesh fan;
+    fan.points.push_back({0, 0, height});
+    for (int j = 0; j < 64; ++j) fan.points.push_back({std::cos(2 * M_PI * j / 64), std::sin(2 * M_PI * j / 64), 0});
+    for (uint32_t j = 0; j < 64; ++j) fan.triangles.push_back({0, 1 + j, 1 + (j + 1) % 64});
+    EXPECT_TRUE(check::find_intersecting_pairs(fan.points, fan.triangles).empty()) << "height " << height;
+    // In the flat fan, a triangle from the centre over several sectors overlaps them.
+    if (height == 0) {
+      Mesh overlap = fan;
+      overlap.triangles.push_back({0, 3, 9});
+      EXPECT_GE(check::find_intersecting_pairs(overlap.points, overlap.triangles).size(), 5u);
+    }
+  }
+  // Two triangles sharing a vertex, one folded through the other.
+  std::vector<Vec3> p = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0.2, 0.2, -0.5}, {0.3, 0.3, 0.5}};
+  EXPECT_TRUE(check::triangle_pair_intersects(p, {0, 1, 2}, {0, 3, 4}));
+  // The same pair with the second triangle lifted off the plane on one side: apart.
+  p[3] = {0.2, 0.2, 0.1};
+  EXPECT_FALSE(check::triangle_pair_intersects(p, {0, 1, 2}, {0, 3, 4}));
+}

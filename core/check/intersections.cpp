@@ -11,6 +11,7 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <cmath>
 #include <array>
 #include <mutex>
 
@@ -29,6 +30,44 @@ bool is_degenerate(const std::vector<P3>& p, const Tri& t) {
   return t[0] == t[1] || t[1] == t[2] || t[0] == t[2] || CGAL::collinear(p[t[0]], p[t[1]], p[t[2]]);
 }
 
+// Fast proof that triangles (c, a, b) and (c, d, e), sharing only vertex c, meet only there
+// (false: no proof, run the exact tests). Fans of triangles around one vertex (cylinder caps,
+// cone tips) make such pairs by the hundred million, nearly all far apart.
+bool apart_at_shared_vertex(const P3& c, const P3& a, const P3& b, const P3& d, const P3& e) {
+  // d and e strictly on one side of plane (c, a, b): the second triangle meets that plane at c
+  // only (and the same the other way round). Filtered predicates: fast when not coplanar.
+  const CGAL::Orientation od = CGAL::orientation(c, a, b, d);
+  if (od != CGAL::COPLANAR && od == CGAL::orientation(c, a, b, e)) return true;
+  const CGAL::Orientation oa = CGAL::orientation(c, d, e, a);
+  if (oa != CGAL::COPLANAR && oa == CGAL::orientation(c, d, e, b)) return true;
+  if (od != CGAL::COPLANAR || oa != CGAL::COPLANAR) return false;
+  // Coplanar: the two angular sectors at c are disjoint when a line through c along one of
+  // their four sides leaves the other sector strictly on its far side. Doubles with a margin;
+  // anything close is left to the exact tests.
+  const double n[3] = {(a.y() - c.y()) * (b.z() - c.z()) - (a.z() - c.z()) * (b.y() - c.y()),
+                       (a.z() - c.z()) * (b.x() - c.x()) - (a.x() - c.x()) * (b.z() - c.z()),
+                       (a.x() - c.x()) * (b.y() - c.y()) - (a.y() - c.y()) * (b.x() - c.x())};
+  int drop = 0;
+  for (int k = 1; k < 3; ++k)
+    if (std::fabs(n[k]) > std::fabs(n[drop])) drop = k;
+  const int u = (drop + 1) % 3, v = (drop + 2) % 3;
+  auto vec = [&](const P3& q) { return std::array<double, 2>{q[u] - c[u], q[v] - c[v]}; };
+  auto cross = [](const std::array<double, 2>& p, const std::array<double, 2>& q) { return p[0] * q[1] - p[1] * q[0]; };
+  auto len = [](const std::array<double, 2>& p) { return std::hypot(p[0], p[1]); };
+  const auto va = vec(a), vb = vec(b), vd = vec(d), ve = vec(e);
+  // Does the line along `side` (with `other` the sector's other side) keep p and q strictly
+  // outside the sector's half-plane?
+  auto separates = [&](const std::array<double, 2>& side, const std::array<double, 2>& other, const std::array<double, 2>& p,
+                       const std::array<double, 2>& q) {
+    const double inside = cross(side, other);
+    const double margin = 1e-9 * len(side);
+    const double sp = cross(side, p), sq = cross(side, q);
+    if (std::fabs(inside) <= margin * len(other)) return false;
+    return (inside > 0 ? sp < -margin * len(p) && sq < -margin * len(q) : sp > margin * len(p) && sq > margin * len(q));
+  };
+  return separates(va, vb, vd, ve) || separates(vb, va, vd, ve) || separates(vd, ve, va, vb) || separates(ve, vd, va, vb);
+}
+
 // Triangles intersect when they share points other than their common vertices/edge.
 bool triangles_intersect(const std::vector<P3>& p, const Tri& x, const Tri& y) {
   int shared = 0;
@@ -43,8 +82,9 @@ bool triangles_intersect(const std::vector<P3>& p, const Tri& x, const Tri& y) {
   if (shared == 0) return CGAL::do_intersect(T3(p[x[0]], p[x[1]], p[x[2]]), T3(p[y[0]], p[y[1]], p[y[2]]));
   if (shared == 3) return true;  // the same triangle twice
   if (shared == 1) {
-    // A crossing that starts at the common vertex leaves one triangle through its opposite edge.
     int i = xi[0], j = yi[0];
+    if (apart_at_shared_vertex(p[x[i]], p[x[(i + 1) % 3]], p[x[(i + 2) % 3]], p[y[(j + 1) % 3]], p[y[(j + 2) % 3]])) return false;
+    // A crossing that starts at the common vertex leaves one triangle through its opposite edge.
     S3 opp_x(p[x[(i + 1) % 3]], p[x[(i + 2) % 3]]);
     S3 opp_y(p[y[(j + 1) % 3]], p[y[(j + 2) % 3]]);
     return CGAL::do_intersect(opp_x, T3(p[y[0]], p[y[1]], p[y[2]])) ||
