@@ -8,6 +8,7 @@
 #include <unordered_map>
 
 #include "check/intersections.h"
+#include "common/float_round.h"
 #include "common/grid_key.h"
 #include "common/triangle_buckets.h"
 #include "common/vec.h"
@@ -247,7 +248,7 @@ FittedSurface fit_to_input(const extract::LatticeSurface& surf, const grid::Adap
   std::vector<Vec3>& p = out.points;
   auto world = [&](const Vec3& local) {
     Vec3 w = local + origin;
-    if (params.float_coordinates) w = {double(float(w[0])), double(float(w[1])), double(float(w[2]))};
+    if (params.float_coordinates) w = round_to_float(w);  // not double(float(x)): see float_round.h
     return w;
   };
   p.resize(n);
