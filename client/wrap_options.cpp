@@ -86,6 +86,10 @@ void WrapOptions::add_to(CLI::App* cmd, const std::string& threads_help) {
       ->check(CLI::Range(0, 100));
   CLI::Option* nf = cmd->add_flag("--no-features", no_features_, "Do not snap the wrap onto sharp edges, boundaries and corners");
   bindings_.push_back({nf, [this](WrapParams& p) { p.snap_features = !no_features_; }});
+  CLI::Option* nr = cmd->add_flag("--no-remesh", no_remesh_,
+                                  "Do not rebuild the bad regions of the wrap (slivers, tiny triangles, very poor normals); "
+                                  "the report's quality section still counts them");
+  bindings_.push_back({nr, [this](WrapParams& p) { p.remesh = !no_remesh_; }});
   bind(cmd, "--corner-angle", cli_.corner_angle_deg, "Degrees a feature curve must turn at a point to make a corner there",
        [this](WrapParams& p) { p.corner_angle_deg = cli_.corner_angle_deg; })
       ->capture_default_str()

@@ -141,6 +141,7 @@ WrapParams to_wrap_params(const pb::WrapParameters& in) {
     p.presmooth_iterations = in.presmooth_iterations();
   }
   if (in.has_snap_features()) p.snap_features = in.snap_features();
+  if (in.has_remesh()) p.remesh = in.remesh();
   if (in.has_corner_angle_deg()) {
     double a = finite("corner_angle_deg", in.corner_angle_deg());
     if (!(a > 0 && a < 180)) bad("corner_angle_deg", "must be strictly between 0 and 180 degrees");
@@ -217,6 +218,7 @@ pb::WrapParameters to_proto(const WrapParams& in) {
   out.set_surface_offset(in.surface_offset);
   out.set_compute_distances(in.compute_distances);
   out.set_coarsen_tolerance(in.coarsen_tolerance);
+  out.set_remesh(in.remesh);
   return out;
 }
 
