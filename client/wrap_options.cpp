@@ -96,6 +96,14 @@ void WrapOptions::add_to(CLI::App* cmd, const std::string& threads_help) {
       ->check(CLI::Range(0.0, 180.0));
 }
 
+std::vector<std::string> WrapOptions::given() const {
+  std::vector<std::string> out;
+  if (!params_file_.empty()) out.push_back("--params");
+  for (const Binding& b : bindings_)
+    if (b.option->count() > 0) out.push_back(b.option->get_name());
+  return out;
+}
+
 WrapParams WrapOptions::resolve() const {
   WrapParams p;
   if (!params_file_.empty()) {

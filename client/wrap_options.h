@@ -20,6 +20,8 @@ class WrapOptions {
   // After parsing: the parameter file (if any), then every option given. Throws
   // Error(InvalidArgument) naming the option or the file.
   WrapParams resolve() const;
+  // The options given on the command line (their names, --params included).
+  std::vector<std::string> given() const;
 
  private:
   struct Binding {
