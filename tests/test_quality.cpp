@@ -446,14 +446,8 @@ TEST(Remesh, FallsBackToEarClippingWithoutAnInputUnderTheRegion) {
 // ---- intersection repair of the wrap ------------------------------------------------------
 
 TEST(RepairWrap, RepairsAFoldAndKeepsThePerPointData) {
-  Mesh m = icosphere_mesh(1.0, 3);
-  PostSurface s = post_surface(m, 0.1);
+  PostSurface s = post_surface(folded_icosphere(), 0.1);
   s.locked[0] = 1;
-  // One node pushed along the sphere past its neighbours: a fold.
-  const Vec3 n0 = m.points[5];
-  const double edge = norm(m.points[m.triangles[0][1]] - m.points[m.triangles[0][0]]);
-  Vec3 t = normalized(cross(n0, {0.3, 0.5, 0.8}));
-  s.points[5] = normalized(n0 + t * (1.6 * edge));
   ASSERT_GT(intersecting_triangles(s.points, s.triangles).size(), 0u);
   const WrapRepairOutcome r = repair_intersections(s, 0.2, false, nullptr);
   EXPECT_TRUE(r.ran);
