@@ -232,6 +232,14 @@ WrapResult run_pipeline(const Mesh& input, const WrapParams& params, ProgressSin
   quality_ref.finest_size = report.finest_size;
   quality_ref.thresholds = params.quality;
   const double repair_bound = 0.5 * base;  // the intersection repair moves nothing farther than half a base cell
+  auto repair_if_intersecting = [&]() {
+    const post::WrapRepairOutcome r = post::repair_intersections(surface, repair_bound, params.float_coordinates, progress);
+    report.quality.repair_runs += r.ran ? 1 : 0;
+    report.quality.intersecting_before_repair += r.intersecting_before;
+    report.quality.intersecting_after_repair = r.intersecting_after;
+    if (r.ran) report.quality.repair_summary = r.summary;
+    return r.ran;
+  };
   {
     StageTimer timer("remesh", report.stages);
     if (progress) progress->progress("remesh", 0.0, "quality analysis of " + std::to_string(surface.triangles.size()) + " triangles");
@@ -239,7 +247,8 @@ WrapResult run_pipeline(const Mesh& input, const WrapParams& params, ProgressSin
     report.quality.before = post::analyse_quality(surface.points, surface.triangles, surface.cell_size, quality_ref, &flags);
     if (params.remesh) {
       post::RemeshParams rp;
-      rp.max_deviation = params.coarsen_tolerance > 0 ? params.coarsen_tolerance * base : 0.02 * base;
+      // Rebuilds are held to the coarsening's tolerance (its default when coarsening is off).
+      rp.max_deviation = (params.coarsen_tolerance > 0 ? params.coarsen_tolerance : WrapParams().coarsen_tolerance) * base;
       rp.offset = params.surface_offset * g.fine_size();
       rp.float_coordinates = params.float_coordinates;
       const post::RemeshStats st = post::remesh_bad_regions(surface, flags, quality_ref, prepared, rp, progress);
@@ -250,13 +259,7 @@ WrapResult run_pipeline(const Mesh& input, const WrapParams& params, ProgressSin
       report.quality.refusals = st.refusals;
     }
     // Rebuilds never add an intersection: only a surface that had some can have any left.
-    if (report.quality.before.self_intersecting > 0 || !fitted.valid) {
-      const post::WrapRepairOutcome r = post::repair_intersections(surface, repair_bound, params.float_coordinates, progress);
-      report.quality.repair_runs += r.ran ? 1 : 0;
-      report.quality.intersecting_before_repair += r.intersecting_before;
-      report.quality.intersecting_after_repair = r.intersecting_after;
-      report.quality.repair_summary = r.summary;
-    }
+    if (report.quality.before.self_intersecting > 0 || !fitted.valid) repair_if_intersecting();
   }
   check_cancel(progress);
 
@@ -298,12 +301,7 @@ WrapResult run_pipeline(const Mesh& input, const WrapParams& params, ProgressSin
       }
       // A closed manifold that intersects itself: the intersection repair, once.
       if (attempt > 0 || !verdict.self_intersects || !verdict.valid_polygon_mesh || !report.output.closed) break;
-      const post::WrapRepairOutcome r = post::repair_intersections(surface, repair_bound, params.float_coordinates, progress);
-      report.quality.repair_runs += r.ran ? 1 : 0;
-      report.quality.intersecting_before_repair += r.intersecting_before;
-      report.quality.intersecting_after_repair = r.intersecting_after;
-      report.quality.repair_summary = r.summary;
-      if (!r.ran) break;
+      if (!repair_if_intersecting()) break;
       result.surface = label_parts();
     }
     if (!report.output.valid_closed_surface() || !verdict.valid_polygon_mesh || !verdict.outward) {

@@ -381,22 +381,21 @@ class Remesher {
     const QualityThresholds& th = ref_.thresholds;
     // The region's defects must drop: bad triangles (the triggers) fewer, defective edges
     // and poor normals not more.
-    auto edge_defects = [&](const Tri& t) {
-      uint8_t e = 0;
+    // Short and long edges, counted per triangle side (inside edges twice, in both).
+    auto count_edges = [&](const Tri& t, size_t& short_edges, size_t& long_edges) {
       for (int k = 0; k < 3; ++k) {
         const uint32_t u = t[k], v = t[(k + 1) % 3];
         const double len = norm(s_.points[v] - s_.points[u]);
-        if (len < th.short_edge * std::min(cell_of(u), cell_of(v))) e |= kShortEdge;
-        if (len > th.long_edge * std::max(cell_of(u), cell_of(v))) e |= kLongEdge;
+        if (len < th.short_edge * std::min(cell_of(u), cell_of(v))) ++short_edges;
+        if (len > th.long_edge * std::max(cell_of(u), cell_of(v))) ++long_edges;
       }
-      return e;
     };
     size_t old_bad = 0, new_bad = 0, old_normals = 0, new_normals = 0;
-    uint8_t old_edges = 0, new_edges = 0;
+    size_t old_short = 0, old_long = 0, new_short = 0, new_long = 0;
     for (uint32_t f : reg.triangles) {
       old_bad += is_bad(f) ? 1 : 0;
       old_normals += (flags_[f] & kNormalDeviation) ? 1 : 0;
-      old_edges |= edge_defects(s_.triangles[f]);
+      count_edges(s_.triangles[f], old_short, old_long);
     }
     std::vector<uint8_t> new_flags;
     std::vector<float> new_deviation;
@@ -409,13 +408,13 @@ class Remesher {
       if (deviation > th.normal_deviation_deg) f |= kNormalDeviation;
       new_flags.push_back(f);
       new_deviation.push_back(float(deviation));
-      new_edges |= edge_defects(t);
+      count_edges(t, new_short, new_long);
       new_bad += bad_by(f, deviation) ? 1 : 0;
       new_normals += (f & kNormalDeviation) ? 1 : 0;
     }
     if (new_bad >= old_bad) return undo_points(), why = "bad triangles not fewer", false;
     if (new_normals > old_normals) return undo_points(), why = "more triangles with poor normals", false;
-    if ((new_edges & ~old_edges) != 0) return undo_points(), why = "edges of uncharacteristic length", false;
+    if (new_short > old_short || new_long > old_long) return undo_points(), why = "more edges of uncharacteristic length", false;
 
     // No intersection among the new triangles, nor with the rest of the surface.
     for (size_t i = 0; i < tris.size(); ++i) {
