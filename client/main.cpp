@@ -9,6 +9,7 @@
 #include <iostream>
 
 #include "cli_progress.h"
+#include "repair_options.h"
 #include "wrap_options.h"
 #ifdef VDBWRAP_WITH_REMOTE
 #include "remote.h"  // submit, wait, jobs, cancel (gRPC job service)
@@ -119,47 +120,13 @@ int main(int argc, char** argv) {
   repair_cmd->footer(
       "Exit codes: 0 no intersections left; 4 intersections left (OUTPUT and the report are still written, the\n"
       "report lists the unfixed regions); 2 bad arguments; 3 unreadable or invalid input; 5 output not written.");
-  std::string repair_input, repair_output, repair_report, max_deviation = "0.5%";
-  RepairParams rparams;
-  bool repair_quiet = false, no_fair = false, keep_pieces = false;
+  std::string repair_input, repair_output, repair_report;
+  cli::RepairOptions repair_options;
+  bool repair_quiet = false;
   repair_cmd->add_option("input", repair_input, "Input mesh (.stl .obj .off .ply)")->required();
   repair_cmd->add_option("-o,--output", repair_output, "Output mesh; the format follows the extension")->required();
   repair_cmd->add_option("--report", repair_report, "Write a JSON report (regions, diagnostics before/after, deviation)");
-  repair_cmd->add_option("--max-deviation", max_deviation,
-                         "How far any vertex or refill may end from the input: model units (0.05) or percent of the "
-                         "bounding-box diagonal (0.5%)")
-      ->capture_default_str();
-  repair_cmd->add_option("--local-iterations", rparams.local_iterations, "Iterations of part 1 (vertex/triangle shifts)")
-      ->capture_default_str()
-      ->check(CLI::Range(0, 1000));
-  repair_cmd->add_option("--alpha", rparams.alpha, "Vertex shift: clearance past the crossing, share of the gap")
-      ->capture_default_str();
-  repair_cmd->add_option("--beta", rparams.beta, "Vertex shift: alpha x gap must stay under beta x the longest region edge")
-      ->capture_default_str();
-  repair_cmd->add_option("--delta", rparams.delta, "Triangle shift: eps_move = delta x accuracy ...")->capture_default_str();
-  repair_cmd->add_option("--gamma", rparams.gamma, "... capped at gamma x the longest region edge")->capture_default_str();
-  repair_cmd->add_option("--area-ratio", rparams.area_ratio,
-                         "eps_S: least min/max area ratio of the triangles a local operation changes")
-      ->capture_default_str();
-  repair_cmd->add_option("--accuracy", rparams.accuracy,
-                         "Model accuracy in model units (0: 0.05 x the shortest edge)")
-      ->capture_default_str();
-  repair_cmd->add_option("--refill-iterations", rparams.refill_iterations, "Iterations of part 2 (remove and refill)")
-      ->capture_default_str()
-      ->check(CLI::Range(0, 100));
-  repair_cmd->add_option("--refill-area-ratio", rparams.refill_area_ratio,
-                         "Least min/max area ratio of a removed region and its refill")
-      ->capture_default_str();
-  repair_cmd->add_flag("--no-fair", no_fair, "Refine refills but do not fair them");
-  repair_cmd->add_flag("--keep-small-pieces", keep_pieces, "Do not delete small pieces the repair leaves behind");
-  repair_cmd->add_option("--small-piece-triangles", rparams.small_piece_triangles,
-                         "A leftover piece is small with at most this many triangles ...")
-      ->capture_default_str();
-  repair_cmd->add_option("--small-piece-area", rparams.small_piece_area, "... and at most this fraction of the total area")
-      ->capture_default_str();
-  repair_cmd->add_option("--threads", rparams.threads, "Worker threads (0: all cores)")
-      ->capture_default_str()
-      ->check(CLI::NonNegativeNumber);
+  repair_options.add_to(repair_cmd, true);
   repair_cmd->add_flag("-q,--quiet", repair_quiet, "No progress on stderr");
 
 #ifdef VDBWRAP_WITH_REMOTE
@@ -217,9 +184,7 @@ int main(int argc, char** argv) {
       return 0;
     }
     if (*repair_cmd) {
-      rparams.max_deviation = Length::parse(max_deviation);
-      rparams.fair = !no_fair;
-      rparams.remove_small_pieces = !keep_pieces;
+      RepairParams rparams = repair_options.resolve();
       // Binary STL stores floats: repair what will be written.
       rparams.float_coordinates = io::format_from_extension(repair_output) == io::Format::Stl;
       if (io::format_from_extension(repair_output) == io::Format::Unknown)

@@ -1,4 +1,5 @@
 #include "remote.h"
+#include "repair_options.h"
 #include "wrap_options.h"
 
 #include <grpcpp/generic/generic_stub.h>
@@ -357,6 +358,13 @@ int follow(const Connection& conn, const std::shared_ptr<grpc::Channel>& channel
                 static_cast<unsigned long long>(status.output_triangles()), id.c_str(),
                 target.report.empty() ? "" : "; report ", target.report.c_str());
   display.note(index, line);
+  // A repair that left intersections: the result is written, the exit code says so (as
+  // `vdbwrap repair`).
+  if (api::is_repair(status.spec()) && status.intersecting_pairs_left() > 0) {
+    display.note(index, "error: job " + id + ": " + std::to_string(status.intersecting_pairs_left()) +
+                            " intersecting pairs left in the result (written; the report lists where)");
+    return exit_code(ErrorKind::WrapFailed);
+  }
   return 0;
 }
 
@@ -367,13 +375,13 @@ std::string stem_of(const std::string& file_name) {
   return s.empty() ? std::string("job") : s;
 }
 
-// Outputs in DIR for names, unique within this run.
+// Outputs in DIR for names, unique within this run: NAME_wrap, or NAME_repaired for repair jobs.
 std::vector<Target> targets_in(const std::string& dir, const std::vector<std::string>& stems, const std::string& ext,
-                               const std::vector<std::string>& ids) {
+                               const std::vector<std::string>& ids, const std::vector<bool>& repairs = {}) {
   std::vector<Target> out;
   std::map<std::string, int> seen;
   for (size_t i = 0; i < stems.size(); ++i) {
-    std::string base = stems[i] + "_wrap";
+    std::string base = stems[i] + (i < repairs.size() && repairs[i] ? "_repaired" : "_wrap");
     if (seen[base]++ > 0) base += "_" + (i < ids.size() && !ids[i].empty() ? ids[i].substr(0, 8) : std::to_string(i));
     out.push_back({(fs::path(dir) / (base + "." + ext)).string(), (fs::path(dir) / (base + ".json")).string()});
   }
@@ -423,7 +431,8 @@ struct RemoteCommands::Impl {
   std::vector<std::string> inputs;
   std::string output, out_dir, format, report, leak_path;
   cli::WrapOptions wrap_options;
-  bool detach = false, quiet = false;
+  cli::RepairOptions repair_options;
+  bool detach = false, quiet = false, repair_job = false;
   double queue_wait = 600;
   // wait / cancel
   std::vector<std::string> ids;
@@ -442,13 +451,14 @@ struct RemoteCommands::Impl {
   }
 
   explicit Impl(CLI::App& app) {
-    submit = app.add_subcommand("submit", "Wrap INPUT... on a vdbwrap-server: upload, show progress, download the results");
+    submit = app.add_subcommand(
+        "submit", "Wrap (or with --repair, repair) INPUT... on a vdbwrap-server: upload, show progress, download the results");
     add_connection(submit);
     submit->add_option("input", inputs, "Input meshes (.stl .obj .off .ply); several run concurrently on the server")
         ->required()
         ->check(CLI::ExistingFile);
     submit->add_option("-o,--output", output, "Output mesh (one input); the format follows the extension");
-    submit->add_option("--out-dir", out_dir, "Folder for the results NAME_wrap.EXT and reports NAME_wrap.json");
+    submit->add_option("--out-dir", out_dir, "Folder for the results NAME_wrap.EXT (repairs: NAME_repaired.EXT) and reports NAME_wrap.json");
     submit->add_option("--format", format, "Output format with --out-dir (default: the input's)")
         ->check(CLI::IsMember({"stl", "obj", "off", "ply"}));
     submit->add_option("--report", report, "Write the JSON report (one input)");
@@ -460,15 +470,19 @@ struct RemoteCommands::Impl {
         ->capture_default_str()
         ->check(CLI::NonNegativeNumber);
     submit->add_flag("-q,--quiet", quiet, "No progress on stderr");
-    // The wrap options, as in `vdbwrap wrap`.
+    // The wrap options, as in `vdbwrap wrap`; with --repair, the repair options of `vdbwrap repair`.
     wrap_options.add_to(submit, "Worker threads on the server (0: all its cores)");
+    submit->add_flag("--repair", repair_job,
+                     "Repair the self-intersections of each input locally, as `vdbwrap repair`, instead of wrapping it "
+                     "(takes the repair options below, not the wrap options; exit code 4 when intersections are left)");
+    repair_options.add_to(submit, false);
     submit->add_option("--leak-path", leak_path,
                        "When a seed point's volume leaks: write the narrowest passage and the path to it here (OBJ; one input)");
 
     wait = app.add_subcommand("wait", "Wait for jobs on a vdbwrap-server and download their results");
     add_connection(wait);
     wait->add_option("id", ids, "Job ids")->required();
-    wait->add_option("--out-dir", out_dir, "Folder for the results NAME_wrap.EXT and reports NAME_wrap.json")
+    wait->add_option("--out-dir", out_dir, "Folder for the results NAME_wrap.EXT (repairs: NAME_repaired.EXT) and reports NAME_wrap.json")
         ->capture_default_str();
     wait->add_flag("-q,--quiet", quiet, "No progress on stderr");
 
@@ -538,11 +552,26 @@ int RemoteCommands::Impl::run_submit() {
   if (!detach && output.empty() && out_dir.empty())
     throw Error(ErrorKind::InvalidArgument, "give -o OUTPUT, --out-dir DIR or --detach");
   if (!report.empty() && inputs.size() > 1)
-    throw Error(ErrorKind::InvalidArgument, "--report names one file: with --out-dir the reports are NAME_wrap.json");
+    throw Error(ErrorKind::InvalidArgument, "--report names one file: with --out-dir the reports are NAME_wrap.json (NAME_repaired.json)");
   if (!output.empty() && io::format_from_extension(output) == io::Format::Unknown)
     throw Error(ErrorKind::InvalidArgument, output + ": unknown output format (use .stl, .obj, .off or .ply)");
   if (!out_dir.empty() && !fs::is_directory(out_dir)) throw Error(ErrorKind::InvalidArgument, out_dir + ": not a folder");
-  const pb::WrapParameters wire_params = api::to_proto(wrap_options.resolve());
+  // The job's parameters: a wrap's, or with --repair a repair's (and not the other's).
+  pb::WrapParameters wire_params;
+  pb::RepairParameters wire_repair;
+  if (repair_job) {
+    for (const std::string& name : wrap_options.given())
+      if (name != "--threads") throw Error(ErrorKind::InvalidArgument, name + " is a wrap option: it has no meaning with --repair");
+    if (!leak_path.empty()) throw Error(ErrorKind::InvalidArgument, "--leak-path is a wrap option: it has no meaning with --repair");
+    RepairParams rp = repair_options.resolve();
+    rp.threads = wrap_options.resolve().threads;
+    wire_repair = api::to_proto(rp);
+    api::to_repair_params(wire_repair);  // the server's checks, here first
+  } else {
+    const std::vector<std::string> stray = repair_options.given();
+    if (!stray.empty()) throw Error(ErrorKind::InvalidArgument, stray.front() + " is a repair option: add --repair");
+    wire_params = api::to_proto(wrap_options.resolve());
+  }
   conn.load();
 
   // Output format per input.
@@ -571,7 +600,12 @@ int RemoteCommands::Impl::run_submit() {
     pb::JobSpec spec;
     spec.set_file_name(names[i]);
     spec.set_input_format(api::format_from_file_name(inputs[i]));
-    *spec.mutable_params() = wire_params;
+    if (repair_job) {
+      spec.set_kind(pb::JOB_KIND_REPAIR);
+      *spec.mutable_repair_params() = wire_repair;
+    } else {
+      *spec.mutable_params() = wire_params;
+    }
     spec.set_output_format(formats[i]);
     spec.set_idempotency_key(random_key());
     std::error_code ec;
@@ -633,7 +667,9 @@ int RemoteCommands::Impl::run_submit() {
 
   std::vector<Target> targets;
   if (!output.empty()) targets.push_back({output, report, leak_path});
-  else targets = targets_in(out_dir, stems, api::extension_of(formats.empty() ? pb::MESH_FORMAT_PLY : formats[0]), ids);
+  else
+    targets = targets_in(out_dir, stems, api::extension_of(formats.empty() ? pb::MESH_FORMAT_PLY : formats[0]), ids,
+                         std::vector<bool>(ids.size(), repair_job));
   if (output.empty() && format.empty())  // per-input formats
     for (size_t i = 0; i < targets.size(); ++i)
       targets[i].output = fs::path(targets[i].output).replace_extension(api::extension_of(formats[i])).string();
@@ -668,6 +704,7 @@ int RemoteCommands::Impl::run_wait() {
   // Names and formats from the server.
   std::vector<std::string> names, stems;
   std::vector<pb::MeshFormat> formats;
+  std::vector<bool> repairs;
   for (const auto& id : ids) {
     grpc::ClientContext ctx;
     conn.prepare(ctx);
@@ -686,8 +723,9 @@ int RemoteCommands::Impl::run_wait() {
     names.push_back(status.spec().file_name().empty() ? id : status.spec().file_name());
     stems.push_back(stem_of(names.back()));
     formats.push_back(status.spec().output_format());
+    repairs.push_back(api::is_repair(status.spec()));
   }
-  std::vector<Target> targets = targets_in(out_dir, stems, "ply", ids);
+  std::vector<Target> targets = targets_in(out_dir, stems, "ply", ids, repairs);
   for (size_t i = 0; i < targets.size(); ++i)
     targets[i].output = fs::path(targets[i].output).replace_extension(api::extension_of(formats[i])).string();
   Display display(quiet, names);

@@ -89,10 +89,22 @@ void WrapOptions::add_to(CLI::App* cmd, const std::string& threads_help) {
   bindings_.push_back({nd, [this](WrapParams& p) { p.compute_distances = !no_distances_; }});
   CLI::Option* nf = cmd->add_flag("--no-features", no_features_, "Do not snap the wrap onto sharp edges, boundaries and corners");
   bindings_.push_back({nf, [this](WrapParams& p) { p.snap_features = !no_features_; }});
+  CLI::Option* nr = cmd->add_flag("--no-remesh", no_remesh_,
+                                  "Do not rebuild the bad regions of the wrap (slivers, tiny triangles, very poor normals); "
+                                  "the report's quality section still counts them");
+  bindings_.push_back({nr, [this](WrapParams& p) { p.remesh = !no_remesh_; }});
   bind(cmd, "--corner-angle", cli_.corner_angle_deg, "Degrees a feature curve must turn at a point to make a corner there",
        [this](WrapParams& p) { p.corner_angle_deg = cli_.corner_angle_deg; })
       ->capture_default_str()
       ->check(CLI::Range(0.0, 180.0));
+}
+
+std::vector<std::string> WrapOptions::given() const {
+  std::vector<std::string> out;
+  if (!params_file_.empty()) out.push_back("--params");
+  for (const Binding& b : bindings_)
+    if (b.option->count() > 0) out.push_back(b.option->get_name());
+  return out;
 }
 
 WrapParams WrapOptions::resolve() const {

@@ -20,6 +20,8 @@ class WrapOptions {
   // After parsing: the parameter file (if any), then every option given. Throws
   // Error(InvalidArgument) naming the option or the file.
   WrapParams resolve() const;
+  // The options given on the command line (their names, --params included).
+  std::vector<std::string> given() const;
 
  private:
   struct Binding {
@@ -34,7 +36,7 @@ class WrapOptions {
   WrapParams cli_;
   std::string base_size_ = "1%", volume_ = "outside", gap_closure_, contact_floor_, params_file_;
   std::vector<std::string> control_volumes_, part_sizes_, contact_rules_;
-  bool no_features_ = false, no_distances_ = false;
+  bool no_features_ = false, no_distances_ = false, no_remesh_ = false;
 };
 
 }  // namespace vdbwrap::cli

@@ -85,8 +85,52 @@ json params_json(const WrapParams& p) {
               {"snap_features", p.snap_features},
               {"corner_angle_deg", p.corner_angle_deg},
               {"coarsen_tolerance", p.coarsen_tolerance},
+              {"remesh", p.remesh},
               {"float_coordinates", p.float_coordinates}};
 }
+json counts_json(const QualityCounts& q) {
+  return json{{"triangles", q.triangles},
+              {"edges", q.edges},
+              {"self_intersecting_triangles", q.self_intersecting},
+              {"small_area_triangles", q.small_area},
+              {"sliver_triangles", q.slivers},
+              {"short_edges", q.short_edges},
+              {"long_edges", q.long_edges},
+              {"normal_deviation_triangles", q.normal_deviation},
+              {"feature_samples", q.feature_samples},
+              {"lost_feature_samples", q.lost_feature_samples},
+              {"unreachable_feature_samples", q.unreachable_feature_samples},
+              {"min_angle_deg", q.min_angle_deg},
+              {"max_normal_deviation_deg", q.max_normal_deviation_deg}};
+}
+
+json quality_json(const QualityReport& q, const WrapParams& p) {
+  const QualityThresholds& t = p.quality;
+  return json{{"thresholds",
+               {{"small_area", t.small_area},
+                {"sliver_angle_deg", t.sliver_angle_deg},
+                {"short_edge", t.short_edge},
+                {"long_edge", t.long_edge},
+                {"normal_deviation_deg", t.normal_deviation_deg},
+                {"near_input", t.near_input},
+                {"feature_tolerance", t.feature_tolerance},
+                {"feature_reach", t.feature_reach}}},
+              {"before", counts_json(q.before)},
+              {"after", counts_json(q.after)},
+              {"remesh",
+               {{"enabled", p.remesh},
+                {"regions", q.regions},
+                {"rebuilt_on_input", q.remeshed_on_input},
+                {"rebuilt_by_ear_clipping", q.remeshed_by_ear_clipping},
+                {"restored", q.restored},
+                {"refusals", q.refusals}}},
+              {"intersection_repair",
+               {{"runs", q.repair_runs},
+                {"intersecting_triangles_before", q.intersecting_before_repair},
+                {"intersecting_triangles_after", q.intersecting_after_repair},
+                {"summary", q.repair_summary}}}};
+}
+
 json leak_json(const LeakReport& l) {
   if (!l.detected) return json{{"detected", false}};
   return json{{"detected", true},
@@ -201,6 +245,7 @@ std::string to_json(const WrapReport& r, int indent) {
            {"separate_bodies", r.contact.separate_bodies}}},
          {"control_sizes", sizes},
          {"projection", {{"nodes_held_back", r.nodes_held_back}, {"triangles_before_coarsening", r.triangles_before_coarsening}}},
+         {"quality", quality_json(r.quality, r.params)},
          {"output", diag_json(r.output)},
          {"distance_output_to_input", dist_json(r.output_to_input)},
          {"distance_input_to_output", dist_json(r.input_to_output)},

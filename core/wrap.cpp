@@ -21,6 +21,9 @@
 #include "grid/size_controls.h"
 #include "grid/volume_select.h"
 #include "post/coarsen.h"
+#include "post/quality.h"
+#include "post/remesh.h"
+#include "post/repair_wrap.h"
 #include "prep/prepare.h"
 #include "vdbwrap/wrap.h"
 
@@ -201,49 +204,123 @@ WrapResult run_pipeline(const Mesh& input, const WrapParams& params, ProgressSin
       cp.max_deviation = params.coarsen_tolerance * base;
       cp.max_edge = 4.0 * base;  // measured: half the triangles of 2 base, same distances
       cp.min_area2 = 1e-6 * g.fine_size() * g.fine_size();
-      post::coarsen(fitted.points, fitted.triangles, fitted.snapped, index, prepared.origin, cp, progress);
+      const post::CoarsenStats cs =
+          post::coarsen(fitted.points, fitted.triangles, fitted.snapped, index, prepared.origin, cp, progress);
+      // The per-point data follow their points (snapped nodes are never merged away).
+      std::vector<double> cell(fitted.points.size());
+      std::vector<uint8_t> snapped(fitted.points.size());
+      for (size_t i = 0; i < cs.remap.size(); ++i)
+        if (cs.remap[i] != UINT32_MAX) cell[cs.remap[i]] = fitted.cell_size[i], snapped[cs.remap[i]] = fitted.snapped[i];
+      std::vector<std::pair<uint32_t, uint32_t>> edges;
+      for (const auto& [a, b] : fitted.feature_edges)
+        if (cs.remap[a] != UINT32_MAX && cs.remap[b] != UINT32_MAX) edges.push_back({cs.remap[a], cs.remap[b]});
+      fitted.cell_size.swap(cell);
+      fitted.snapped.swap(snapped);
+      fitted.feature_edges.swap(edges);
     }
+  }
+  check_cancel(progress);
 
-    // Every output triangle carries the part of the input triangle nearest its centroid.
-    Mesh& out = result.surface;
-    out.points = fitted.points;
-    out.triangles = fitted.triangles;
+  // Stage 4: quality analysis, remeshing of bad regions, intersection repair when anything
+  // still intersects; then the part labels and the final validation.
+  post::PostSurface surface{std::move(fitted.points), std::move(fitted.triangles), std::move(fitted.cell_size),
+                            std::move(fitted.snapped), std::move(fitted.feature_edges)};
+  post::QualityReference quality_ref;
+  quality_ref.input = &index;
+  quality_ref.origin = prepared.origin;
+  quality_ref.feature_samples = post::sample_sharp_edges(prepared, 1e-3 * prepared.diagonal);
+  quality_ref.finest_size = report.finest_size;
+  quality_ref.thresholds = params.quality;
+  const double repair_bound = 0.5 * base;  // the intersection repair moves nothing farther than half a base cell
+  auto repair_if_intersecting = [&]() {
+    const post::WrapRepairOutcome r = post::repair_intersections(surface, repair_bound, params.float_coordinates, progress);
+    report.quality.repair_runs += r.ran ? 1 : 0;
+    report.quality.intersecting_before_repair += r.intersecting_before;
+    report.quality.intersecting_after_repair = r.intersecting_after;
+    if (r.ran) report.quality.repair_summary = r.summary;
+    return r.ran;
+  };
+  {
+    StageTimer timer("remesh", report.stages);
+    if (progress) progress->progress("remesh", 0.0, "quality analysis of " + std::to_string(surface.triangles.size()) + " triangles");
+    std::vector<uint8_t> flags;
+    report.quality.before = post::analyse_quality(surface.points, surface.triangles, surface.cell_size, quality_ref, &flags);
+    if (params.remesh) {
+      post::RemeshParams rp;
+      // Rebuilds are held to the coarsening's tolerance (its default when coarsening is off).
+      rp.max_deviation = (params.coarsen_tolerance > 0 ? params.coarsen_tolerance : WrapParams().coarsen_tolerance) * base;
+      rp.offset = params.surface_offset * g.fine_size();
+      rp.float_coordinates = params.float_coordinates;
+      const post::RemeshStats st = post::remesh_bad_regions(surface, flags, quality_ref, prepared, rp, progress);
+      report.quality.regions = st.regions;
+      report.quality.remeshed_on_input = st.on_input;
+      report.quality.remeshed_by_ear_clipping = st.ear_clipping;
+      report.quality.restored = st.restored;
+      report.quality.refusals = st.refusals;
+    }
+    // Rebuilds never add an intersection: only a surface that had some can have any left.
+    if (report.quality.before.self_intersecting > 0 || !fitted.valid) repair_if_intersecting();
+  }
+  check_cancel(progress);
+
+  // Every output triangle carries the part of the input triangle nearest its centroid.
+  auto label_parts = [&]() {
+    Mesh out;
+    out.points = surface.points;
+    out.triangles = surface.triangles;
     out.part_names = prepared.mesh.part_names;
     out.triangle_part.resize(out.triangles.size());
     tbb::parallel_for(tbb::blocked_range<size_t>(0, out.triangles.size(), 1024), [&](const tbb::blocked_range<size_t>& r) {
       for (size_t t = r.begin(); t != r.end(); ++t) {
-        const Tri& tri = fitted.triangles[t];
-        Vec3 c = (fitted.points[tri[0]] + fitted.points[tri[1]] + fitted.points[tri[2]]) * (1.0 / 3.0) - prepared.origin;
+        const Tri& tri = out.triangles[t];
+        Vec3 c = (out.points[tri[0]] + out.points[tri[1]] + out.points[tri[2]]) * (1.0 / 3.0) - prepared.origin;
         out.triangle_part[t] = prepared.mesh.part_of(index.closest(c).triangle);
       }
     });
-  }
+    return out;
+  };
+  result.surface = label_parts();
   check_cancel(progress);
 
+  std::vector<uint32_t> crossing;  // CGAL's intersecting faces of the final surface
   {
     StageTimer timer("validate", report.stages);
     if (progress) progress->progress("validate", 0.0, "checking the wrap");
-    report.output = diagnose(result.surface, false);
-    check_cancel(progress);
-    // The authoritative self-intersection verdict is CGAL's own on the closed mesh.
-    check::CgalVerdict verdict = check::cgal_verdict(result.surface.points, result.surface.triangles);
-    report.output.self_intersecting = verdict.self_intersects;
-    if (verdict.valid_polygon_mesh) {
-      // Count what CGAL finds (zero for any surface that is handed back).
-      auto bad = check::mesh_self_intersecting_faces(result.surface.points, result.surface.triangles);
-      report.output.intersecting_triangles = bad.size();
+    check::CgalVerdict verdict;
+    for (int attempt = 0;; ++attempt) {
+      report.output = diagnose(result.surface, false);
+      check_cancel(progress);
+      // The authoritative self-intersection verdict is CGAL's own on the closed mesh.
+      verdict = check::cgal_verdict(result.surface.points, result.surface.triangles);
+      report.output.self_intersecting = verdict.self_intersects;
+      crossing.clear();
+      if (verdict.valid_polygon_mesh) {
+        // Count what CGAL finds (zero for any surface that is handed back).
+        crossing = check::mesh_self_intersecting_faces(result.surface.points, result.surface.triangles);
+        report.output.intersecting_triangles = crossing.size();
+      }
+      // A closed manifold that intersects itself: the intersection repair, once.
+      if (attempt > 0 || !verdict.self_intersects || !verdict.valid_polygon_mesh || !report.output.closed) break;
+      if (!repair_if_intersecting()) break;
+      result.surface = label_parts();
     }
     if (!report.output.valid_closed_surface() || !verdict.valid_polygon_mesh || !verdict.outward) {
       // For diagnosis only: VDBWRAP_DUMP_INVALID=FILE keeps the rejected surface.
       if (const char* dump = std::getenv("VDBWRAP_DUMP_INVALID")) io::write_mesh(result.surface, dump);
-      throw WrapFailure("the wrap failed validation: closed=" + std::to_string(report.output.closed) +
-                            " manifold=" + std::to_string(report.output.manifold) +
-                            " outward=" + std::to_string(verdict.outward) +
-                            " self-intersecting=" + std::to_string(verdict.self_intersects),
-                        report);
+      std::string why = "the wrap failed validation: closed=" + std::to_string(report.output.closed) +
+                        " manifold=" + std::to_string(report.output.manifold) + " outward=" + std::to_string(verdict.outward) +
+                        " self-intersecting=" + std::to_string(verdict.self_intersects);
+      if (verdict.self_intersects && report.quality.repair_runs > 0)
+        why += " (" + std::to_string(report.output.intersecting_triangles) +
+               " intersecting triangles left after the intersection repair: " + report.quality.repair_summary + ")";
+      throw WrapFailure(why, report);
     }
     report.contact.separate_bodies = report.output.components;
     if (progress) progress->progress("validate", 1.0, "closed, manifold, outward, no self-intersections");
+  }
+  {
+    StageTimer timer("quality", report.stages);
+    report.quality.after = post::analyse_quality(surface.points, surface.triangles, surface.cell_size, quality_ref, nullptr, &crossing);
   }
 
   if (params.compute_distances) {

@@ -141,6 +141,7 @@ WrapParams to_wrap_params(const pb::WrapParameters& in) {
     p.presmooth_iterations = in.presmooth_iterations();
   }
   if (in.has_snap_features()) p.snap_features = in.snap_features();
+  if (in.has_remesh()) p.remesh = in.remesh();
   if (in.has_corner_angle_deg()) {
     double a = finite("corner_angle_deg", in.corner_angle_deg());
     if (!(a > 0 && a < 180)) bad("corner_angle_deg", "must be strictly between 0 and 180 degrees");
@@ -217,7 +218,91 @@ pb::WrapParameters to_proto(const WrapParams& in) {
   out.set_surface_offset(in.surface_offset);
   out.set_compute_distances(in.compute_distances);
   out.set_coarsen_tolerance(in.coarsen_tolerance);
+  out.set_remesh(in.remesh);
   return out;
+}
+
+RepairParams to_repair_params(const pb::RepairParameters& in) {
+  RepairParams p;  // `vdbwrap repair`'s defaults
+  auto fraction = [](const std::string& field, double v, bool zero_ok, bool one_ok) {
+    if (!std::isfinite(v) || !((zero_ok ? v >= 0 : v > 0) && (one_ok ? v <= 1 : v < 1)))
+      bad(field, std::string("must be in ") + (zero_ok ? "[0" : "(0") + ", 1" + (one_ok ? "]" : ")"));
+    return v;
+  };
+  auto positive = [](const std::string& field, double v) {
+    if (!(finite(field, v) > 0)) bad(field, "must be positive");
+    return v;
+  };
+  if (in.has_local_iterations()) {
+    if (in.local_iterations() < 0 || in.local_iterations() > 1000) bad("local_iterations", "must be between 0 and 1000");
+    p.local_iterations = in.local_iterations();
+  }
+  if (in.has_alpha()) p.alpha = fraction("alpha", in.alpha(), false, false);
+  if (in.has_beta()) p.beta = positive("beta", in.beta());
+  if (in.has_delta()) p.delta = positive("delta", in.delta());
+  if (in.has_gamma()) p.gamma = positive("gamma", in.gamma());
+  if (in.has_area_ratio()) p.area_ratio = fraction("area_ratio", in.area_ratio(), false, true);
+  if (in.has_accuracy()) {
+    if (!(finite("accuracy", in.accuracy()) >= 0)) bad("accuracy", "must be 0 (automatic) or positive");
+    p.accuracy = in.accuracy();
+  }
+  if (in.has_refill_iterations()) {
+    if (in.refill_iterations() < 0 || in.refill_iterations() > 100) bad("refill_iterations", "must be between 0 and 100");
+    p.refill_iterations = in.refill_iterations();
+  }
+  if (in.has_refill_area_ratio()) p.refill_area_ratio = fraction("refill_area_ratio", in.refill_area_ratio(), false, true);
+  if (in.has_fair()) p.fair = in.fair();
+  if (in.has_max_deviation()) p.max_deviation = to_length("max_deviation", in.max_deviation());
+  if (in.has_remove_small_pieces()) p.remove_small_pieces = in.remove_small_pieces();
+  if (in.has_small_piece_triangles()) {
+    if (in.small_piece_triangles() < 0) bad("small_piece_triangles", "must not be negative");
+    p.small_piece_triangles = in.small_piece_triangles();
+  }
+  if (in.has_small_piece_area()) p.small_piece_area = fraction("small_piece_area", in.small_piece_area(), true, true);
+  if (in.has_threads()) {
+    if (in.threads() < 0) bad("threads", "must be 0 (all cores) or more");
+    p.threads = in.threads();
+  }
+  if (in.has_compute_distances()) p.compute_distances = in.compute_distances();
+  return p;
+}
+
+pb::RepairParameters to_proto(const RepairParams& in) {
+  pb::RepairParameters out;
+  out.set_local_iterations(in.local_iterations);
+  out.set_alpha(in.alpha);
+  out.set_beta(in.beta);
+  out.set_delta(in.delta);
+  out.set_gamma(in.gamma);
+  out.set_area_ratio(in.area_ratio);
+  out.set_accuracy(in.accuracy);
+  out.set_refill_iterations(in.refill_iterations);
+  out.set_refill_area_ratio(in.refill_area_ratio);
+  out.set_fair(in.fair);
+  *out.mutable_max_deviation() = to_proto_size(in.max_deviation);
+  out.set_remove_small_pieces(in.remove_small_pieces);
+  out.set_small_piece_triangles(in.small_piece_triangles);
+  out.set_small_piece_area(in.small_piece_area);
+  out.set_threads(in.threads);
+  out.set_compute_distances(in.compute_distances);
+  return out;
+}
+
+bool is_repair(const pb::JobSpec& spec) { return spec.kind() == pb::JOB_KIND_REPAIR; }
+
+void check_job_parameters(const pb::JobSpec& spec) {
+  switch (spec.kind()) {
+    case pb::JOB_KIND_UNSPECIFIED:
+    case pb::JOB_KIND_WRAP:
+      if (spec.has_repair_params()) bad("repair_params", "given, but the job is a wrap (kind JOB_KIND_REPAIR for a repair)");
+      to_wrap_params(spec.params());
+      return;
+    case pb::JOB_KIND_REPAIR:
+      if (spec.has_params()) bad("params", "given, but the job is a repair (use repair_params)");
+      to_repair_params(spec.repair_params());
+      return;
+    default: bad("kind", "unknown value " + std::to_string(int(spec.kind())));
+  }
 }
 
 io::Format to_io_format(pb::MeshFormat format) {

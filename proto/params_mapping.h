@@ -7,6 +7,7 @@
 
 #include "io/mesh_io.h"
 #include "vdbwrap/errors.h"
+#include "vdbwrap/repair.h"
 #include "vdbwrap/v1/jobs.pb.h"
 #include "vdbwrap/wrap.h"
 
@@ -25,6 +26,16 @@ WrapParams to_wrap_params(const pb::WrapParameters& in);
 
 // Core parameters -> API parameters, every field set.
 pb::WrapParameters to_proto(const WrapParams& in);
+
+// The same for the repair: unset fields take RepairParams' defaults (`vdbwrap repair`'s);
+// Error(InvalidArgument) naming the field for a value out of range.
+RepairParams to_repair_params(const pb::RepairParameters& in);
+pb::RepairParameters to_proto(const RepairParams& in);
+
+// Checks that a job's spec names its kind's parameters only (Error(InvalidArgument)) and
+// that they are in range.
+void check_job_parameters(const pb::JobSpec& spec);
+bool is_repair(const pb::JobSpec& spec);
 
 io::Format to_io_format(pb::MeshFormat format);
 pb::MeshFormat to_proto_format(io::Format format);

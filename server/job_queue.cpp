@@ -9,6 +9,7 @@
 
 #include "io/mesh_io.h"
 #include "params_mapping.h"
+#include "vdbwrap/repair.h"
 #include "vdbwrap/wrap.h"
 
 namespace vdbwrap::server {
@@ -344,9 +345,17 @@ void JobQueue::run(const std::shared_ptr<Job>& job) {
   };
   try {
     const pb::JobSpec& spec = spec_record.spec();
-    WrapParams params = api::to_wrap_params(spec.params());
-    // Binary STL stores floats: validate what will be written.
-    params.float_coordinates = spec.output_format() == pb::MESH_FORMAT_STL;
+    // Binary STL stores floats: validate (or repair) what will be written.
+    const bool float_coordinates = spec.output_format() == pb::MESH_FORMAT_STL;
+    WrapParams params;
+    RepairParams repair_params;
+    if (api::is_repair(spec)) {
+      repair_params = api::to_repair_params(spec.repair_params());
+      repair_params.float_coordinates = float_coordinates;
+    } else {
+      params = api::to_wrap_params(spec.params());
+      params.float_coordinates = float_coordinates;
+    }
     if (sink.cancelled()) throw Error(ErrorKind::Cancelled, "cancelled");
     Mesh input;
     {
@@ -356,31 +365,50 @@ void JobQueue::run(const std::shared_ptr<Job>& job) {
                                        spec.file_name().empty() ? "upload" : spec.file_name());
       sink.progress("read", 1.0, std::to_string(input.triangles.size()) + " triangles");
     }
-    WrapResult result = wrap(input, params, &sink);
+    // The job's work: a wrap, or a repair (whose result is written even with intersections
+    // left, as `vdbwrap repair` does; the status says how many).
+    Mesh surface;
+    std::string report;
+    double seconds = 0;
+    uint64_t pairs_left = 0;
+    if (api::is_repair(spec)) {
+      RepairResult result = repair(input, repair_params, &sink);
+      surface = std::move(result.mesh);
+      report = to_json(result.report);
+      seconds = result.report.total_seconds;
+      pairs_left = result.report.after.intersecting_pairs;
+    } else {
+      WrapResult result = wrap(input, params, &sink);
+      surface = std::move(result.surface);
+      report = to_json(result.report);
+      seconds = result.report.total_seconds;
+    }
     input = Mesh{};  // frees the input before writing
     sink.progress("write", 0.0, "writing the result");
     const pb::MeshFormat out_format = spec.output_format();
-    std::string ply = io::write_mesh_to_bytes(result.surface, io::Format::Ply);
+    std::string ply = io::write_mesh_to_bytes(surface, io::Format::Ply);
     store_.write_file_atomic(store_.result_path(id, pb::MESH_FORMAT_PLY), ply);
     uint64_t result_bytes = ply.size();
     ply = std::string();
     if (out_format != pb::MESH_FORMAT_PLY) {
-      std::string bytes = io::write_mesh_to_bytes(result.surface, api::to_io_format(out_format));
+      std::string bytes = io::write_mesh_to_bytes(surface, api::to_io_format(out_format));
       store_.write_file_atomic(store_.result_path(id, out_format), bytes);
       result_bytes = bytes.size();
     }
-    store_.write_file_atomic(store_.report_path(id), to_json(result.report) + "\n");
+    store_.write_file_atomic(store_.report_path(id), report + "\n");
     {
       std::lock_guard<std::mutex> g(job->lock);
       job->record.set_result_bytes(result_bytes);
-      job->record.set_output_triangles(result.surface.triangles.size());
+      job->record.set_output_triangles(surface.triangles.size());
+      job->record.set_intersecting_pairs_left(pairs_left);
     }
     sink.progress("write", 1.0, std::to_string(result_bytes) + " bytes");
     set_state(*job, pb::JOB_STATE_SUCCEEDED);
     char line[256];
-    std::snprintf(line, sizeof line, " finished: %zu triangles, %.2f s", result.surface.triangles.size(),
-                  result.report.total_seconds);
-    log_line("job " + id + line);
+    std::snprintf(line, sizeof line, " finished: %zu triangles, %.2f s", surface.triangles.size(), seconds);
+    std::string text = "job " + id + line;
+    if (api::is_repair(spec)) text += ", " + std::to_string(pairs_left) + " intersecting pairs left";
+    log_line(text);
   } catch (const WrapFailure& f) {
     // A leak or a failed validation: the report says where, so it is kept with the job.
     try {

@@ -2,6 +2,7 @@
 
 #include <fstream>
 
+#include "common/float_round.h"
 #include "io/mesh_io.h"
 #include "params_mapping.h"
 
@@ -83,7 +84,7 @@ grpc::Status JobsService::Submit(grpc::ServerContext* ctx, grpc::ServerReader<pb
   if (spec.idempotency_key().size() > kMaxKey)
     return reject(status(grpc::StatusCode::INVALID_ARGUMENT, "idempotency_key is longer than 128 characters"));
   try {
-    api::to_wrap_params(spec.params());
+    api::check_job_parameters(spec);
   } catch (const Error& e) {
     return reject(core_error(ctx, e));
   }
@@ -166,7 +167,7 @@ grpc::Status JobsService::Submit(grpc::ServerContext* ctx, grpc::ServerReader<pb
   reply->set_server(options_.advertise);
   if (!duplicate)
     log_line("job " + record.job_id() + " accepted: \"" + name + "\", " + std::to_string(upload->size()) + " bytes, " +
-             std::to_string(triangles) + " triangles");
+             std::to_string(triangles) + " triangles" + (api::is_repair(spec) ? ", repair" : ""));
   return grpc::Status::OK;
 }
 
@@ -271,11 +272,13 @@ grpc::Status JobsService::Download(grpc::ServerContext* ctx, const pb::DownloadR
     Mesh mesh = io::read_mesh_from_bytes(ply, io::Format::Ply, "result");
     if (format == pb::MESH_FORMAT_STL) {
       // Binary STL stores floats: a result validated in double precision is checked again
-      // as it will be written, and refused rather than handed back invalid.
+      // as it will be written, and refused rather than handed back invalid (a repair's
+      // result: with more intersections than the repair left).
       Mesh rounded = mesh;
-      for (auto& p : rounded.points) p = {double(float(p[0])), double(float(p[1])), double(float(p[2]))};
+      for (auto& p : rounded.points) p = round_to_float(p);
       MeshDiagnostics d = diagnose(rounded, true);
-      if (!d.valid_closed_surface())
+      const bool worse = api::is_repair(r.spec()) ? d.intersecting_pairs > r.intersecting_pairs_left() : !d.valid_closed_surface();
+      if (worse)
         return status(grpc::StatusCode::FAILED_PRECONDITION,
                       "this result is not valid once rounded to single precision for STL (" +
                           std::to_string(d.intersecting_triangles) + " intersecting triangles); download it as PLY or OBJ, "

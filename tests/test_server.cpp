@@ -181,17 +181,22 @@ class Client {
   SubmitOutcome submit(const std::string& bytes, const std::string& file_name, const pb::WrapParameters& params,
                        const std::string& key = "", pb::MeshFormat output = pb::MESH_FORMAT_UNSPECIFIED,
                        uint64_t declared_size = 0) {
+    pb::JobSpec spec;
+    spec.set_file_name(file_name);
+    *spec.mutable_params() = params;
+    spec.set_idempotency_key(key);
+    spec.set_output_format(output);
+    spec.set_size_bytes(declared_size);
+    return submit_spec(bytes, spec);
+  }
+
+  SubmitOutcome submit_spec(const std::string& bytes, const pb::JobSpec& job) {
     grpc::ClientContext ctx;
     prepare(ctx);
     pb::SubmitReply reply;
     auto writer = stub_->Submit(&ctx, &reply);
     pb::SubmitRequest req;
-    auto* spec = req.mutable_spec();
-    spec->set_file_name(file_name);
-    *spec->mutable_params() = params;
-    spec->set_idempotency_key(key);
-    spec->set_output_format(output);
-    spec->set_size_bytes(declared_size);
+    *req.mutable_spec() = job;
     bool open = writer->Write(req);
     const size_t chunk = 64 * 1024;
     for (size_t off = 0; open && off < bytes.size(); off += chunk) {
@@ -394,6 +399,7 @@ TEST(ParamsMapping, RoundTripsEveryFieldAndRefusesOutOfRange) {
   p.surface_offset = 0.1;
   p.presmooth_iterations = 5;
   p.snap_features = !vdbwrap::WrapParams().snap_features;
+  p.remesh = !vdbwrap::WrapParams().remesh;
   p.corner_angle_deg = 55;
   p.compute_distances = false;
   vdbwrap::WrapParams q = vdbwrap::api::to_wrap_params(vdbwrap::api::to_proto(p));
@@ -410,6 +416,7 @@ TEST(ParamsMapping, RoundTripsEveryFieldAndRefusesOutOfRange) {
   EXPECT_EQ(q.surface_offset, 0.1);
   EXPECT_EQ(q.presmooth_iterations, 5);
   EXPECT_EQ(q.snap_features, p.snap_features);
+  EXPECT_EQ(q.remesh, p.remesh);
   EXPECT_EQ(q.corner_angle_deg, 55);
   EXPECT_FALSE(q.compute_distances);
   // The voxel-stage controls (issue 5), through the API and back.
@@ -466,6 +473,142 @@ TEST(ParamsMapping, RoundTripsEveryFieldAndRefusesOutOfRange) {
   EXPECT_TRUE(refused([](pb::WrapParameters& w) { w.set_corner_angle_deg(0); }));
   EXPECT_TRUE(refused([](pb::WrapParameters& w) { w.set_surface_offset(0.5); }));
   EXPECT_TRUE(refused([](pb::WrapParameters& w) { w.set_volume(static_cast<pb::Volume>(9)); }));
+}
+
+TEST(ParamsMapping, RepairParametersRoundTripRefuseOutOfRangeAndMatchTheJobKind) {
+  vdbwrap::RepairParams p;
+  p.local_iterations = 7;
+  p.alpha = 0.3;
+  p.beta = 0.2;
+  p.delta = 0.4;
+  p.gamma = 0.002;
+  p.area_ratio = 0.9;
+  p.accuracy = 1e-4;
+  p.refill_iterations = 2;
+  p.refill_area_ratio = 0.6;
+  p.fair = false;
+  p.max_deviation = {0.05, false};
+  p.remove_small_pieces = false;
+  p.small_piece_triangles = 5;
+  p.small_piece_area = 0.01;
+  p.threads = 2;
+  p.compute_distances = false;
+  const vdbwrap::RepairParams q = vdbwrap::api::to_repair_params(vdbwrap::api::to_proto(p));
+  EXPECT_EQ(q.local_iterations, 7);
+  EXPECT_EQ(q.alpha, 0.3);
+  EXPECT_EQ(q.beta, 0.2);
+  EXPECT_EQ(q.delta, 0.4);
+  EXPECT_EQ(q.gamma, 0.002);
+  EXPECT_EQ(q.area_ratio, 0.9);
+  EXPECT_EQ(q.accuracy, 1e-4);
+  EXPECT_EQ(q.refill_iterations, 2);
+  EXPECT_EQ(q.refill_area_ratio, 0.6);
+  EXPECT_FALSE(q.fair);
+  EXPECT_EQ(q.max_deviation.to_string(), "0.05");
+  EXPECT_FALSE(q.remove_small_pieces);
+  EXPECT_EQ(q.small_piece_triangles, 5);
+  EXPECT_EQ(q.small_piece_area, 0.01);
+  EXPECT_EQ(q.threads, 2);
+  EXPECT_FALSE(q.compute_distances);
+  // Unset: `vdbwrap repair`'s defaults.
+  const vdbwrap::RepairParams d = vdbwrap::api::to_repair_params(pb::RepairParameters());
+  EXPECT_EQ(d.alpha, vdbwrap::RepairParams().alpha);
+  EXPECT_EQ(d.max_deviation.to_string(), vdbwrap::RepairParams().max_deviation.to_string());
+  EXPECT_TRUE(d.fair);
+  auto refused = [](auto set) {
+    pb::RepairParameters r;
+    set(r);
+    try {
+      vdbwrap::api::to_repair_params(r);
+    } catch (const vdbwrap::Error& e) {
+      return e.kind() == vdbwrap::ErrorKind::InvalidArgument;
+    }
+    return false;
+  };
+  EXPECT_TRUE(refused([](pb::RepairParameters& r) { r.set_alpha(1); }));
+  EXPECT_TRUE(refused([](pb::RepairParameters& r) { r.set_alpha(std::nan("")); }));
+  EXPECT_TRUE(refused([](pb::RepairParameters& r) { r.set_beta(0); }));
+  EXPECT_TRUE(refused([](pb::RepairParameters& r) { r.set_area_ratio(1.5); }));
+  EXPECT_TRUE(refused([](pb::RepairParameters& r) { r.set_local_iterations(-1); }));
+  EXPECT_TRUE(refused([](pb::RepairParameters& r) { r.set_refill_iterations(101); }));
+  EXPECT_TRUE(refused([](pb::RepairParameters& r) { r.set_accuracy(-1); }));
+  EXPECT_TRUE(refused([](pb::RepairParameters& r) { r.set_small_piece_area(2); }));
+  EXPECT_TRUE(refused([](pb::RepairParameters& r) { r.set_threads(-1); }));
+  EXPECT_TRUE(refused([](pb::RepairParameters& r) { r.mutable_max_deviation()->set_percent(0); }));
+  EXPECT_FALSE(refused([](pb::RepairParameters& r) { r.set_small_piece_area(0); }));
+  // A job names its own kind's parameters only.
+  pb::JobSpec repair_job;
+  repair_job.set_kind(pb::JOB_KIND_REPAIR);
+  EXPECT_NO_THROW(vdbwrap::api::check_job_parameters(repair_job));
+  repair_job.mutable_params()->set_levels(2);
+  EXPECT_THROW(vdbwrap::api::check_job_parameters(repair_job), vdbwrap::Error);
+  pb::JobSpec wrap_job;
+  EXPECT_NO_THROW(vdbwrap::api::check_job_parameters(wrap_job));
+  wrap_job.mutable_repair_params()->set_alpha(0.3);
+  EXPECT_THROW(vdbwrap::api::check_job_parameters(wrap_job), vdbwrap::Error);
+  pb::JobSpec unknown;
+  unknown.set_kind(static_cast<pb::JobKind>(9));
+  EXPECT_THROW(vdbwrap::api::check_job_parameters(unknown), vdbwrap::Error);
+}
+
+TEST_F(Service, RepairJobRepairsAnUploadedMesh) {
+  ServerProcess& s = server({"--workers", "1"});
+  Client c(s.address());
+  const vdbwrap::Mesh folded = vdbwrap::testing::folded_icosphere();
+  const vdbwrap::MeshDiagnostics before = vdbwrap::diagnose(folded, true);
+  ASSERT_GT(before.intersecting_pairs, 0u);
+  const std::string bytes = vdbwrap::io::write_mesh_to_bytes(folded, vdbwrap::io::Format::Obj);
+  pb::JobSpec spec;
+  spec.set_file_name("folded.obj");
+  spec.set_kind(pb::JOB_KIND_REPAIR);
+  spec.set_output_format(pb::MESH_FORMAT_OBJ);
+  spec.mutable_repair_params()->mutable_max_deviation()->set_percent(5);
+  SubmitOutcome o = c.submit_spec(bytes, spec);
+  ASSERT_TRUE(o.status.ok()) << o.status.error_message();
+  const pb::JobStatus st = c.wait_done(o.job_id);
+  ASSERT_EQ(st.state(), pb::JOB_STATE_SUCCEEDED) << st.error_message();
+  EXPECT_EQ(st.spec().kind(), pb::JOB_KIND_REPAIR);
+  EXPECT_EQ(st.intersecting_pairs_left(), 0u);
+  EXPECT_NE(st.report_json().find("\"all_fixed\": true"), std::string::npos) << st.report_json();
+  EXPECT_NE(st.report_json().find("\"fixed_by_local_operations\""), std::string::npos);
+  EXPECT_EQ(st.report_json().find("\"quality\""), std::string::npos) << "a repair's report, not a wrap's";
+  std::string result;
+  ASSERT_TRUE(c.download(st.job_id(), result).ok());
+  const vdbwrap::MeshDiagnostics after = vdbwrap::diagnose(vdbwrap::io::read_mesh_from_bytes(result, vdbwrap::io::Format::Obj, "r"), true);
+  EXPECT_LT(after.intersecting_pairs, before.intersecting_pairs);
+  EXPECT_EQ(after.intersecting_pairs, 0u);
+  EXPECT_TRUE(after.valid_closed_surface());
+  EXPECT_EQ(after.triangles, folded.triangles.size()) << "a local repair: no re-wrap";
+  // As STL (single precision): converted on download, still free of intersections.
+  ASSERT_TRUE(c.download(st.job_id(), result, pb::MESH_FORMAT_STL).ok());
+  EXPECT_EQ(vdbwrap::diagnose(vdbwrap::io::read_mesh_from_bytes(result, vdbwrap::io::Format::Stl, "r"), true).intersecting_pairs, 0u);
+
+  // Two boxes pushed into each other cross along a curve: not a local defect. The job
+  // succeeds with the result written and says how many pairs are left.
+  vdbwrap::Mesh boxes = vdbwrap::testing::box_mesh({0, 0, 0}, {1, 1, 1});
+  vdbwrap::testing::add_box(boxes, {0.5, 0.3, 0.3}, {1.5, 0.7, 0.7}, 1);
+  spec.set_file_name("boxes.obj");
+  o = c.submit_spec(vdbwrap::io::write_mesh_to_bytes(boxes, vdbwrap::io::Format::Obj), spec);
+  ASSERT_TRUE(o.status.ok()) << o.status.error_message();
+  const pb::JobStatus left = c.wait_done(o.job_id);
+  ASSERT_EQ(left.state(), pb::JOB_STATE_SUCCEEDED) << left.error_message();
+  EXPECT_GT(left.intersecting_pairs_left(), 0u);
+  EXPECT_NE(left.report_json().find("\"all_fixed\": false"), std::string::npos);
+  EXPECT_TRUE(c.download(left.job_id(), result).ok());
+
+  // Parameters of the other kind, or out of range: refused on arrival.
+  pb::JobSpec mixed = spec;
+  mixed.mutable_params()->set_levels(2);
+  o = c.submit_spec(bytes, mixed);
+  EXPECT_EQ(o.status.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_EQ(o.error_kind, "2");
+  EXPECT_NE(o.status.error_message().find("params"), std::string::npos) << o.status.error_message();
+  pb::JobSpec bad_alpha = spec;
+  bad_alpha.mutable_repair_params()->set_alpha(2);
+  o = c.submit_spec(bytes, bad_alpha);
+  EXPECT_EQ(o.status.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_NE(o.status.error_message().find("alpha"), std::string::npos) << o.status.error_message();
+  EXPECT_EQ(s.jobs_on_disk(), 2u);
 }
 
 TEST_F(Service, ConcurrentSubmissionsGiveValidResults) {
@@ -1060,6 +1203,51 @@ TEST_F(Service, CliSubmitTakesEveryWrapOption) {
   std::set<std::string> wrap_options = options(wrap_help.out), submit_options = options(submit_help.out);
   ASSERT_GT(wrap_options.size(), 5u) << wrap_help.out;
   for (const auto& o : wrap_options) EXPECT_TRUE(submit_options.count(o)) << "submit lacks wrap's " << o;
+}
+
+TEST_F(Service, CliSubmitRepairRunsTheRepairOnTheServer) {
+  // `submit --repair` takes every option of `vdbwrap repair`, and gives its exit codes.
+  auto options = [](const std::string& help) {
+    std::set<std::string> out;
+    const std::regex opt("--[a-z][a-z0-9-]+");
+    for (auto it = std::sregex_iterator(help.begin(), help.end(), opt); it != std::sregex_iterator(); ++it)
+      out.insert(it->str());
+    return out;
+  };
+  const std::set<std::string> repair_options = options(cli("repair --help").out), submit_options = options(cli("submit --help").out);
+  ASSERT_GT(repair_options.size(), 10u);
+  for (const auto& o : repair_options) EXPECT_TRUE(submit_options.count(o)) << "submit lacks repair's " << o;
+
+  ServerProcess& s = server({"--workers", "1"});
+  const fs::path folded = dir_ / "folded.obj", out = dir_ / "fixed.obj", report = dir_ / "fixed.json";
+  vdbwrap::io::write_mesh(vdbwrap::testing::folded_icosphere(), folded.string());
+  CliRun r = cli("submit --repair --server " + s.address() + " " + folded.string() + " -o " + out.string() + " --report " +
+                 report.string() + " --max-deviation 5% --alpha 0.3");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(vdbwrap::diagnose(vdbwrap::io::read_mesh(out.string()), true).intersecting_pairs, 0u);
+  EXPECT_NE(read_file(report).find("\"all_fixed\": true"), std::string::npos);
+  EXPECT_NE(read_file(report).find("\"alpha\": 0.3"), std::string::npos) << "the options reach the server";
+  // Intersections left: the result and the report are written, exit code 4 (as `vdbwrap repair`).
+  vdbwrap::Mesh boxes = vdbwrap::testing::box_mesh({0, 0, 0}, {1, 1, 1});
+  vdbwrap::testing::add_box(boxes, {0.5, 0.3, 0.3}, {1.5, 0.7, 0.7}, 1);
+  const fs::path crossing = dir_ / "boxes.obj";
+  vdbwrap::io::write_mesh(boxes, crossing.string());
+  fs::create_directories(dir_ / "outs");
+  r = cli("submit --repair --server " + s.address() + " " + crossing.string() + " --out-dir " + (dir_ / "outs").string() + " -q");
+  EXPECT_EQ(r.code, 4) << r.err;
+  EXPECT_TRUE(fs::exists(dir_ / "outs" / "boxes_repaired.obj"));
+  EXPECT_TRUE(fs::exists(dir_ / "outs" / "boxes_repaired.json"));
+  EXPECT_NE(r.err.find("intersecting pairs left"), std::string::npos) << r.err;
+  // One kind's options with the other kind: refused before anything is sent.
+  r = cli("submit --repair --server " + s.address() + " " + folded.string() + " -o " + out.string() + " --base-size 1%");
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_NE(r.err.find("--base-size"), std::string::npos) << r.err;
+  r = cli("submit --server " + s.address() + " " + folded.string() + " -o " + out.string() + " --alpha 0.3");
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_NE(r.err.find("--repair"), std::string::npos) << r.err;
+  r = cli("submit --repair --server " + s.address() + " " + folded.string() + " -o " + out.string() + " --area-ratio 1.5");
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_EQ(s.jobs_on_disk(), 2u);
 }
 
 TEST_F(Service, CliExitCodesMatchTheLocalWrap) {

@@ -21,6 +21,7 @@ class TriangleBuckets {
     seen_.assign(tris.size(), 0);
     for (uint32_t f = 0; f < tris.size(); ++f) insert(f);
   }
+  // After triangle f moved, or was appended to the triangle list.
   void update(uint32_t f) { insert(f); }
   // Triangles whose (bucketed) bounding box overlaps that of triangle f, f excluded.
   template <typename F>
@@ -59,6 +60,7 @@ class TriangleBuckets {
         for (int64_t z = lo[2]; z <= hi[2]; ++z) fn(Key{x, y, z});
   }
   void insert(uint32_t f) {
+    if (f >= boxes_.size()) boxes_.resize(f + 1), seen_.resize(f + 1, 0);
     Box3 b;
     for (uint32_t v : tris_[f]) b.add(p_[v]);
     boxes_[f] = b;

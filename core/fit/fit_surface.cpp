@@ -8,6 +8,7 @@
 #include <unordered_map>
 
 #include "check/intersections.h"
+#include "common/float_round.h"
 #include "common/grid_key.h"
 #include "common/triangle_buckets.h"
 #include "common/vec.h"
@@ -85,9 +86,11 @@ FittedSurface fit_to_input(const extract::LatticeSurface& surf, const grid::Adap
   const double hf = g.fine_size();
   // Nodes: lattice nodes, then one centre node per polygon with more than four nodes.
   std::vector<Vec3> lattice;
+  std::vector<double> cell_size;  // the local target size of the post-processing
   lattice.reserve(surf.nodes.size());
   for (size_t i = 0; i < surf.nodes.size(); ++i) {
     lattice.push_back(g.node_position(surf.nodes[i]));
+    cell_size.push_back(surf.node_size[i] * hf);
   }
   std::vector<std::array<uint32_t, 4>> quads;
   std::vector<Tri> fans;
@@ -105,6 +108,7 @@ FittedSurface fit_to_input(const extract::LatticeSurface& surf, const grid::Adap
     Coord mid((lo.x() + hi.x()) / 2, (lo.y() + hi.y()) / 2, (lo.z() + hi.z()) / 2);
     uint32_t centre = uint32_t(lattice.size());
     lattice.push_back(g.node_position(mid));
+    cell_size.push_back(std::max({hi.x() - lo.x(), hi.y() - lo.y(), hi.z() - lo.z()}) * hf);
     for (size_t k = 0; k < poly.size(); ++k) fans.push_back({centre, poly[k], poly[(k + 1) % poly.size()]});
   }
   const size_t n = lattice.size();
@@ -247,7 +251,7 @@ FittedSurface fit_to_input(const extract::LatticeSurface& surf, const grid::Adap
   std::vector<Vec3>& p = out.points;
   auto world = [&](const Vec3& local) {
     Vec3 w = local + origin;
-    if (params.float_coordinates) w = {double(float(w[0])), double(float(w[1])), double(float(w[2]))};
+    if (params.float_coordinates) w = round_to_float(w);  // not double(float(x)): see float_round.h
     return w;
   };
   p.resize(n);
@@ -332,11 +336,15 @@ FittedSurface fit_to_input(const extract::LatticeSurface& surf, const grid::Adap
     local_check(moved, flag);
   }
   out.validity_rounds = round;
-  if (!valid) throw Error(ErrorKind::WrapFailed, "projection could not be made valid");
+  out.valid = valid;
+  if (!valid && progress)
+    progress->progress("project", 1.0, "the validity loop ran out of rounds: intersections left for the repair");
   for (size_t i = 0; i < n; ++i)
     if (t[i] < 1.0 && norm2(target[i] - lattice[i]) > 0) ++out.held_back;
   if (progress) progress->progress("project", 1.0, std::to_string(out.held_back) + " nodes held back to stay valid");
   out.snapped = std::move(snapped);
+  out.cell_size = std::move(cell_size);
+  out.feature_edges.assign(traced.begin(), traced.end());
   return out;
 }
 

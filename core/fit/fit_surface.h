@@ -17,8 +17,13 @@ struct FittedSurface {
   std::vector<Vec3> points;   // output (world) frame: local + origin
   std::vector<Tri> triangles;
   std::vector<uint8_t> snapped;  // per point: on a feature curve (kept by later stages)
+  std::vector<double> cell_size; // per point: edge of the smallest lattice face at it (the local target size)
+  std::vector<std::pair<uint32_t, uint32_t>> feature_edges;  // edges traced along the feature curves
   size_t held_back = 0;       // nodes that could not go all the way to the input
   size_t validity_rounds = 0;
+  // False when the validity loop ran out of rounds: intersecting or degenerate triangles are
+  // left for the post-processing (remeshing, then intersection repair) to fix.
+  bool valid = true;
   SnapStats snap;
 };
 

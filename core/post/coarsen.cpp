@@ -191,7 +191,7 @@ class Coarsener {
   }
 
  public:
-  void compact() {
+  std::vector<uint32_t> compact() {
     std::vector<uint32_t> remap(p_.size(), UINT32_MAX);
     std::vector<Vec3> points;
     for (uint32_t i = 0; i < p_.size(); ++i)
@@ -201,6 +201,7 @@ class Coarsener {
       if (alive_[f]) tris.push_back({remap[t_[f][0]], remap[t_[f][1]], remap[t_[f][2]]});
     p_.swap(points);
     t_.swap(tris);
+    return remap;
   }
 
  private:
@@ -227,7 +228,7 @@ CoarsenStats coarsen(std::vector<Vec3>& points, std::vector<Tri>& triangles, con
   if (progress) progress->progress("coarsen", 0.0, "merging nodes on flat parts of " + std::to_string(triangles.size()) + " triangles");
   Coarsener c(points, triangles, locked, input, origin, params);
   stats.collapses = c.run(progress);
-  c.compact();
+  stats.remap = c.compact();
   stats.triangles_after = triangles.size();
   if (progress)
     progress->progress("coarsen", 1.0, std::to_string(stats.triangles_before) + " -> " + std::to_string(stats.triangles_after) + " triangles");

@@ -23,10 +23,12 @@ struct CoarsenParams {
 
 struct CoarsenStats {
   size_t collapses = 0, triangles_before = 0, triangles_after = 0;
+  std::vector<uint32_t> remap;  // old point -> new point (UINT32_MAX: merged away), for per-point data
 };
 
 // points in output coordinates; `input` is indexed in the local frame (local = output - origin).
-// locked: vertices that must stay (snapped feature nodes). Compacts points and triangles.
+// locked: vertices that must stay (snapped feature nodes). Compacts points and triangles
+// (stats.remap says where each point went).
 CoarsenStats coarsen(std::vector<Vec3>& points, std::vector<Tri>& triangles, const std::vector<uint8_t>& locked,
                      const fit::SurfaceIndex& input, const Vec3& origin, const CoarsenParams& params, ProgressSink* progress);
 

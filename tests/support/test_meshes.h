@@ -169,6 +169,22 @@ inline Mesh icosphere_mesh(double r, int level) {
   return m;
 }
 
+// A unit icosphere (level 3) with one node pushed along the sphere past its neighbours: a
+// local fold, intersecting triangles that the intersection repair fixes.
+inline Mesh folded_icosphere() {
+  Mesh m = icosphere_mesh(1.0, 3);
+  const Vec3 p = m.points[5];
+  const Vec3 a = m.points[m.triangles[0][0]], b = m.points[m.triangles[0][1]];
+  const double edge = std::sqrt((b[0] - a[0]) * (b[0] - a[0]) + (b[1] - a[1]) * (b[1] - a[1]) + (b[2] - a[2]) * (b[2] - a[2]));
+  const Vec3 w{0.3, 0.5, 0.8};  // a tangent direction: w x p, normalized
+  Vec3 t{w[1] * p[2] - w[2] * p[1], w[2] * p[0] - w[0] * p[2], w[0] * p[1] - w[1] * p[0]};
+  const double tn = std::sqrt(t[0] * t[0] + t[1] * t[1] + t[2] * t[2]);
+  Vec3 q{p[0] + t[0] / tn * 1.6 * edge, p[1] + t[1] / tn * 1.6 * edge, p[2] + t[2] / tn * 1.6 * edge};
+  const double qn = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2]);
+  m.points[5] = {q[0] / qn, q[1] / qn, q[2] / qn};
+  return m;
+}
+
 // Closed cylinder tessellated like a CAD export: caps are fans of long thin wedges around a
 // hub, the side one ring of long thin quads (two triangles each).
 inline void add_cylinder(Mesh& m, const Vec3& base, double r, double h, int segments, int32_t part = 0) {

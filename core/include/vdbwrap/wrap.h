@@ -4,6 +4,7 @@
 #pragma once
 #include <cstdint>
 #include <functional>
+#include <map>
 #include <memory>
 #include <optional>
 #include <string>
@@ -68,6 +69,21 @@ struct ContactRule {
 void parse_volume_choice(const std::string& text, VolumeChoice& choice, std::vector<Vec3>& seed_points);
 std::string volume_choice_to_string(VolumeChoice choice, const std::vector<Vec3>& seed_points);
 
+// Stage 4 quality analysis: when a triangle or an edge of the wrap counts as a defect (spec:
+// self-intersecting triangles, small-area triangles, edges of uncharacteristic length, poor
+// approximation of the input). Sizes are relative to the local cell size of the voxel stage at
+// the triangle (the edge of the smallest lattice face at its nodes).
+struct QualityThresholds {
+  double small_area = 0.01;           // area under this x (local cell size)^2
+  double sliver_angle_deg = 5;        // smallest angle under this (needles and caps)
+  double short_edge = 0.1;            // edge shorter than this x the local cell size
+  double long_edge = 4;               // edge longer than this x the local cell size (the larger at its ends)
+  double normal_deviation_deg = 45;   // normal off the input's near the triangle by more than this
+  double near_input = 0.25;           // normals are judged where the input is within this x the local cell size
+  double feature_tolerance = 0.1;     // sharp-edge samples farther than this x the finest cell are lost ...
+  double feature_reach = 2;           // ... unless farther than this x the local cell size (out of the wrap's reach)
+};
+
 struct WrapParams {
   Length base_size{1.0, true};     // edge of a level-0 cell
   int levels = 1;                  // most 2x2x2 refinements below the base size
@@ -101,6 +117,11 @@ struct WrapParams {
   // Coarsening (stage 4): nodes merged on flat parts while every new triangle stays within
   // this fraction of the base size of the input; 0 turns it off.
   double coarsen_tolerance = 0.02;
+
+  // Stage 4: bad regions (slivers, tiny triangles, very poor normals, intersections) rebuilt
+  // from the input (constrained Delaunay on nearly flat patches) or by ear clipping.
+  bool remesh = true;
+  QualityThresholds quality;       // what counts as a defect (fixed; listed in the report)
 
   // The output will be stored in single precision (binary STL): coordinates are rounded to
   // float during the validity loop, so the validity checked is that of what is written.
@@ -182,6 +203,36 @@ struct ContactReport {
   size_t separate_bodies = 0;      // connected pieces of the wrap
 };
 
+// Defects of one surface, by kind (QualityThresholds says when each counts).
+struct QualityCounts {
+  size_t triangles = 0, edges = 0;
+  size_t self_intersecting = 0;      // triangles in an intersecting pair, or degenerate
+  size_t small_area = 0;             // triangles
+  size_t slivers = 0;                // triangles
+  size_t short_edges = 0, long_edges = 0;  // edges
+  size_t normal_deviation = 0;       // triangles
+  size_t feature_samples = 0;        // points along the input's sharp edges (feature angle), every 0.1 % of the diagonal
+  size_t lost_feature_samples = 0;   // of those, farther from the surface than the feature tolerance (within reach)
+  size_t unreachable_feature_samples = 0;  // farther than the reach: inside other bodies, in slots narrower than the cells
+  double min_angle_deg = 0;          // smallest angle of any triangle
+  double max_normal_deviation_deg = 0;
+};
+
+// Stage 4: the quality analysis before and after the post-processing (remeshing of bad regions
+// and, when anything still intersects, the intersection repair), and what each step did.
+struct QualityReport {
+  QualityCounts before, after;
+  size_t regions = 0;                // bad regions tried
+  size_t remeshed_on_input = 0;      // rebuilt with the input as substrate (constrained Delaunay)
+  size_t remeshed_by_ear_clipping = 0;  // rebuilt by the fallback
+  size_t restored = 0;               // rebuilt, but the rebuild was refused: put back as it was
+  std::map<std::string, size_t> refusals;  // why rebuilds were refused
+  // Intersection repair (spec, second paper) on the wrap when anything still intersected.
+  size_t repair_runs = 0;
+  size_t intersecting_before_repair = 0, intersecting_after_repair = 0;  // triangles
+  std::string repair_summary;        // what the repair did, when it ran
+};
+
 struct WrapReport {
   MeshDiagnostics input;
   FeatureStats features;
@@ -195,6 +246,7 @@ struct WrapReport {
   size_t manifold_fixes = 0;            // cells taken out of the volume to keep it manifold
   size_t nodes_held_back = 0;           // nodes kept off the input to stay valid
   size_t triangles_before_coarsening = 0;
+  QualityReport quality;
   MeshDiagnostics output;
   DistanceStats output_to_input, input_to_output;
   DistanceStats sharp_edges_to_output;  // samples along the input's sharp edges (over 40 degrees)
