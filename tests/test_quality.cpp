@@ -144,6 +144,15 @@ PostSurface post_surface(const Mesh& m, double cell) {
   return s;
 }
 
+// The unit cube's surface as a 20 x 20 grid per face, one node of the top face pushed almost
+// onto its neighbour: slivers around it.
+Mesh cube_with_slivers() {
+  Mesh m = holed_cube(0);
+  for (Vec3& q : m.points)
+    if (std::fabs(q[0] - 0.5) < 1e-9 && std::fabs(q[1] - 0.5) < 1e-9 && q[2] > 1 - 1e-9) q[0] = 0.5485;
+  return m;
+}
+
 // Triangles as corner coordinates, order-free: two surfaces compare equal when their
 // triangles are the same, whatever the numbering.
 std::multiset<std::array<Vec3, 3>> geometry_of(const PostSurface& s) {
@@ -352,10 +361,7 @@ TEST(Remesh, RebuildsSliversOnAClosedSurface) {
   // of the top face pushed almost onto its neighbour.
   const Mesh cube = box_mesh({0, 0, 0}, {1, 1, 1});
   auto setup = setup_for(cube, 0.05);
-  Mesh m = holed_cube(0);
-  for (Vec3& q : m.points)
-    if (std::fabs(q[0] - 0.5) < 1e-9 && std::fabs(q[1] - 0.5) < 1e-9 && q[2] > 1 - 1e-9) q[0] = 0.5485;
-  PostSurface s = post_surface(m, 0.05);
+  PostSurface s = post_surface(cube_with_slivers(), 0.05);
   std::vector<uint8_t> flags;
   const QualityCounts before = analyse_quality(s.points, s.triangles, s.cell_size, setup->ref, &flags);
   ASSERT_GT(before.slivers, 0u);
@@ -426,10 +432,7 @@ TEST(Remesh, FallsBackToEarClippingWithoutAnInputUnderTheRegion) {
   input.points = {{-5, -5, -3}, {5, -5, -3}, {5, 5, -3}, {-5, 5, -3}};
   input.triangles = {{0, 1, 2}, {0, 2, 3}};
   auto setup = setup_for(input, 0.05);
-  Mesh m = holed_cube(0);
-  for (Vec3& q : m.points)
-    if (std::fabs(q[0] - 0.5) < 1e-9 && std::fabs(q[1] - 0.5) < 1e-9 && q[2] > 1 - 1e-9) q[0] = 0.5485;
-  PostSurface s = post_surface(m, 0.05);
+  PostSurface s = post_surface(cube_with_slivers(), 0.05);
   std::vector<uint8_t> flags;
   const QualityCounts before = analyse_quality(s.points, s.triangles, s.cell_size, setup->ref, &flags);
   ASSERT_GT(before.slivers, 0u);

@@ -383,6 +383,19 @@ class Service : public ::testing::Test {
   std::vector<std::unique_ptr<ServerProcess>> servers_;
 };
 
+// True when `map` refuses the message that `set` fills, as bad parameters.
+template <typename Message, typename Map, typename Set>
+bool refused_by(Map map, Set set) {
+  Message m;
+  set(m);
+  try {
+    map(m);
+  } catch (const vdbwrap::Error& e) {
+    return e.kind() == vdbwrap::ErrorKind::InvalidArgument;
+  }
+  return false;
+}
+
 // --- tests ----------------------------------------------------------------------------
 
 TEST(ParamsMapping, RoundTripsEveryFieldAndRefusesOutOfRange) {
@@ -454,14 +467,7 @@ TEST(ParamsMapping, RoundTripsEveryFieldAndRefusesOutOfRange) {
   EXPECT_EQ(d.surface_offset, vdbwrap::WrapParams().surface_offset);
   // Out of range.
   auto refused = [](auto set) {
-    pb::WrapParameters w;
-    set(w);
-    try {
-      vdbwrap::api::to_wrap_params(w);
-    } catch (const vdbwrap::Error& e) {
-      return e.kind() == vdbwrap::ErrorKind::InvalidArgument;
-    }
-    return false;
+    return refused_by<pb::WrapParameters>([](const auto& w) { vdbwrap::api::to_wrap_params(w); }, set);
   };
   EXPECT_TRUE(refused([](pb::WrapParameters& w) { w.set_levels(7); }));
   EXPECT_TRUE(refused([](pb::WrapParameters& w) { w.set_base_size_percent(0); }));
@@ -516,14 +522,7 @@ TEST(ParamsMapping, RepairParametersRoundTripRefuseOutOfRangeAndMatchTheJobKind)
   EXPECT_EQ(d.max_deviation.to_string(), vdbwrap::RepairParams().max_deviation.to_string());
   EXPECT_TRUE(d.fair);
   auto refused = [](auto set) {
-    pb::RepairParameters r;
-    set(r);
-    try {
-      vdbwrap::api::to_repair_params(r);
-    } catch (const vdbwrap::Error& e) {
-      return e.kind() == vdbwrap::ErrorKind::InvalidArgument;
-    }
-    return false;
+    return refused_by<pb::RepairParameters>([](const auto& r) { vdbwrap::api::to_repair_params(r); }, set);
   };
   EXPECT_TRUE(refused([](pb::RepairParameters& r) { r.set_alpha(1); }));
   EXPECT_TRUE(refused([](pb::RepairParameters& r) { r.set_alpha(std::nan("")); }));
