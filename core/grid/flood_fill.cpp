@@ -57,12 +57,7 @@ Components label_components(AdaptiveGrid& g, const std::function<bool(int32_t)>&
   return comps;
 }
 
-int32_t choose_volume(AdaptiveGrid& g, VolumeChoice choice, Components& comps, ProgressSink* progress) {
-  if (progress) progress->progress("flood fill", 0.0, "labelling free cells");
-  comps = label_components(g, [](int32_t v) { return v == kFree; }, 1, progress);
-  if (progress)
-    progress->progress("flood fill", 1.0, std::to_string(comps.count()) + " free volume(s) found");
-  if (choice == VolumeChoice::Outside) return 1;
+int32_t largest_enclosed_label(const Components& comps) {
   int32_t best = -1;
   double best_volume = 0;
   for (size_t i = 0; i < comps.count(); ++i)
@@ -70,6 +65,16 @@ int32_t choose_volume(AdaptiveGrid& g, VolumeChoice choice, Components& comps, P
       best_volume = comps.volume[i];
       best = comps.first_label + int32_t(i);
     }
+  return best;
+}
+
+int32_t choose_volume(AdaptiveGrid& g, VolumeChoice choice, Components& comps, ProgressSink* progress) {
+  if (progress) progress->progress("flood fill", 0.0, "labelling free cells");
+  comps = label_components(g, [](int32_t v) { return v == kFree; }, 1, progress);
+  if (progress)
+    progress->progress("flood fill", 1.0, std::to_string(comps.count()) + " free volume(s) found");
+  if (choice == VolumeChoice::Outside) return 1;
+  const int32_t best = largest_enclosed_label(comps);
   if (best < 0)
     throw Error(ErrorKind::WrapFailed,
                 "the input encloses no volume at this base size: nothing to wrap from inside (try a smaller --base-size)");

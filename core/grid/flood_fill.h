@@ -21,6 +21,9 @@ struct Components {
 Components label_components(AdaptiveGrid& grid, const std::function<bool(int32_t)>& member, int32_t first_label,
                             ProgressSink* progress = nullptr);
 
+// The label of the largest component that does not reach the box boundary, or -1.
+int32_t largest_enclosed_label(const Components& components);
+
 // Labels the free cells and returns the label of the chosen volume: the outside (1), or the
 // largest component that does not reach the boundary. Throws Error(WrapFailed) when the
 // input encloses no volume at this cell size and `inside` is asked for.

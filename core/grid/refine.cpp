@@ -8,6 +8,7 @@
 #include <cmath>
 #include <unordered_map>
 
+#include "common/grid_key.h"
 #include "common/vec.h"
 #include "vdbwrap/errors.h"
 
@@ -140,11 +141,8 @@ class ContactBuckets {
   }
 
  private:
-  static uint64_t key(const Coord& c) {
-    return (uint64_t(uint32_t(c.x()) & 0x1FFFFF) << 42) | (uint64_t(uint32_t(c.y()) & 0x1FFFFF) << 21) |
-           uint64_t(uint32_t(c.z()) & 0x1FFFFF);
-  }
-  std::unordered_map<uint64_t, std::vector<uint32_t>> cells_;
+  static GridKey key(const Coord& c) { return {c.x(), c.y(), c.z()}; }
+  std::unordered_map<GridKey, std::vector<uint32_t>, GridKeyHash> cells_;
 };
 
 }  // namespace

@@ -183,13 +183,7 @@ VolumeSelection select_volume(AdaptiveGrid& g, const VolumeRequest& req, const D
   if (req.choice == VolumeChoice::Outside) {
     chosen.push_back(1);
   } else if (req.choice == VolumeChoice::Inside) {
-    int32_t best = -1;
-    double best_volume = 0;
-    for (size_t i = 0; i < comps.count(); ++i)
-      if (!comps.touches_outside[i] && comps.volume[i] > best_volume) {
-        best_volume = comps.volume[i];
-        best = comps.first_label + int32_t(i);
-      }
+    const int32_t best = largest_enclosed_label(comps);
     if (best < 0)
       throw Error(ErrorKind::WrapFailed, "the input encloses no volume at this base size" + gap_note +
                                              ": nothing to wrap from inside (try a smaller --base-size, a --gap-closure "
