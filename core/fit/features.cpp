@@ -186,70 +186,100 @@ std::vector<std::pair<uint32_t, uint32_t>> snap_to_curves(const std::vector<Feat
   std::vector<uint32_t> prev(n, UINT32_MAX);
   std::vector<double> curve_distance(n, -1);
   std::vector<uint32_t> touched;
+  std::vector<uint32_t> component_of(n, UINT32_MAX);
 
-  stats.curves = curves.size();
-  for (const FeatureCurve& c : curves) {
-    stats.corners += (c.start_corner ? 1 : 0) + (c.end_corner ? 1 : 0);
-    auto pieces = split_into_pieces(c, piece_length);
-    size_t captured = 0;
-    uint32_t carry = UINT32_MAX;  // end node of the previous piece
-    for (size_t pi = 0; pi < pieces.size(); ++pi) {
-      const Piece& piece = pieces[pi];
-      ++stats.pieces;
-      // The region: nodes within the radius of the piece.
-      Box3 box;
-      for (const Vec3& q : piece.points) box.add(q);
-      Key lo = key(box.lo - Vec3{radius, radius, radius}), hi = key(box.hi + Vec3{radius, radius, radius});
-      std::vector<uint32_t> region;
-      for (int64_t x = lo.x; x <= hi.x; ++x)
-        for (int64_t y = lo.y; y <= hi.y; ++y)
-          for (int64_t z = lo.z; z <= hi.z; ++z) {
-            auto it = buckets.find({x, y, z});
-            if (it == buckets.end()) continue;
-            for (uint32_t v : it->second) {
-              // Nearer of the projected and the lattice position: smoothing rounds a
-              // concave corner away from its crease, the lattice node stays close to it.
-              double d, dl, at;
-              piece.closest(target[v], d, at);
-              piece.closest(lattice[v], dl, at);
-              d = std::min(d, dl);
-              if (d <= radius && curve_distance[v] < 0) {
-                curve_distance[v] = d;
-                region.push_back(v);
-              }
+  // The path of wrap nodes hugging one piece, from `carry` (the previous piece's end node)
+  // when it lies near, among the nodes within `r` of the piece; empty when there is none.
+  auto find_path = [&](const Piece& piece, double r, uint32_t carry) {
+    // The region: nodes within r of the piece, by the nearer of the projected and the lattice
+    // position (smoothing rounds a concave corner away from its crease, the lattice node
+    // stays close to it).
+    Box3 box;
+    for (const Vec3& q : piece.points) box.add(q);
+    const Key lo = key(box.lo - Vec3{r, r, r}), hi = key(box.hi + Vec3{r, r, r});
+    std::vector<uint32_t> region;
+    for (int64_t x = lo.x; x <= hi.x; ++x)
+      for (int64_t y = lo.y; y <= hi.y; ++y)
+        for (int64_t z = lo.z; z <= hi.z; ++z) {
+          auto it = buckets.find({x, y, z});
+          if (it == buckets.end()) continue;
+          for (uint32_t v : it->second) {
+            double d, dl, at;
+            piece.closest(target[v], d, at);
+            piece.closest(lattice[v], dl, at);
+            d = std::min(d, dl);
+            if (d <= r && curve_distance[v] < 0) {
+              curve_distance[v] = d;
+              region.push_back(v);
             }
           }
-      auto reset = [&]() {
-        for (uint32_t v : region) curve_distance[v] = -1;
-        for (uint32_t v : touched) dist[v] = std::numeric_limits<double>::infinity(), prev[v] = UINT32_MAX;
-        touched.clear();
-      };
-      if (region.empty()) {
-        carry = UINT32_MAX;
-        continue;
-      }
-      // End nodes: the region node nearest each end point (or the node already at a corner).
-      auto nearest_to = [&](const Vec3& p, bool corner) {
-        if (corner) {
-          auto it = corner_node.find(corner_key(p));
-          if (it != corner_node.end() && curve_distance[it->second] >= 0) return it->second;
         }
-        uint32_t best = UINT32_MAX;
-        double bd = std::numeric_limits<double>::infinity();
-        for (uint32_t v : region) {
-          if (snapped[v] && !is_corner_node[v]) continue;
-          double d = norm(target[v] - p);
-          if (d < bd) bd = d, best = v;
+    std::vector<uint32_t> path;
+    auto passable = [&](uint32_t v) { return !snapped[v] || is_corner_node[v]; };
+    // The region can hold several sheets of the wrap (both sides of a thin wall, a patch
+    // across a gap): the path runs on the one that covers most of the piece (the nearest to
+    // it on a tie); the other sheets leave the region.
+    {
+      std::vector<uint32_t> members, stack;
+      std::vector<size_t> starts;
+      uint32_t ncomp = 0;
+      for (uint32_t v0 : region) {
+        if (component_of[v0] != UINT32_MAX || !passable(v0)) continue;
+        starts.push_back(members.size());
+        component_of[v0] = ncomp;
+        stack.push_back(v0);
+        while (!stack.empty()) {
+          uint32_t u = stack.back();
+          stack.pop_back();
+          members.push_back(u);
+          for (uint32_t w : graph.neighbours[u])
+            if (curve_distance[w] >= 0 && component_of[w] == UINT32_MAX && passable(w)) component_of[w] = ncomp, stack.push_back(w);
         }
-        return best;
-      };
-      uint32_t s = (carry != UINT32_MAX && curve_distance[carry] >= 0) ? carry : nearest_to(piece.points.front(), piece.start_corner);
-      uint32_t e = nearest_to(piece.points.back(), piece.end_corner);
-      if (s == UINT32_MAX || e == UINT32_MAX || s == e) {
-        carry = e;
-        reset();
-        continue;
+        ++ncomp;
       }
+      starts.push_back(members.size());
+      uint32_t best = 0;
+      double best_cover = -1, best_near = std::numeric_limits<double>::infinity();
+      const double tie = 1e-3 * piece.arc.back();
+      for (uint32_t comp = 0; comp < ncomp; ++comp) {
+        double a0 = std::numeric_limits<double>::infinity(), a1 = -a0, near = a0;
+        for (size_t k = starts[comp]; k < starts[comp + 1]; ++k) {
+          double d, at;
+          piece.closest(target[members[k]], d, at);
+          a0 = std::min(a0, at), a1 = std::max(a1, at), near = std::min(near, curve_distance[members[k]]);
+        }
+        if (a1 - a0 > best_cover + tie || (std::fabs(a1 - a0 - best_cover) <= tie && near < best_near))
+          best = comp, best_cover = a1 - a0, best_near = near;
+      }
+      for (uint32_t v0 : region)
+        if (component_of[v0] != best) curve_distance[v0] = -1;
+      // A snapped carry node is outside every component: it joins the chosen one when it
+      // touches it.
+      if (carry != UINT32_MAX && curve_distance[carry] >= 0 && component_of[carry] == UINT32_MAX) {
+        bool touches = false;
+        for (uint32_t w : graph.neighbours[carry]) touches |= component_of[w] == best && curve_distance[w] >= 0;
+        if (!touches) curve_distance[carry] = -1;
+      }
+      for (uint32_t v0 : region) component_of[v0] = UINT32_MAX;
+    }
+    // End nodes: the region node nearest each end point (or the node already at a corner).
+    auto nearest_to = [&](const Vec3& q, bool corner) {
+      if (corner) {
+        auto it = corner_node.find(corner_key(q));
+        if (it != corner_node.end() && curve_distance[it->second] >= 0) return it->second;
+      }
+      uint32_t best = UINT32_MAX;
+      double bd = std::numeric_limits<double>::infinity();
+      for (uint32_t v : region) {
+        if (curve_distance[v] < 0 || (snapped[v] && !is_corner_node[v])) continue;
+        double d = norm(target[v] - q);
+        if (d < bd) bd = d, best = v;
+      }
+      return best;
+    };
+    const uint32_t s = (carry != UINT32_MAX && curve_distance[carry] >= 0) ? carry : nearest_to(piece.points.front(), piece.start_corner);
+    const uint32_t e = nearest_to(piece.points.back(), piece.end_corner);
+    if (s != UINT32_MAX && e != UINT32_MAX && s != e) {
       // Shortest path hugging the piece; other curves' snapped nodes are not crossed.
       using Item = std::pair<double, uint32_t>;
       std::priority_queue<Item, std::vector<Item>, std::greater<Item>> heap;
@@ -265,7 +295,7 @@ std::vector<std::pair<uint32_t, uint32_t>> snap_to_curves(const std::vector<Feat
           if (curve_distance[w] < 0) continue;
           if (snapped[w] && w != e && !is_corner_node[w]) continue;
           double len = norm(target[w] - target[u]);
-          double cost = len * (1.0 + 4.0 * (curve_distance[u] + curve_distance[w]) / (2 * radius)) + 1e-12;
+          double cost = len * (1.0 + 4.0 * (curve_distance[u] + curve_distance[w]) / (2 * r)) + 1e-12;
           if (du + cost < dist[w]) {
             if (dist[w] == std::numeric_limits<double>::infinity()) touched.push_back(w);
             dist[w] = du + cost;
@@ -274,14 +304,33 @@ std::vector<std::pair<uint32_t, uint32_t>> snap_to_curves(const std::vector<Feat
           }
         }
       }
-      if (prev[e] == UINT32_MAX) {
+      if (prev[e] != UINT32_MAX)
+        for (uint32_t v = e; v != UINT32_MAX; v = prev[v]) path.push_back(v);
+    }
+    for (uint32_t v : region) curve_distance[v] = -1;
+    for (uint32_t v : touched) dist[v] = std::numeric_limits<double>::infinity(), prev[v] = UINT32_MAX;
+    touched.clear();
+    std::reverse(path.begin(), path.end());
+    return path;
+  };
+
+  stats.curves = curves.size();
+  for (const FeatureCurve& c : curves) {
+    stats.corners += (c.start_corner ? 1 : 0) + (c.end_corner ? 1 : 0);
+    auto pieces = split_into_pieces(c, piece_length);
+    size_t captured = 0;
+    uint32_t carry = UINT32_MAX;  // end node of the previous piece
+    for (size_t pi = 0; pi < pieces.size(); ++pi) {
+      const Piece& piece = pieces[pi];
+      ++stats.pieces;
+      // Where the wrap is coarse or split into sheets the band may hold no path: a wider one
+      // is tried before the piece is given up.
+      std::vector<uint32_t> path = find_path(piece, radius, carry);
+      if (path.empty()) path = find_path(piece, 2 * radius, carry);
+      if (path.empty()) {
         carry = UINT32_MAX;
-        reset();
         continue;
       }
-      std::vector<uint32_t> path;
-      for (uint32_t v = e; v != UINT32_MAX; v = prev[v]) path.push_back(v);
-      std::reverse(path.begin(), path.end());
       // Move the path onto the piece, keeping its order along the curve (no zig-zag back).
       double last_at = -1;
       std::vector<uint8_t> on(path.size(), 0);
@@ -316,8 +365,7 @@ std::vector<std::pair<uint32_t, uint32_t>> snap_to_curves(const std::vector<Feat
       if (piece.end_corner && on.back()) corner_node[corner_key(piece.points.back())] = path.back(), is_corner_node[path.back()] = 1;
       ++stats.pieces_traced;
       ++captured;
-      carry = e;
-      reset();
+      carry = path.back();
     }
     if (captured == pieces.size() && !pieces.empty()) ++stats.curves_captured;
   }

@@ -229,9 +229,14 @@ FittedSurface fit_to_input(const extract::LatticeSurface& surf, const grid::Adap
   out.triangles = fans;
   out.triangles.reserve(fans.size() + 2 * quads.size());
   // Traced feature edges stay edges: a quad whose diagonal was traced is split along it.
+  // A split that puts two traced sides into one triangle is avoided: their three nodes lie on
+  // one curve, so the triangle would be flat.
+  auto is_traced = [&](uint32_t a, uint32_t b) { return traced.count({std::min(a, b), std::max(a, b)}) > 0; };
   for (const auto& q : quads) {
-    bool along02 = traced.count({std::min(q[0], q[2]), std::max(q[0], q[2])}) > 0;
-    bool along13 = traced.count({std::min(q[1], q[3]), std::max(q[1], q[3])}) > 0;
+    const bool side[4] = {is_traced(q[0], q[1]), is_traced(q[1], q[2]), is_traced(q[2], q[3]), is_traced(q[3], q[0])};
+    bool along02 = is_traced(q[0], q[2]) || (side[0] && side[3]) || (side[1] && side[2]);
+    bool along13 = is_traced(q[1], q[3]) || (side[0] && side[1]) || (side[2] && side[3]);
+    if (along02 == along13) along02 = along13 = false;  // both or neither: the input decides
     if (along02 || (!along13 && split_along_02(q, target, input, min_area2))) {
       out.triangles.push_back({q[0], q[1], q[2]});
       out.triangles.push_back({q[0], q[2], q[3]});
