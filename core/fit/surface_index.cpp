@@ -54,4 +54,10 @@ bool SurfaceIndex::within(const Vec3& q, double radius) const {
   return impl_->tree.do_intersect(K::Sphere_3(K::Point_3(q[0], q[1], q[2]), radius * radius));
 }
 
+bool SurfaceIndex::touches(const Vec3& a, const Vec3& b, const Vec3& c) const {
+  const Triangle t(K::Point_3(a[0], a[1], a[2]), K::Point_3(b[0], b[1], b[2]), K::Point_3(c[0], c[1], c[2]));
+  if (t.is_degenerate()) return true;
+  return impl_->tree.do_intersect(t);
+}
+
 }  // namespace vdbwrap::fit

@@ -25,6 +25,8 @@ class SurfaceIndex {
   double squared_distance(const Vec3& query) const { return closest(query).squared_distance; }
   // Is the input within `radius` of the query? (Much cheaper than closest() for small radii.)
   bool within(const Vec3& query, double radius) const;
+  // Does triangle abc touch or cross the input? (Floating point: a near miss may count.)
+  bool touches(const Vec3& a, const Vec3& b, const Vec3& c) const;
 
  private:
   struct Impl;

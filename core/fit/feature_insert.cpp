@@ -1,0 +1,279 @@
+#include "fit/feature_insert.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <set>
+
+#include "check/intersections.h"
+#include "common/float_round.h"
+#include "common/triangle_buckets.h"
+#include "common/vec.h"
+
+namespace vdbwrap::fit {
+namespace {
+
+// Closest point of triangle abc to p (Ericson, Real-Time Collision Detection, 5.1.5).
+Vec3 closest_on_triangle(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c) {
+  const Vec3 ab = b - a, ac = c - a, ap = p - a;
+  const double d1 = dot(ab, ap), d2 = dot(ac, ap);
+  if (d1 <= 0 && d2 <= 0) return a;
+  const Vec3 bp = p - b;
+  const double d3 = dot(ab, bp), d4 = dot(ac, bp);
+  if (d3 >= 0 && d4 <= d3) return b;
+  const double vc = d1 * d4 - d3 * d2;
+  if (vc <= 0 && d1 >= 0 && d3 <= 0) return a + ab * (d1 / (d1 - d3));
+  const Vec3 cp = p - c;
+  const double d5 = dot(ab, cp), d6 = dot(ac, cp);
+  if (d6 >= 0 && d5 <= d6) return c;
+  const double vb = d5 * d2 - d1 * d6;
+  if (vb <= 0 && d2 >= 0 && d6 <= 0) return a + ac * (d2 / (d2 - d6));
+  const double va = d3 * d6 - d5 * d4;
+  if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0) return b + (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6)));
+  const double denom = 1.0 / (va + vb + vc);
+  return a + ab * (vb * denom) + ac * (vc * denom);
+}
+
+class Inserter {
+ public:
+  Inserter(FittedSurface& s, const SurfaceIndex& input, const Vec3& origin, const FeatureInsertParams& prm)
+      : s_(s), p_(s.points), t_(s.triangles), input_(input), origin_(origin), prm_(prm),
+        buckets_(s.points, s.triangles, std::max(prm.max_move, 1e-300)) {
+    vf_.resize(p_.size());
+    for (uint32_t f = 0; f < t_.size(); ++f)
+      for (uint32_t v : t_[f]) vf_[v].push_back(f);
+    for (const auto& [a, b] : s.feature_edges) edges_.insert({std::min(a, b), std::max(a, b)});
+  }
+
+  void run(const std::vector<FeatureCurve>& curves, FeatureInsertStats& stats) {
+    for (const FeatureCurve& c : curves) {
+      uint32_t previous = UINT32_MAX;  // the last node put on this curve: their edge is a feature edge
+      for (size_t i = 0; i + 1 < c.points.size(); ++i) {
+        const Vec3 &a = c.points[i], &b = c.points[i + 1];
+        const size_t k = std::max<size_t>(1, size_t(std::ceil(norm(b - a) / prm_.spacing)));
+        for (size_t j = (i == 0 ? 0 : 1); j <= k; ++j) {
+          const uint32_t v = visit(world(lerp(a, b, double(j) / double(k))), stats);
+          if (v == UINT32_MAX) continue;
+          if (previous != UINT32_MAX && previous != v && adjacent(previous, v)) add_feature_edge(previous, v);
+          previous = v;
+        }
+      }
+    }
+    s_.feature_edges.assign(edges_.begin(), edges_.end());
+  }
+
+ private:
+  Vec3 world(const Vec3& local) const {
+    Vec3 w = local + origin_;
+    return prm_.float_coordinates ? round_to_float(w) : w;
+  }
+
+  // Brings the wrap to curve point q when it misses it; returns the node now at q, if any.
+  uint32_t visit(const Vec3& q, FeatureInsertStats& stats) {
+    const double r = prm_.max_move;
+    Box3 box;
+    box.add(q - Vec3{r, r, r});
+    box.add(q + Vec3{r, r, r});
+    double nearest = std::numeric_limits<double>::infinity();
+    struct Candidate {
+      double distance, t;
+      uint32_t a, b;
+    };
+    std::vector<Candidate> edges;
+    buckets_.for_each_in_box(box, [&](uint32_t f) {
+      if (f >= t_.size()) return;  // a stale entry of an undone split
+      const Tri& tri = t_[f];
+      nearest = std::min(nearest, norm(closest_on_triangle(q, p_[tri[0]], p_[tri[1]], p_[tri[2]]) - q));
+      for (int e = 0; e < 3; ++e) {
+        const uint32_t u = tri[e], w = tri[(e + 1) % 3];
+        if (u > w) continue;  // each interior edge once (from the face that has it as u < w)
+        const Vec3 d = p_[w] - p_[u];
+        const double len2 = norm2(d);
+        const double t = len2 > 0 ? std::clamp(dot(q - p_[u], d) / len2, 0.0, 1.0) : 0.0;
+        const double dist = norm(p_[u] + d * t - q);
+        if (dist <= r) edges.push_back({dist, t, u, w});
+      }
+    });
+    if (nearest <= prm_.tolerance) {
+      // Already on the wrap: report the node there, if one is.
+      for (const Candidate& c : edges)
+        for (uint32_t v : {c.a, c.b})
+          if (norm(p_[v] - q) <= prm_.tolerance) return v;
+      return UINT32_MAX;
+    }
+    ++stats.samples_missed;
+    // The nearest edges first: the nearest may fold where the next one does not.
+    std::sort(edges.begin(), edges.end(), [](const Candidate& x, const Candidate& y) { return x.distance < y.distance; });
+    const size_t tries = std::min<size_t>(edges.size(), 6);
+    for (size_t k = 0; k < tries; ++k) {
+      const Candidate& c = edges[k];
+      // The node stops `offset` short of the curve, on the side the wrap came from.
+      const Vec3 from = lerp(p_[c.a], p_[c.b], c.t);
+      const Vec3 away = from - q;
+      const double d = norm(away);
+      Vec3 target = d > 0 ? q + away * (std::min(prm_.offset, d) / d) : q;
+      if (prm_.float_coordinates) target = round_to_float(target);
+      // Near an end of the edge, that end goes (unless it is on a curve already); else a split,
+      // and failing that the nearer end.
+      const uint32_t end = c.t < 0.5 ? c.a : c.b;
+      const bool near_end = c.t < 0.25 || c.t > 0.75;
+      if (near_end && !s_.snapped[end] && move(end, target)) {
+        ++stats.nodes_moved;
+        return end;
+      }
+      const uint32_t m = split(c.a, c.b, target);
+      if (m != UINT32_MAX) {
+        ++stats.nodes_inserted;
+        return m;
+      }
+      if (!near_end && !s_.snapped[end] && move(end, target)) {
+        ++stats.nodes_moved;
+        return end;
+      }
+    }
+    ++stats.refused;
+    return UINT32_MAX;
+  }
+
+  bool move(uint32_t v, const Vec3& to) {
+    const Vec3 from = p_[v];
+    std::vector<Vec3> before;
+    for (uint32_t f : vf_[v]) before.push_back(normal_of(t_[f]));
+    p_[v] = to;
+    for (uint32_t f : vf_[v]) buckets_.update(f);
+    bool ok = !crowded(v);
+    for (size_t k = 0; ok && k < vf_[v].size(); ++k) ok = acceptable(vf_[v][k], before[k]);
+    if (!ok) {
+      p_[v] = from;
+      for (uint32_t f : vf_[v]) buckets_.update(f);
+      return false;
+    }
+    s_.snapped[v] = 1;
+    return true;
+  }
+
+  // Splits edge ab at a new node placed at `at`; the two triangles on the edge become four.
+  uint32_t split(uint32_t a, uint32_t b, const Vec3& at) {
+    std::vector<uint32_t> faces;
+    for (uint32_t f : vf_[a])
+      for (uint32_t v : t_[f])
+        if (v == b) faces.push_back(f);
+    if (faces.size() != 2) return UINT32_MAX;  // a border or non-manifold edge: leave it
+    const uint32_t m = uint32_t(p_.size());
+    p_.push_back(at);
+    vf_.emplace_back();
+    const Tri old0 = t_[faces[0]], old1 = t_[faces[1]];
+    const Vec3 n0 = normal_of(old0), n1 = normal_of(old1);
+    // In each face (x, y, c) with x-y the edge in its own order: (x, m, c) and (m, y, c).
+    auto halves = [&](const Tri& tri) {
+      int e = 0;
+      while (!((tri[e] == a && tri[(e + 1) % 3] == b) || (tri[e] == b && tri[(e + 1) % 3] == a))) ++e;
+      const uint32_t x = tri[e], y = tri[(e + 1) % 3], c = tri[(e + 2) % 3];
+      return std::pair<Tri, Tri>{Tri{x, m, c}, Tri{m, y, c}};
+    };
+    const auto [h00, h01] = halves(old0);
+    const auto [h10, h11] = halves(old1);
+    const uint32_t f2 = uint32_t(t_.size()), f3 = f2 + 1;
+    t_[faces[0]] = h00;
+    t_[faces[1]] = h10;
+    t_.push_back(h01);
+    t_.push_back(h11);
+    for (uint32_t f : {faces[0], faces[1], f2, f3}) buckets_.update(f);
+    const bool ok = !crowded(m) && acceptable(faces[0], n0) && acceptable(f2, n0) && acceptable(faces[1], n1) && acceptable(f3, n1);
+    if (!ok) {
+      t_[faces[0]] = old0;
+      t_[faces[1]] = old1;
+      t_.pop_back();
+      t_.pop_back();
+      p_.pop_back();
+      vf_.pop_back();
+      buckets_.update(faces[0]);
+      buckets_.update(faces[1]);
+      return UINT32_MAX;
+    }
+    // Incidences: m is in all four; y of each face moved to its new half; c is in both halves.
+    vf_[m] = {faces[0], faces[1], f2, f3};
+    for (const auto& [face, half] : {std::pair{faces[0], f2}, std::pair{faces[1], f3}}) {
+      const Tri& h = t_[half];
+      auto& ly = vf_[h[1]];
+      std::replace(ly.begin(), ly.end(), face, half);
+      vf_[h[2]].push_back(half);
+    }
+    s_.snapped.push_back(1);
+    s_.cell_size.push_back(std::min(s_.cell_size[a], s_.cell_size[b]));
+    if (edges_.erase({std::min(a, b), std::max(a, b)})) add_feature_edge(a, m), add_feature_edge(m, b);
+    return m;
+  }
+
+  Vec3 normal_of(const Tri& tri) const { return area_vector(p_[tri[0]], p_[tri[1]], p_[tri[2]]); }
+
+  // A changed triangle: not degenerate, not flipped against the face it came from, clear of the
+  // input, and crossing no other triangle.
+  bool acceptable(uint32_t f, const Vec3& was) {
+    const Tri& tri = t_[f];
+    const Vec3 n = normal_of(tri);
+    if (norm(n) < prm_.min_area2 || check::triangle_is_degenerate(p_, tri) || dot(n, was) <= 0) return false;
+    if (input_.touches(p_[tri[0]] - origin_, p_[tri[1]] - origin_, p_[tri[2]] - origin_)) return false;
+    bool hit = false;
+    buckets_.for_each_candidate(f, [&](uint32_t g) {
+      if (hit || g >= t_.size()) return;
+      hit = check::triangle_pair_intersects(p_, tri, t_[g]);
+    });
+    return !hit;
+  }
+
+  bool crowded(uint32_t v) {
+    const double sep = prm_.min_separation;
+    Box3 box;
+    box.add(p_[v] - Vec3{sep, sep, sep});
+    box.add(p_[v] + Vec3{sep, sep, sep});
+    bool close = false;
+    buckets_.for_each_in_box(box, [&](uint32_t f) {
+      if (close || f >= t_.size()) return;
+      for (uint32_t w : t_[f])
+        if (w != v && norm2(p_[w] - p_[v]) < sep * sep) close = true;
+    });
+    return close;
+  }
+
+  bool adjacent(uint32_t a, uint32_t b) const {
+    for (uint32_t f : vf_[a])
+      for (uint32_t v : t_[f])
+        if (v == b) return true;
+    return false;
+  }
+  void add_feature_edge(uint32_t a, uint32_t b) { edges_.insert({std::min(a, b), std::max(a, b)}); }
+
+  FittedSurface& s_;
+  std::vector<Vec3>& p_;
+  std::vector<Tri>& t_;
+  const SurfaceIndex& input_;
+  Vec3 origin_;
+  FeatureInsertParams prm_;
+  TriangleBuckets buckets_;
+  std::vector<std::vector<uint32_t>> vf_;
+  std::set<std::pair<uint32_t, uint32_t>> edges_;
+};
+
+}  // namespace
+
+FeatureInsertStats insert_feature_nodes(FittedSurface& surface, const std::vector<FeatureCurve>& curves, const SurfaceIndex& input,
+                                        const Vec3& origin, const FeatureInsertParams& params) {
+  FeatureInsertStats stats;
+  if (curves.empty() || surface.triangles.empty() || !(params.spacing > 0)) return stats;
+  Inserter inserter(surface, input, origin, params);
+  // More passes while they place nodes: the nodes of one pass give the points it refused new
+  // edges to split. The missed count is the first pass's, the refused count the last's.
+  inserter.run(curves, stats);
+  for (int pass = 1; pass < 4; ++pass) {
+    FeatureInsertStats more;
+    inserter.run(curves, more);
+    stats.nodes_inserted += more.nodes_inserted;
+    stats.nodes_moved += more.nodes_moved;
+    stats.refused = more.refused;
+    if (more.nodes_inserted + more.nodes_moved == 0) break;
+  }
+  return stats;
+}
+
+}  // namespace vdbwrap::fit
