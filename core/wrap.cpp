@@ -209,12 +209,14 @@ WrapResult run_pipeline(const Mesh& input, const WrapParams& params, ProgressSin
       fp.offset = params.surface_offset * hf;
       fp.min_area2 = 1e-6 * hf * hf;
       fp.min_separation = 0.05 * hf;
+      fp.max_deviation = 0.1 * hf;
       fp.float_coordinates = params.float_coordinates;
       const auto fs = fit::insert_feature_nodes(fitted, curves, index, prepared.origin, fp);
       report.features.points_missed = fs.samples_missed;
       report.features.nodes_inserted = fs.nodes_inserted;
       report.features.nodes_moved = fs.nodes_moved;
       report.features.inserts_refused = fs.refused;
+      report.features.points_unreachable = fs.unreachable;
     }
 
     report.triangles_before_coarsening = fitted.triangles.size();

@@ -213,6 +213,26 @@ TEST(FeatureInsertion, RefusesAMoveThroughTheInput) {
   EXPECT_EQ(wrap.points, points);
 }
 
+// Two boxes pushed into each other: half of their intersection lines lie inside the union,
+// where the wrap cannot go. Those are reported unreachable and pull nothing in: the wrap
+// stays on the outer surface. (Their sharp edges inside the union are out of reach too, so
+// the sharp-edge distance is not the measure here.)
+TEST(FeatureInsertion, BuriedIntersectionLinesDoNotPullTheWrapIn) {
+  Mesh m = box_mesh({0, 0, 0}, {2, 2, 2});
+  add_box(m, {1, 0.5, 1}, {3, 1.5, 3}, 1);
+  m = rotated(m, 0.3, 0.5, 0.9);
+  WrapParams p;
+  WrapResult r = wrap(m, p);
+  auto v = valid_closed_surface(r.surface);
+  ASSERT_TRUE(v.ok) << v.why;
+  const auto& f = r.report.features;
+  EXPECT_GT(f.points_unreachable, 0u);
+  const DistanceStats to_input = sampled_distance(r.surface, m);
+  EXPECT_LE(to_input.mean, 0.0002 * to_input.diagonal) << 100 * to_input.mean / to_input.diagonal << "%";
+  EXPECT_LE(to_input.p95, 0.0005 * to_input.diagonal) << 100 * to_input.p95 / to_input.diagonal << "%";
+  EXPECT_GT(f.nodes_snapped, 0u);
+}
+
 // The CAD-like corpus meshes of the issue: valid, edges far closer than without snapping.
 class CorpusFeatures : public ::testing::TestWithParam<const char*> {};
 

@@ -45,14 +45,25 @@ class Inserter {
     for (const auto& [a, b] : s.feature_edges) edges_.insert({std::min(a, b), std::max(a, b)});
   }
 
-  void run(const std::vector<FeatureCurve>& curves, FeatureInsertStats& stats) {
+  // One pass over the curves. `retry` has a flag per sample (in curve order): only flagged
+  // samples are visited, and a sample stays flagged only when a reachable change was refused.
+  void run(const std::vector<FeatureCurve>& curves, std::vector<uint8_t>& retry, FeatureInsertStats& stats) {
+    const bool first = retry.empty();
+    size_t index = 0;
     for (const FeatureCurve& c : curves) {
       uint32_t previous = UINT32_MAX;  // the last node put on this curve: their edge is a feature edge
       for (size_t i = 0; i + 1 < c.points.size(); ++i) {
         const Vec3 &a = c.points[i], &b = c.points[i + 1];
         const size_t k = std::max<size_t>(1, size_t(std::ceil(norm(b - a) / prm_.spacing)));
-        for (size_t j = (i == 0 ? 0 : 1); j <= k; ++j) {
-          const uint32_t v = visit(world(lerp(a, b, double(j) / double(k))), stats);
+        for (size_t j = (i == 0 ? 0 : 1); j <= k; ++j, ++index) {
+          if (first) retry.push_back(1);
+          if (!retry[index]) {
+            previous = UINT32_MAX;
+            continue;
+          }
+          bool again = false;
+          const uint32_t v = visit(world(lerp(a, b, double(j) / double(k))), again, stats);
+          retry[index] = again;
           if (v == UINT32_MAX) continue;
           if (previous != UINT32_MAX && previous != v && adjacent(previous, v)) add_feature_edge(previous, v);
           previous = v;
@@ -69,7 +80,8 @@ class Inserter {
   }
 
   // Brings the wrap to curve point q when it misses it; returns the node now at q, if any.
-  uint32_t visit(const Vec3& q, FeatureInsertStats& stats) {
+  // `refused`: q was missed and some change that could reach it was refused.
+  uint32_t visit(const Vec3& q, bool& refused, FeatureInsertStats& stats) {
     const double r = prm_.max_move;
     Box3 box;
     box.add(q - Vec3{r, r, r});
@@ -112,37 +124,49 @@ class Inserter {
       const Vec3 away = from - q;
       const double d = norm(away);
       Vec3 target = d > 0 ? q + away * (std::min(prm_.offset, d) / d) : q;
+      // A curve point behind the input (a buried intersection line) is out of reach.
+      if (d > prm_.offset && input_.touches(from - origin_, q + away * (0.5 * prm_.offset / d) - origin_)) continue;
+      refused = true;
       if (prm_.float_coordinates) target = round_to_float(target);
       // Near an end of the edge, that end goes (unless it is on a curve already); else a split,
       // and failing that the nearer end.
       const uint32_t end = c.t < 0.5 ? c.a : c.b;
       const bool near_end = c.t < 0.25 || c.t > 0.75;
       if (near_end && !s_.snapped[end] && move(end, target)) {
+        refused = false;
         ++stats.nodes_moved;
         return end;
       }
       const uint32_t m = split(c.a, c.b, target);
       if (m != UINT32_MAX) {
+        refused = false;
         ++stats.nodes_inserted;
         return m;
       }
       if (!near_end && !s_.snapped[end] && move(end, target)) {
+        refused = false;
         ++stats.nodes_moved;
         return end;
       }
     }
-    ++stats.refused;
+    if (refused)
+      ++stats.refused;
+    else
+      ++stats.unreachable;
     return UINT32_MAX;
   }
 
   bool move(uint32_t v, const Vec3& to) {
     const Vec3 from = p_[v];
     std::vector<Vec3> before;
-    for (uint32_t f : vf_[v]) before.push_back(normal_of(t_[f]));
+    double deviation_before = 0;
+    for (uint32_t f : vf_[v]) before.push_back(normal_of(t_[f])), deviation_before = std::max(deviation_before, deviation(t_[f]));
     p_[v] = to;
     for (uint32_t f : vf_[v]) buckets_.update(f);
     bool ok = !crowded(v);
     for (size_t k = 0; ok && k < vf_[v].size(); ++k) ok = acceptable(vf_[v][k], before[k]);
+    const double allowed = std::max(prm_.max_deviation, deviation_before);
+    for (size_t k = 0; ok && k < vf_[v].size(); ++k) ok = deviation(t_[vf_[v][k]]) <= allowed;
     if (!ok) {
       p_[v] = from;
       for (uint32_t f : vf_[v]) buckets_.update(f);
@@ -163,6 +187,7 @@ class Inserter {
     p_.push_back(at);
     vf_.emplace_back();
     const Tri old0 = t_[faces[0]], old1 = t_[faces[1]];
+    const double allowed = std::max({prm_.max_deviation, deviation(old0), deviation(old1)});
     const Vec3 n0 = normal_of(old0), n1 = normal_of(old1);
     // In each face (x, y, c) with x-y the edge in its own order: (x, m, c) and (m, y, c).
     auto halves = [&](const Tri& tri) {
@@ -179,7 +204,9 @@ class Inserter {
     t_.push_back(h01);
     t_.push_back(h11);
     for (uint32_t f : {faces[0], faces[1], f2, f3}) buckets_.update(f);
-    const bool ok = !crowded(m) && acceptable(faces[0], n0) && acceptable(f2, n0) && acceptable(faces[1], n1) && acceptable(f3, n1);
+    const bool ok = !crowded(m) && acceptable(faces[0], n0) && acceptable(f2, n0) && acceptable(faces[1], n1) &&
+                    acceptable(f3, n1) && deviation(t_[faces[0]]) <= allowed && deviation(t_[f2]) <= allowed &&
+                    deviation(t_[faces[1]]) <= allowed && deviation(t_[f3]) <= allowed;
     if (!ok) {
       t_[faces[0]] = old0;
       t_[faces[1]] = old1;
@@ -206,6 +233,16 @@ class Inserter {
   }
 
   Vec3 normal_of(const Tri& tri) const { return area_vector(p_[tri[0]], p_[tri[1]], p_[tri[2]]); }
+
+  // How far a triangle strays from the input: the largest distance of its centroid and edge
+  // midpoints (a node on a curve must not leave its triangles hanging away from the input).
+  double deviation(const Tri& tri) const {
+    const Vec3 &a = p_[tri[0]], &b = p_[tri[1]], &c = p_[tri[2]];
+    double d2 = 0;
+    for (const Vec3& q : {(a + b + c) * (1.0 / 3.0), (a + b) * 0.5, (b + c) * 0.5, (c + a) * 0.5})
+      d2 = std::max(d2, input_.squared_distance(q - origin_));
+    return std::sqrt(d2);
+  }
 
   // A changed triangle: not degenerate, not flipped against the face it came from, clear of the
   // input, and crossing no other triangle.
@@ -264,10 +301,11 @@ FeatureInsertStats insert_feature_nodes(FittedSurface& surface, const std::vecto
   Inserter inserter(surface, input, origin, params);
   // More passes while they place nodes: the nodes of one pass give the points it refused new
   // edges to split. The missed count is the first pass's, the refused count the last's.
-  inserter.run(curves, stats);
+  std::vector<uint8_t> retry;
+  inserter.run(curves, retry, stats);
   for (int pass = 1; pass < 4; ++pass) {
     FeatureInsertStats more;
-    inserter.run(curves, more);
+    inserter.run(curves, retry, more);
     stats.nodes_inserted += more.nodes_inserted;
     stats.nodes_moved += more.nodes_moved;
     stats.refused = more.refused;

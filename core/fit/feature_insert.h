@@ -19,6 +19,7 @@ struct FeatureInsertParams {
   double offset = 0;         // new nodes stop this far off the curve, on the wrap's side
   double min_area2 = 0;      // doubled area below which a triangle is degenerate
   double min_separation = 0; // a new node this close to another is refused
+  double max_deviation = 0;  // changed triangles stay this close to the input, or no farther than before
   bool float_coordinates = false;
 };
 
@@ -26,7 +27,8 @@ struct FeatureInsertStats {
   size_t samples_missed = 0;   // samples farther than the tolerance before the pass
   size_t nodes_inserted = 0;   // edge splits
   size_t nodes_moved = 0;      // existing nodes moved onto a curve instead
-  size_t refused = 0;          // moves that would have made the wrap invalid or cross the input
+  size_t refused = 0;          // points left because every change would have made the wrap invalid or left the input
+  size_t unreachable = 0;      // points behind the input from the wrap (buried intersection lines)
 };
 
 // Works on a valid fitted surface (output frame; `origin` takes the local curves there) and

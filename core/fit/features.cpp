@@ -153,7 +153,8 @@ std::vector<FeatureCurve> build_feature_curves(const prep::PreparedInput& in, do
 std::vector<std::pair<uint32_t, uint32_t>> snap_to_curves(const std::vector<FeatureCurve>& curves, const WrapGraph& graph,
                                                           const std::vector<Vec3>& lattice, std::vector<Vec3>& target,
                                                           std::vector<uint8_t>& snapped, double radius, double piece_length,
-                                                          double offset, SnapStats& stats) {
+                                                          double offset, SnapStats& stats,
+                                                          const std::function<bool(const Vec3&, const Vec3&)>& reachable) {
   const size_t n = target.size();
   std::vector<std::pair<uint32_t, uint32_t>> traced;
   // Nodes bucketed by target position, cells of the radius.
@@ -355,6 +356,7 @@ std::vector<std::pair<uint32_t, uint32_t>> snap_to_curves(const std::vector<Feat
           if (at < last_at) continue;
           last_at = at;
         }
+        if (!reachable(target[v], q)) continue;
         place(v, q);
         on[k] = 1;
         ++stats.nodes_snapped;

@@ -2,6 +2,7 @@
 // curves as polylines, and wrap node chains traced along them and moved onto them.
 #pragma once
 #include <cstdint>
+#include <functional>
 #include <utility>
 #include <vector>
 
@@ -38,9 +39,13 @@ struct WrapGraph {
 // among nodes within `radius` of it (edge costs grow with the distance to the curve, so the
 // path hugs it), and moves the path's nodes onto the curve, `offset` off it toward their
 // lattice positions. Marks snapped nodes and returns the traced wrap edges (node pairs).
+// A node moves only where reachable(from, to) says the straight way there is clear of the
+// input: curves inside the input (intersection lines of parts buried in the assembly)
+// never pull the wrap in.
 std::vector<std::pair<uint32_t, uint32_t>> snap_to_curves(const std::vector<FeatureCurve>& curves, const WrapGraph& graph,
                                                           const std::vector<Vec3>& lattice, std::vector<Vec3>& target,
                                                           std::vector<uint8_t>& snapped, double radius, double piece_length,
-                                                          double offset, SnapStats& stats);
+                                                          double offset, SnapStats& stats,
+                                                          const std::function<bool(const Vec3&, const Vec3&)>& reachable);
 
 }  // namespace vdbwrap::fit

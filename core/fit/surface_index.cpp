@@ -60,4 +60,10 @@ bool SurfaceIndex::touches(const Vec3& a, const Vec3& b, const Vec3& c) const {
   return impl_->tree.do_intersect(t);
 }
 
+bool SurfaceIndex::touches(const Vec3& a, const Vec3& b) const {
+  const K::Segment_3 s(K::Point_3(a[0], a[1], a[2]), K::Point_3(b[0], b[1], b[2]));
+  if (s.is_degenerate()) return false;
+  return impl_->tree.do_intersect(s);
+}
+
 }  // namespace vdbwrap::fit

@@ -27,6 +27,8 @@ class SurfaceIndex {
   bool within(const Vec3& query, double radius) const;
   // Does triangle abc touch or cross the input? (Floating point: a near miss may count.)
   bool touches(const Vec3& a, const Vec3& b, const Vec3& c) const;
+  // Does segment ab touch or cross the input?
+  bool touches(const Vec3& a, const Vec3& b) const;
 
  private:
   struct Impl;

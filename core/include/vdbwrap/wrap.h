@@ -174,8 +174,9 @@ struct FeatureStats {
   size_t sharp_edges = 0, boundary_edges = 0, nonmanifold_edges = 0, intersection_segments = 0;
   size_t curves = 0, corners = 0, curves_captured = 0, corners_captured = 0, nodes_snapped = 0;
   // Curve points the traced chains missed (sampled every half finest cell), and what was done
-  // about them: nodes inserted on the curve by edge splits, nodes moved onto it, changes refused.
-  size_t points_missed = 0, nodes_inserted = 0, nodes_moved = 0, inserts_refused = 0;
+  // about them: nodes inserted on the curve by edge splits, nodes moved onto it, points left
+  // because every change was refused, points behind the input (buried intersection lines).
+  size_t points_missed = 0, nodes_inserted = 0, nodes_moved = 0, inserts_refused = 0, points_unreachable = 0;
 };
 
 // What the flood fill found: does the input enclose anything at this cell size?
