@@ -84,6 +84,12 @@ void WrapOptions::add_to(CLI::App* cmd, const std::string& threads_help) {
        [this](WrapParams& p) { p.presmooth_iterations = cli_.presmooth_iterations; })
       ->capture_default_str()
       ->check(CLI::Range(0, 100));
+  bind(cmd, "--validity-rounds", cli_.validity_rounds,
+       "Rounds of the projection's validity loop; intersections left after them go to the remeshing and the "
+       "intersection repair (0: straight there)",
+       [this](WrapParams& p) { p.validity_rounds = cli_.validity_rounds; })
+      ->capture_default_str()
+      ->check(CLI::Range(0, 100000));
   CLI::Option* nd = cmd->add_flag("--no-distances", no_distances_,
                                   "Skip the sampled distances of the report (timing runs: they cost as much as a stage)");
   bindings_.push_back({nd, [this](WrapParams& p) { p.compute_distances = !no_distances_; }});

@@ -85,6 +85,7 @@ json params_json(const WrapParams& p) {
               {"snap_features", p.snap_features},
               {"corner_angle_deg", p.corner_angle_deg},
               {"coarsen_tolerance", p.coarsen_tolerance},
+              {"validity_rounds", p.validity_rounds},
               {"remesh", p.remesh},
               {"float_coordinates", p.float_coordinates}};
 }

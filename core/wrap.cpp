@@ -42,6 +42,7 @@ void check_params(const WrapParams& p) {
   if (!(p.weld_tolerance >= 0 && p.weld_tolerance < 0.01)) bad("weld tolerance must be in [0, 0.01) of the diagonal");
   if (!(p.corner_angle_deg > 0 && p.corner_angle_deg < 180)) bad("corner angle must be between 0 and 180 degrees");
   if (!(p.coarsen_tolerance >= 0 && p.coarsen_tolerance <= 0.5)) bad("coarsen tolerance must be in [0, 0.5] of the base size");
+  if (p.validity_rounds < 0 || p.validity_rounds > 100000) bad("validity rounds must be between 0 and 100000");
   if (p.volume == VolumeChoice::SeedPoints && p.seed_points.empty()) bad("volume by seed points needs at least one seed point");
   if (p.volume != VolumeChoice::SeedPoints && !p.seed_points.empty()) bad("seed points are given but the volume is not chosen by seed points");
   for (const Vec3& s : p.seed_points)

@@ -140,6 +140,10 @@ WrapParams to_wrap_params(const pb::WrapParameters& in) {
     if (in.presmooth_iterations() < 0 || in.presmooth_iterations() > 100) bad("presmooth_iterations", "must be between 0 and 100");
     p.presmooth_iterations = in.presmooth_iterations();
   }
+  if (in.has_validity_rounds()) {
+    if (in.validity_rounds() < 0 || in.validity_rounds() > 100000) bad("validity_rounds", "must be between 0 and 100000");
+    p.validity_rounds = in.validity_rounds();
+  }
   if (in.has_snap_features()) p.snap_features = in.snap_features();
   if (in.has_remesh()) p.remesh = in.remesh();
   if (in.has_corner_angle_deg()) {
@@ -211,6 +215,7 @@ pb::WrapParameters to_proto(const WrapParams& in) {
   out.set_refine_max_triangles(in.refine_max_triangles);
   out.set_refine_normal_spread_deg(in.refine_normal_spread_deg);
   out.set_presmooth_iterations(in.presmooth_iterations);
+  out.set_validity_rounds(in.validity_rounds);
   out.set_snap_features(in.snap_features);
   out.set_corner_angle_deg(in.corner_angle_deg);
   out.set_refine_at_features(in.refine_at_features);

@@ -411,6 +411,7 @@ TEST(ParamsMapping, RoundTripsEveryFieldAndRefusesOutOfRange) {
   p.weld_tolerance = 1e-5;
   p.surface_offset = 0.1;
   p.presmooth_iterations = 5;
+  p.validity_rounds = 7;
   p.snap_features = !vdbwrap::WrapParams().snap_features;
   p.remesh = !vdbwrap::WrapParams().remesh;
   p.corner_angle_deg = 55;
@@ -428,6 +429,7 @@ TEST(ParamsMapping, RoundTripsEveryFieldAndRefusesOutOfRange) {
   EXPECT_EQ(q.weld_tolerance, 1e-5);
   EXPECT_EQ(q.surface_offset, 0.1);
   EXPECT_EQ(q.presmooth_iterations, 5);
+  EXPECT_EQ(q.validity_rounds, 7);
   EXPECT_EQ(q.snap_features, p.snap_features);
   EXPECT_EQ(q.remesh, p.remesh);
   EXPECT_EQ(q.corner_angle_deg, 55);
@@ -476,6 +478,7 @@ TEST(ParamsMapping, RoundTripsEveryFieldAndRefusesOutOfRange) {
   EXPECT_TRUE(refused([](pb::WrapParameters& w) { w.set_threads(-1); }));
   EXPECT_TRUE(refused([](pb::WrapParameters& w) { w.set_refine_max_triangles(0); }));
   EXPECT_TRUE(refused([](pb::WrapParameters& w) { w.set_presmooth_iterations(101); }));
+  EXPECT_TRUE(refused([](pb::WrapParameters& w) { w.set_validity_rounds(-1); }));
   EXPECT_TRUE(refused([](pb::WrapParameters& w) { w.set_corner_angle_deg(0); }));
   EXPECT_TRUE(refused([](pb::WrapParameters& w) { w.set_surface_offset(0.5); }));
   EXPECT_TRUE(refused([](pb::WrapParameters& w) { w.set_volume(static_cast<pb::Volume>(9)); }));

@@ -356,7 +356,9 @@ std::vector<std::pair<uint32_t, uint32_t>> snap_to_curves(const std::vector<Feat
           if (at < last_at) continue;
           last_at = at;
         }
-        if (!reachable(target[v], q)) continue;
+        // From the target or from the lattice node: next to a concave crease the target can
+        // lie on the other face (its offset runs along it), the lattice node cannot.
+        if (!reachable(target[v], q) && !reachable(lattice[v], q)) continue;
         place(v, q);
         on[k] = 1;
         ++stats.nodes_snapped;

@@ -316,7 +316,7 @@ FittedSurface fit_to_input(const extract::LatticeSurface& surf, const grid::Adap
 
   // A node flagged again and again sits in a tangle that halving resolves only slowly:
   // after a few strikes it goes straight back to its lattice position.
-  const int max_rounds = 400, give_up_halving = 200, strikes_to_lattice = 4;
+  const int max_rounds = params.validity_rounds, give_up_halving = std::min(200, max_rounds / 2), strikes_to_lattice = 4;
   std::vector<uint8_t> flag(n, 0);
   full_check(flag);
   int round = 0;

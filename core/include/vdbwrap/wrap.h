@@ -108,6 +108,9 @@ struct WrapParams {
   double weld_tolerance = 1e-7;    // fraction of the diagonal under which vertices merge
   double surface_offset = 0.005;   // nodes stop this fraction of the finest cell off the input
   int presmooth_iterations = 16;   // smoothing of the voxel surface before projection (untangling)
+  // Rounds of the projection's validity loop (offending nodes pulled back toward the lattice);
+  // intersections still left afterwards go to stage 4's remeshing and intersection repair.
+  int validity_rounds = 400;
 
   // Feature snapping (spec stage 3): wrap edges traced along the feature curves and moved
   // onto them, convex and concave alike, with the corners.
