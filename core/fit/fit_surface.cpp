@@ -347,6 +347,23 @@ FittedSurface fit_to_input(const extract::LatticeSurface& surf, const grid::Adap
     }
     local_check(moved, flag);
   }
+  // Coincident nodes are beyond the repair (it moves triangles, and welding them on output
+  // would pinch the surface): when the rounds ran out, a node still crowded steps a tenth of
+  // its way back toward its lattice position (far more than the crowding distance; nodes are
+  // distinct there), a few times if need be. A larger step makes intersections the repair
+  // then has to fix (measured: all the way back broke busted.STL at 0 rounds).
+  if (!valid)
+    for (int step = 0; step < 4; ++step) {
+      size_t moved = 0;
+      for (uint32_t i = 0; i < n; ++i)
+        if (t[i] > 0 && nodes.crowded(i)) {
+          t[i] = std::max(0.0, t[i] - 0.1);
+          p[i] = world(lerp(lattice[i], target[i], t[i]));
+          nodes.update(i);
+          ++moved;
+        }
+      if (moved == 0) break;
+    }
   out.validity_rounds = round;
   out.valid = valid;
   if (!valid && progress)
