@@ -137,6 +137,26 @@ std::vector<FeatureEdge> find_feature_edges(const std::vector<Vec3>& points, con
   return out;
 }
 
+InputIntersections input_intersections(const std::vector<check::TrianglePair>& mesh_pairs,
+                                       const std::vector<uint32_t>& input_to_mesh, size_t mesh_triangles) {
+  // copies[k]: input triangles that became mesh triangle k (1, or more for duplicates).
+  std::vector<uint32_t> copies(mesh_triangles, 0);
+  for (uint32_t k : input_to_mesh)
+    if (k != UINT32_MAX) ++copies[k];
+  InputIntersections counts;
+  std::vector<uint8_t> hit(mesh_triangles, 0);
+  for (const auto& p : mesh_pairs) {
+    counts.pairs += size_t(copies[p.a]) * copies[p.b];
+    hit[p.a] = hit[p.b] = 1;
+  }
+  for (size_t k = 0; k < mesh_triangles; ++k) {
+    // Copies of one triangle lie on each other: every two of them make an intersecting pair.
+    counts.pairs += copies[k] > 1 ? size_t(copies[k]) * (copies[k] - 1) / 2 : 0;
+    if (hit[k] || copies[k] > 1) counts.triangles += copies[k];
+  }
+  return counts;
+}
+
 PreparedInput prepare(const Mesh& input, const WrapParams& params, ProgressSink* progress) {
   PreparedInput out;
   if (input.triangles.empty()) throw Error(ErrorKind::InvalidInput, "input contains no triangles");
@@ -163,6 +183,7 @@ PreparedInput prepare(const Mesh& input, const WrapParams& params, ProgressSink*
   m.part_names = input.part_names;
   if (m.part_names.empty()) m.part_names.push_back("part0");
   std::unordered_map<uint64_t, std::vector<uint32_t>> seen;  // keyed by sorted triple hash
+  out.input_to_mesh.assign(input.triangles.size(), UINT32_MAX);
   for (size_t t = 0; t < input.triangles.size(); ++t) {
     Tri tri{remap[input.triangles[t][0]], remap[input.triangles[t][1]], remap[input.triangles[t][2]]};
     const Vec3 &a = m.points[tri[0]], &b = m.points[tri[1]], &c = m.points[tri[2]];
@@ -175,16 +196,18 @@ PreparedInput prepare(const Mesh& input, const WrapParams& params, ProgressSink*
     std::sort(sorted.begin(), sorted.end());
     uint64_t h = (uint64_t(sorted[0]) * 0x9E3779B97F4A7C15ULL) ^ (uint64_t(sorted[1]) * 0xC2B2AE3D27D4EB4FULL) ^ sorted[2];
     auto& bucket = seen[h];
-    bool duplicate = false;
+    uint32_t duplicate_of = UINT32_MAX;
     for (uint32_t other : bucket) {
       Tri o = m.triangles[other];
       std::sort(o.begin(), o.end());
-      if (o == sorted) duplicate = true;
+      if (o == sorted) duplicate_of = other;
     }
-    if (duplicate) {
+    if (duplicate_of != UINT32_MAX) {
+      out.input_to_mesh[t] = duplicate_of;
       ++out.dropped_duplicate;
       continue;
     }
+    out.input_to_mesh[t] = uint32_t(m.triangles.size());
     bucket.push_back(uint32_t(m.triangles.size()));
     m.triangles.push_back(tri);
     m.triangle_part.push_back(input.part_of(t));
@@ -206,8 +229,8 @@ PreparedInput prepare(const Mesh& input, const WrapParams& params, ProgressSink*
   out.feature_edges = find_feature_edges(m.points, m.triangles, out.normals, params.feature_angle_deg);
 
   if (progress) progress->progress("prepare", 0.7, "finding self-intersection lines");
-  auto pairs = check::find_intersecting_pairs(m.points, m.triangles);
-  for (const auto& seg : check::intersection_segments(m.points, m.triangles, pairs))
+  out.intersecting_pairs = check::find_intersecting_pairs(m.points, m.triangles);
+  for (const auto& seg : check::intersection_segments(m.points, m.triangles, out.intersecting_pairs))
     out.intersections.push_back({seg.a, seg.b, seg.tri_a, seg.tri_b});
   if (progress) progress->progress("prepare", 1.0, "done");
   return out;
