@@ -166,3 +166,48 @@ TEST(Prepare, OneSearchGivesTheSegmentsAndTheInputCountsOfASearchOnTheRawInput) 
   EXPECT_EQ(c.pairs, raw.intersecting_pairs);
   EXPECT_EQ(c.triangles, raw.intersecting_triangles);
 }
+
+TEST(Diagnose, BoxesTouchingAtACornerMakeOneNonManifoldVertex) {
+  Mesh m = box_mesh({0, 0, 0}, {1, 1, 1});
+  add_box(m, {1, 1, 1}, {2, 2, 2}, 1);  // shares the point (1, 1, 1) only
+  MeshDiagnostics d = diagnose(m, false);
+  EXPECT_EQ(d.nonmanifold_vertices, 1u);
+  EXPECT_EQ(d.nonmanifold_edges, 0u);
+  EXPECT_FALSE(d.manifold);
+  EXPECT_EQ(d.components, 1u);
+}
+
+TEST(Diagnose, AClosedConeWithAWideFanIsManifoldAndOriented) {
+  // Thousands of triangles around the apex and the base centre (CAD cones and caps): the
+  // fan test must see one fan at each, and stay fast.
+  const int n = 4000;
+  Mesh m;
+  m.points.push_back({0, 0, 1});  // apex
+  m.points.push_back({0, 0, 0});  // base centre
+  for (int j = 0; j < n; ++j) m.points.push_back({std::cos(2 * M_PI * j / n), std::sin(2 * M_PI * j / n), 0});
+  for (uint32_t j = 0; j < uint32_t(n); ++j) {
+    const uint32_t a = 2 + j, b = 2 + (j + 1) % n;
+    m.triangles.push_back({0, a, b});
+    m.triangles.push_back({1, b, a});
+  }
+  MeshDiagnostics d = diagnose(m, false);
+  EXPECT_EQ(d.nonmanifold_vertices, 0u);
+  EXPECT_EQ(d.border_edges, 0u);
+  EXPECT_EQ(d.misoriented_edges, 0u);
+  EXPECT_TRUE(d.oriented);
+  EXPECT_TRUE(d.outward);
+  // A second cone standing on the first one's apex: the apex then has two fans of n
+  // triangles each, joined by no edge, and is the one non-manifold vertex.
+  const uint32_t top = uint32_t(m.points.size());
+  m.points.push_back({0, 0, 2});
+  for (int j = 0; j < n; ++j) m.points.push_back({std::cos(2 * M_PI * j / n), std::sin(2 * M_PI * j / n), 2});
+  for (uint32_t j = 0; j < uint32_t(n); ++j) {
+    const uint32_t a = top + 1 + j, b = top + 1 + (j + 1) % n;
+    m.triangles.push_back({0, b, a});
+    m.triangles.push_back({top, a, b});
+  }
+  d = diagnose(m, false);
+  EXPECT_EQ(d.nonmanifold_vertices, 1u);
+  EXPECT_EQ(d.nonmanifold_edges, 0u);
+  EXPECT_EQ(d.components, 1u);
+}
