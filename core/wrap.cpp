@@ -96,7 +96,9 @@ WrapResult run_pipeline(const Mesh& input, const WrapParams& params, ProgressSin
   {
     StageTimer timer("diagnose input", report.stages);
     if (progress) progress->progress("diagnose input", 0.0, "checking the input for defects");
-    report.input = diagnose(input, true);
+    // Intersections are left to prepare, whose one search serves both the report and the
+    // intersection lines; the counts are filled in below.
+    report.input = diagnose(input, false);
   }
   check_cancel(progress);
 
@@ -104,6 +106,13 @@ WrapResult run_pipeline(const Mesh& input, const WrapParams& params, ProgressSin
   {
     StageTimer timer("prepare", report.stages);
     prepared = prep::prepare(input, params, progress);
+  }
+  {
+    const prep::InputIntersections crossing =
+        prep::input_intersections(prepared.intersecting_pairs, prepared.input_to_mesh, prepared.mesh.triangles.size());
+    report.input.intersecting_pairs = crossing.pairs;
+    report.input.intersecting_triangles = crossing.triangles;
+    report.input.self_intersecting = crossing.pairs > 0;
   }
   for (const auto& f : prepared.feature_edges) {
     if (f.kind == prep::FeatureKind::Sharp) ++report.features.sharp_edges;

@@ -114,3 +114,100 @@ TEST(Intersections, FansMeetOnlyAtTheirCentreUnlessTheyOverlapOrFold) {
   p[3] = {0.2, 0.2, 0.1};
   EXPECT_FALSE(check::triangle_pair_intersects(p, {0, 1, 2}, {0, 3, 4}));
 }
+
+TEST(InputIntersections, CopiesOfATriangleCountAsTheyDoInTheInput) {
+  // Mesh triangle 1 stands for three input triangles (two dropped copies), input triangle 4
+  // was degenerate. Mesh pair (0, 1) is three input pairs; the copies make three more.
+  std::vector<check::TrianglePair> pairs = {{0, 1}};
+  std::vector<uint32_t> input_to_mesh = {0, 1, 1, 1, UINT32_MAX, 2};
+  auto c = prep::input_intersections(pairs, input_to_mesh, 3);
+  EXPECT_EQ(c.pairs, 3u + 3u);
+  EXPECT_EQ(c.triangles, 4u);  // 0 and the three copies of 1; 2 meets nothing
+  // A lone duplicate with no other contact still intersects its copy.
+  auto d = prep::input_intersections({}, {0, 0, 1}, 2);
+  EXPECT_EQ(d.pairs, 1u);
+  EXPECT_EQ(d.triangles, 2u);
+}
+
+TEST(Prepare, OneSearchGivesTheSegmentsAndTheInputCountsOfASearchOnTheRawInput) {
+  // Three interpenetrating boxes with the defects prepare removes: a duplicate of a crossing
+  // triangle, a reversed copy of another, a degenerate triangle.
+  Mesh m = box_mesh({0, 0, 0}, {2, 2, 2});
+  add_box(m, {1, 1, 1}, {3, 3, 3}, 1);
+  add_box(m, {0.5, -1, 0.5}, {1.5, 4, 1.5}, 2);
+  m.triangles.push_back(m.triangles[13]);
+  m.triangles.push_back({m.triangles[2][0], m.triangles[2][2], m.triangles[2][1]});
+  m.triangles.push_back({0, 0, 1});
+  m.triangle_part.resize(m.triangles.size(), 0);
+
+  auto p = prep::prepare(m, WrapParams{}, nullptr);
+  ASSERT_EQ(p.dropped_duplicate, 2u);
+  ASSERT_EQ(p.input_to_mesh.size(), m.triangles.size());
+  // The kept pairs are exactly a fresh search of the prepared mesh, and give its segments.
+  auto fresh = check::find_intersecting_pairs(p.mesh.points, p.mesh.triangles);
+  ASSERT_EQ(p.intersecting_pairs.size(), fresh.size());
+  for (size_t i = 0; i < fresh.size(); ++i) {
+    EXPECT_EQ(p.intersecting_pairs[i].a, fresh[i].a);
+    EXPECT_EQ(p.intersecting_pairs[i].b, fresh[i].b);
+  }
+  auto segments = check::intersection_segments(p.mesh.points, p.mesh.triangles, fresh);
+  ASSERT_EQ(p.intersections.size(), segments.size());
+  ASSERT_FALSE(segments.empty());
+  for (size_t i = 0; i < segments.size(); ++i) {
+    EXPECT_EQ(p.intersections[i].tri_a, segments[i].tri_a);
+    EXPECT_EQ(p.intersections[i].tri_b, segments[i].tri_b);
+    EXPECT_EQ(p.intersections[i].a, segments[i].a);
+    EXPECT_EQ(p.intersections[i].b, segments[i].b);
+  }
+  // Mapped back to the input, the counts are those of the search on the input as read.
+  const MeshDiagnostics raw = diagnose(m, true);
+  ASSERT_GT(raw.intersecting_pairs, 0u);
+  auto c = prep::input_intersections(p.intersecting_pairs, p.input_to_mesh, p.mesh.triangles.size());
+  EXPECT_EQ(c.pairs, raw.intersecting_pairs);
+  EXPECT_EQ(c.triangles, raw.intersecting_triangles);
+}
+
+TEST(Diagnose, BoxesTouchingAtACornerMakeOneNonManifoldVertex) {
+  Mesh m = box_mesh({0, 0, 0}, {1, 1, 1});
+  add_box(m, {1, 1, 1}, {2, 2, 2}, 1);  // shares the point (1, 1, 1) only
+  MeshDiagnostics d = diagnose(m, false);
+  EXPECT_EQ(d.nonmanifold_vertices, 1u);
+  EXPECT_EQ(d.nonmanifold_edges, 0u);
+  EXPECT_FALSE(d.manifold);
+  EXPECT_EQ(d.components, 1u);
+}
+
+TEST(Diagnose, AClosedConeWithAWideFanIsManifoldAndOriented) {
+  // Thousands of triangles around the apex and the base centre (CAD cones and caps): the
+  // fan test must see one fan at each, and stay fast.
+  const int n = 4000;
+  Mesh m;
+  m.points.push_back({0, 0, 1});  // apex
+  m.points.push_back({0, 0, 0});  // base centre
+  for (int j = 0; j < n; ++j) m.points.push_back({std::cos(2 * M_PI * j / n), std::sin(2 * M_PI * j / n), 0});
+  for (uint32_t j = 0; j < uint32_t(n); ++j) {
+    const uint32_t a = 2 + j, b = 2 + (j + 1) % n;
+    m.triangles.push_back({0, a, b});
+    m.triangles.push_back({1, b, a});
+  }
+  MeshDiagnostics d = diagnose(m, false);
+  EXPECT_EQ(d.nonmanifold_vertices, 0u);
+  EXPECT_EQ(d.border_edges, 0u);
+  EXPECT_EQ(d.misoriented_edges, 0u);
+  EXPECT_TRUE(d.oriented);
+  EXPECT_TRUE(d.outward);
+  // A second cone standing on the first one's apex: the apex then has two fans of n
+  // triangles each, joined by no edge, and is the one non-manifold vertex.
+  const uint32_t top = uint32_t(m.points.size());
+  m.points.push_back({0, 0, 2});
+  for (int j = 0; j < n; ++j) m.points.push_back({std::cos(2 * M_PI * j / n), std::sin(2 * M_PI * j / n), 2});
+  for (uint32_t j = 0; j < uint32_t(n); ++j) {
+    const uint32_t a = top + 1 + j, b = top + 1 + (j + 1) % n;
+    m.triangles.push_back({0, b, a});
+    m.triangles.push_back({top, a, b});
+  }
+  d = diagnose(m, false);
+  EXPECT_EQ(d.nonmanifold_vertices, 1u);
+  EXPECT_EQ(d.nonmanifold_edges, 0u);
+  EXPECT_EQ(d.components, 1u);
+}

@@ -51,6 +51,11 @@ TEST(Wrap, OutsideWrapOfInterpenetratingPartsIsOneValidSurface) {
   EXPECT_TRUE(v.ok) << v.why;
   EXPECT_EQ(r.report.output.components, 1u);
   EXPECT_GT(r.report.input.intersecting_triangles, 0u);
+  // The report's counts come from prepare's search; they describe the input as read.
+  const MeshDiagnostics raw = diagnose(m, true);
+  EXPECT_EQ(r.report.input.intersecting_pairs, raw.intersecting_pairs);
+  EXPECT_EQ(r.report.input.intersecting_triangles, raw.intersecting_triangles);
+  EXPECT_TRUE(r.report.input.self_intersecting);
   // Both parts appear among the output's part labels.
   bool part0 = false, part1 = false;
   for (int32_t p : r.surface.triangle_part) (p == 0 ? part0 : part1) = true;

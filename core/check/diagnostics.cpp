@@ -3,7 +3,12 @@
 #include <algorithm>
 #include <cstring>
 #include <numeric>
+#include <stdexcept>
 #include <unordered_map>
+
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_reduce.h>
+#include <tbb/parallel_sort.h>
 
 #include "check/intersections.h"
 #include "common/vec.h"
@@ -41,6 +46,99 @@ struct UnionFind {
   void unite(uint32_t a, uint32_t b) { parent[find(a)] = find(b); }
 };
 
+// Every edge of a triangle set once, sorted by key, with how many triangles use it and how
+// many of those traverse it from the smaller to the larger index. Built by a parallel sort of
+// the edge uses: a hash map of edges was the serial bulk of diagnosing millions of triangles.
+struct EdgeUses {
+  std::vector<uint64_t> keys;  // edge_key
+  std::vector<uint32_t> count, forward;
+
+  uint32_t count_of(uint32_t a, uint32_t b) const {
+    const uint64_t k = edge_key(a, b);
+    auto it = std::lower_bound(keys.begin(), keys.end(), k);
+    return it != keys.end() && *it == k ? count[size_t(it - keys.begin())] : 0;
+  }
+};
+
+EdgeUses count_edge_uses(const std::vector<Tri>& tris) {
+  // One word per use: (smaller << 33) | (larger << 1) | forward, so that sorting groups the
+  // uses of an edge. Vertex indices below 2^31 leave room for the direction bit.
+  std::vector<uint64_t> uses;
+  uses.reserve(tris.size() * 3);
+  for (const Tri& t : tris)
+    for (int e = 0; e < 3; ++e) {
+      const uint32_t a = t[e], b = t[(e + 1) % 3];
+      if (a == b) continue;
+      if (std::max(a, b) >= (1u << 31)) throw std::length_error("diagnose: more than 2^31 vertices");
+      uses.push_back((uint64_t(std::min(a, b)) << 33) | (uint64_t(std::max(a, b)) << 1) | (a < b ? 1 : 0));
+    }
+  tbb::parallel_sort(uses.begin(), uses.end());
+  EdgeUses out;
+  for (size_t i = 0; i < uses.size();) {
+    const uint64_t edge = uses[i] >> 1;
+    uint32_t count = 0, forward = 0;
+    for (; i < uses.size() && (uses[i] >> 1) == edge; ++i) ++count, forward += uint32_t(uses[i] & 1);
+    out.keys.push_back(edge);  // (smaller << 32) | larger: edge_key
+    out.count.push_back(count);
+    out.forward.push_back(forward);
+  }
+  return out;
+}
+
+// Vertices whose triangles, joined through the manifold edges (used by exactly two
+// triangles) at the vertex, do not form a single fan. Per vertex, the triangles are grouped
+// by their other vertices (sorting), not compared pairwise: cylinder caps fan thousands of
+// triangles around one vertex. Vertices are independent: a parallel sum.
+size_t count_nonmanifold_vertices(const std::vector<Tri>& tris, size_t vertices, const EdgeUses& edges) {
+  // Triangles around each vertex (a triangle repeating a vertex is listed once per corner).
+  std::vector<uint32_t> first(vertices + 1, 0), around(tris.size() * 3);
+  for (const Tri& t : tris)
+    for (uint32_t v : t) ++first[v + 1];
+  for (size_t v = 0; v < vertices; ++v) first[v + 1] += first[v];
+  {
+    std::vector<uint32_t> fill(first.begin(), first.end() - 1);
+    for (uint32_t t = 0; t < tris.size(); ++t)
+      for (uint32_t v : tris[t]) around[fill[v]++] = t;
+  }
+  struct Scratch {
+    std::vector<std::pair<uint32_t, uint32_t>> by_other;  // (other vertex w, position in the list around v)
+    UnionFind uf{0};
+  };
+  tbb::enumerable_thread_specific<Scratch> scratch;
+  return tbb::parallel_reduce(
+      tbb::blocked_range<size_t>(0, vertices, 1024), size_t(0),
+      [&](const tbb::blocked_range<size_t>& r, size_t count) {
+        Scratch& s = scratch.local();
+        for (size_t v = r.begin(); v != r.end(); ++v) {
+          const uint32_t begin = first[v], n = first[v + 1] - begin;
+          if (n < 2) continue;
+          s.by_other.clear();
+          for (uint32_t i = 0; i < n; ++i)
+            for (uint32_t w : tris[around[begin + i]])
+              if (w != v) s.by_other.push_back({w, i});
+          std::sort(s.by_other.begin(), s.by_other.end());
+          s.uf.parent.resize(n);
+          std::iota(s.uf.parent.begin(), s.uf.parent.end(), 0);
+          // Triangles sharing the edge (v, w) are joined when exactly two triangles use it.
+          for (size_t i = 0; i < s.by_other.size();) {
+            size_t j = i + 1;
+            while (j < s.by_other.size() && s.by_other[j].first == s.by_other[i].first) ++j;
+            if (j - i > 1 && edges.count_of(uint32_t(v), s.by_other[i].first) == 2)
+              for (size_t k = i + 1; k < j; ++k) s.uf.unite(s.by_other[k].second, s.by_other[i].second);
+            i = j;
+          }
+          const uint32_t root = s.uf.find(0);
+          for (uint32_t i = 1; i < n; ++i)
+            if (s.uf.find(i) != root) {
+              ++count;
+              break;
+            }
+        }
+        return count;
+      },
+      std::plus<size_t>());
+}
+
 }  // namespace
 
 MeshDiagnostics diagnose(const Mesh& mesh, bool find_intersections) {
@@ -75,12 +173,6 @@ MeshDiagnostics diagnose(const Mesh& mesh, bool find_intersections) {
     d.parts = parts.empty() ? (tris.empty() ? 0 : 1) : size_t(std::unique(parts.begin(), parts.end()) - parts.begin());
   }
 
-  // Edges: how many triangles use each, and in which directions.
-  struct EdgeUse {
-    uint32_t count = 0, forward = 0;  // forward: traversed from the smaller to the larger index
-  };
-  std::unordered_map<uint64_t, EdgeUse> edges;
-  edges.reserve(tris.size() * 2);
   const Vec3 c = box.empty() ? Vec3{0, 0, 0} : box.center();
   for (const Tri& t : tris) {
     if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2] ||
@@ -89,47 +181,14 @@ MeshDiagnostics diagnose(const Mesh& mesh, bool find_intersections) {
     }
     d.area += 0.5 * norm(area_vector(pts[t[0]], pts[t[1]], pts[t[2]]));
     d.volume += dot(pts[t[0]] - c, cross(pts[t[1]] - c, pts[t[2]] - c)) / 6.0;
-    for (int e = 0; e < 3; ++e) {
-      uint32_t a = t[e], b = t[(e + 1) % 3];
-      if (a == b) continue;
-      auto& use = edges[edge_key(a, b)];
-      ++use.count;
-      if (a < b) ++use.forward;
-    }
   }
-  for (const auto& [key, use] : edges) {
-    if (use.count == 1) ++d.border_edges;
-    if (use.count > 2) ++d.nonmanifold_edges;
-    if (use.count == 2 && use.forward != 1) ++d.misoriented_edges;
+  const EdgeUses edges = count_edge_uses(tris);
+  for (size_t i = 0; i < edges.keys.size(); ++i) {
+    if (edges.count[i] == 1) ++d.border_edges;
+    if (edges.count[i] > 2) ++d.nonmanifold_edges;
+    if (edges.count[i] == 2 && edges.forward[i] != 1) ++d.misoriented_edges;
   }
-
-  // Non-manifold vertices: the triangles around a vertex, joined through its manifold edges,
-  // must form a single fan.
-  {
-    std::vector<std::vector<uint32_t>> vert_tris(pts.size());
-    for (uint32_t t = 0; t < tris.size(); ++t)
-      for (uint32_t v : tris[t]) vert_tris[v].push_back(t);
-    for (uint32_t v = 0; v < pts.size(); ++v) {
-      const auto& around = vert_tris[v];
-      if (around.size() < 2) continue;
-      UnionFind uf(around.size());
-      for (size_t i = 0; i < around.size(); ++i)
-        for (size_t j = i + 1; j < around.size(); ++j) {
-          // joined when they share an edge at v that is used by exactly these two
-          for (uint32_t w : tris[around[i]]) {
-            if (w == v) continue;
-            bool shared = std::find(tris[around[j]].begin(), tris[around[j]].end(), w) != tris[around[j]].end();
-            if (shared && edges[edge_key(v, w)].count == 2) uf.unite(uint32_t(i), uint32_t(j));
-          }
-        }
-      uint32_t root = uf.find(0);
-      for (size_t i = 1; i < around.size(); ++i)
-        if (uf.find(uint32_t(i)) != root) {
-          ++d.nonmanifold_vertices;
-          break;
-        }
-    }
-  }
+  d.nonmanifold_vertices = count_nonmanifold_vertices(tris, pts.size(), edges);
 
   // Connected components through shared vertices.
   {

@@ -5,6 +5,9 @@
 #include <numeric>
 #include <unordered_map>
 
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_sort.h>
+
 #include "check/intersections.h"
 #include "common/grid_key.h"
 #include "common/vec.h"
@@ -16,6 +19,41 @@ namespace {
 uint64_t edge_key(uint32_t a, uint32_t b) {
   if (a > b) std::swap(a, b);
   return (uint64_t(a) << 32) | b;
+}
+
+// The triangles around each edge, in increasing order: runs of `tris` sorted by edge key.
+// Built by one parallel sort instead of a hash map of vectors (a heap block per edge), which
+// was most of orienting and of finding feature edges on millions of triangles. Every edge of
+// every triangle is listed, repeated vertices included, as the map listed them.
+struct EdgeTriangles {
+  std::vector<uint64_t> keys;   // edge keys, sorted, each once
+  std::vector<uint32_t> start;  // triangles of keys[i]: tris[start[i] .. start[i + 1])
+  std::vector<uint32_t> tris;
+
+  size_t edges() const { return keys.size(); }
+  size_t size(size_t i) const { return start[i + 1] - start[i]; }
+  const uint32_t* begin(size_t i) const { return tris.data() + start[i]; }
+  size_t find(uint64_t key) const { return size_t(std::lower_bound(keys.begin(), keys.end(), key) - keys.begin()); }
+};
+
+EdgeTriangles edge_triangles(const std::vector<Tri>& triangles) {
+  std::vector<std::pair<uint64_t, uint32_t>> uses(triangles.size() * 3);
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, triangles.size(), 4096), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t t = r.begin(); t != r.end(); ++t)
+      for (int e = 0; e < 3; ++e) uses[3 * t + e] = {edge_key(triangles[t][e], triangles[t][(e + 1) % 3]), uint32_t(t)};
+  });
+  tbb::parallel_sort(uses.begin(), uses.end());  // (key, triangle): a total order, deterministic
+  EdgeTriangles out;
+  out.tris.resize(uses.size());
+  for (size_t i = 0; i < uses.size(); ++i) {
+    if (i == 0 || uses[i].first != uses[i - 1].first) {
+      out.keys.push_back(uses[i].first);
+      out.start.push_back(uint32_t(i));
+    }
+    out.tris[i] = uses[i].second;
+  }
+  out.start.push_back(uint32_t(uses.size()));
+  return out;
 }
 
 }  // namespace
@@ -56,10 +94,7 @@ std::vector<uint32_t> weld_points(const std::vector<Vec3>& points, double tolera
 size_t orient_pieces(const std::vector<Vec3>& points, std::vector<Tri>& triangles) {
   // Triangles meeting at an edge used by exactly two of them must traverse it in opposite
   // directions; a breadth-first walk flips neighbours that disagree.
-  std::unordered_map<uint64_t, std::vector<uint32_t>> edge_tris;
-  edge_tris.reserve(triangles.size() * 2);
-  for (uint32_t t = 0; t < triangles.size(); ++t)
-    for (int e = 0; e < 3; ++e) edge_tris[edge_key(triangles[t][e], triangles[t][(e + 1) % 3])].push_back(t);
+  const EdgeTriangles edge_tris = edge_triangles(triangles);
 
   auto has_directed = [](const Tri& t, uint32_t a, uint32_t b) {
     for (int e = 0; e < 3; ++e)
@@ -81,8 +116,9 @@ size_t orient_pieces(const std::vector<Vec3>& points, std::vector<Tri>& triangle
       if (flip[t]) std::swap(cur[1], cur[2]);
       for (int e = 0; e < 3; ++e) {
         uint32_t a = cur[e], b = cur[(e + 1) % 3];
-        const auto& nb = edge_tris[edge_key(a, b)];
-        if (nb.size() != 2) continue;
+        const size_t edge = edge_tris.find(edge_key(a, b));
+        if (edge_tris.size(edge) != 2) continue;
+        const uint32_t* nb = edge_tris.begin(edge);
         uint32_t n = nb[0] == t ? nb[1] : nb[0];
         if (piece[n] >= 0) continue;
         piece[n] = pieces;
@@ -114,27 +150,43 @@ size_t orient_pieces(const std::vector<Vec3>& points, std::vector<Tri>& triangle
 std::vector<FeatureEdge> find_feature_edges(const std::vector<Vec3>& points, const std::vector<Tri>& triangles,
                                             const std::vector<Vec3>& normals, double feature_angle_deg) {
   (void)points;
-  std::unordered_map<uint64_t, std::vector<uint32_t>> edge_tris;
-  edge_tris.reserve(triangles.size() * 2);
-  for (uint32_t t = 0; t < triangles.size(); ++t)
-    for (int e = 0; e < 3; ++e) edge_tris[edge_key(triangles[t][e], triangles[t][(e + 1) % 3])].push_back(t);
+  const EdgeTriangles edge_tris = edge_triangles(triangles);
   const double cos_limit = std::cos(feature_angle_deg * M_PI / 180.0);
   std::vector<FeatureEdge> out;
-  for (const auto& [key, tris] : edge_tris) {
-    uint32_t a = uint32_t(key >> 32), b = uint32_t(key & 0xffffffffu);
-    if (tris.size() == 1) {
+  // Keys in increasing order: the edges come out sorted by (a, b).
+  for (size_t i = 0; i < edge_tris.edges(); ++i) {
+    const uint64_t key = edge_tris.keys[i];
+    const uint32_t a = uint32_t(key >> 32), b = uint32_t(key & 0xffffffffu);
+    const uint32_t* tris = edge_tris.begin(i);
+    if (edge_tris.size(i) == 1) {
       out.push_back({a, b, FeatureKind::Boundary});
-    } else if (tris.size() > 2) {
+    } else if (edge_tris.size(i) > 2) {
       out.push_back({a, b, FeatureKind::NonManifold});
     } else if (dot(normals[tris[0]], normals[tris[1]]) < cos_limit) {
       out.push_back({a, b, FeatureKind::Sharp});
     }
   }
-  // Deterministic order regardless of hash iteration.
-  std::sort(out.begin(), out.end(), [](const FeatureEdge& x, const FeatureEdge& y) {
-    return x.a != y.a ? x.a < y.a : x.b < y.b;
-  });
   return out;
+}
+
+InputIntersections input_intersections(const std::vector<check::TrianglePair>& mesh_pairs,
+                                       const std::vector<uint32_t>& input_to_mesh, size_t mesh_triangles) {
+  // copies[k]: input triangles that became mesh triangle k (1, or more for duplicates).
+  std::vector<uint32_t> copies(mesh_triangles, 0);
+  for (uint32_t k : input_to_mesh)
+    if (k != UINT32_MAX) ++copies[k];
+  InputIntersections counts;
+  std::vector<uint8_t> hit(mesh_triangles, 0);
+  for (const auto& p : mesh_pairs) {
+    counts.pairs += size_t(copies[p.a]) * copies[p.b];
+    hit[p.a] = hit[p.b] = 1;
+  }
+  for (size_t k = 0; k < mesh_triangles; ++k) {
+    // Copies of one triangle lie on each other: every two of them make an intersecting pair.
+    counts.pairs += copies[k] > 1 ? size_t(copies[k]) * (copies[k] - 1) / 2 : 0;
+    if (hit[k] || copies[k] > 1) counts.triangles += copies[k];
+  }
+  return counts;
 }
 
 PreparedInput prepare(const Mesh& input, const WrapParams& params, ProgressSink* progress) {
@@ -163,6 +215,7 @@ PreparedInput prepare(const Mesh& input, const WrapParams& params, ProgressSink*
   m.part_names = input.part_names;
   if (m.part_names.empty()) m.part_names.push_back("part0");
   std::unordered_map<uint64_t, std::vector<uint32_t>> seen;  // keyed by sorted triple hash
+  out.input_to_mesh.assign(input.triangles.size(), UINT32_MAX);
   for (size_t t = 0; t < input.triangles.size(); ++t) {
     Tri tri{remap[input.triangles[t][0]], remap[input.triangles[t][1]], remap[input.triangles[t][2]]};
     const Vec3 &a = m.points[tri[0]], &b = m.points[tri[1]], &c = m.points[tri[2]];
@@ -175,16 +228,18 @@ PreparedInput prepare(const Mesh& input, const WrapParams& params, ProgressSink*
     std::sort(sorted.begin(), sorted.end());
     uint64_t h = (uint64_t(sorted[0]) * 0x9E3779B97F4A7C15ULL) ^ (uint64_t(sorted[1]) * 0xC2B2AE3D27D4EB4FULL) ^ sorted[2];
     auto& bucket = seen[h];
-    bool duplicate = false;
+    uint32_t duplicate_of = UINT32_MAX;
     for (uint32_t other : bucket) {
       Tri o = m.triangles[other];
       std::sort(o.begin(), o.end());
-      if (o == sorted) duplicate = true;
+      if (o == sorted) duplicate_of = other;
     }
-    if (duplicate) {
+    if (duplicate_of != UINT32_MAX) {
+      out.input_to_mesh[t] = duplicate_of;
       ++out.dropped_duplicate;
       continue;
     }
+    out.input_to_mesh[t] = uint32_t(m.triangles.size());
     bucket.push_back(uint32_t(m.triangles.size()));
     m.triangles.push_back(tri);
     m.triangle_part.push_back(input.part_of(t));
@@ -198,16 +253,18 @@ PreparedInput prepare(const Mesh& input, const WrapParams& params, ProgressSink*
   out.flipped_triangles = orient_pieces(m.points, m.triangles);
 
   out.normals.resize(m.triangles.size());
-  for (size_t t = 0; t < m.triangles.size(); ++t) {
-    const Tri& tri = m.triangles[t];
-    out.normals[t] = normalized(area_vector(m.points[tri[0]], m.points[tri[1]], m.points[tri[2]]));
-  }
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, m.triangles.size(), 4096), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t t = r.begin(); t != r.end(); ++t) {
+      const Tri& tri = m.triangles[t];
+      out.normals[t] = normalized(area_vector(m.points[tri[0]], m.points[tri[1]], m.points[tri[2]]));
+    }
+  });
   if (progress) progress->progress("prepare", 0.5, "finding feature edges");
   out.feature_edges = find_feature_edges(m.points, m.triangles, out.normals, params.feature_angle_deg);
 
   if (progress) progress->progress("prepare", 0.7, "finding self-intersection lines");
-  auto pairs = check::find_intersecting_pairs(m.points, m.triangles);
-  for (const auto& seg : check::intersection_segments(m.points, m.triangles, pairs))
+  out.intersecting_pairs = check::find_intersecting_pairs(m.points, m.triangles);
+  for (const auto& seg : check::intersection_segments(m.points, m.triangles, out.intersecting_pairs))
     out.intersections.push_back({seg.a, seg.b, seg.tri_a, seg.tri_b});
   if (progress) progress->progress("prepare", 1.0, "done");
   return out;

@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "check/intersections.h"
 #include "vdbwrap/mesh.h"
 #include "vdbwrap/wrap.h"
 
@@ -30,6 +31,13 @@ struct PreparedInput {
   std::vector<Vec3> normals;     // unit normal per triangle
   std::vector<FeatureEdge> feature_edges;
   std::vector<IntersectionSegment> intersections;
+  // Pairs of mesh triangles that intersect, sorted: the pipeline's only search for them. The
+  // segments above come from these, and so do the report's counts on the input (see
+  // input_intersections).
+  std::vector<check::TrianglePair> intersecting_pairs;
+  // Input triangle t became mesh triangle input_to_mesh[t]; an exact duplicate points at the
+  // copy that was kept; UINT32_MAX for a triangle dropped as degenerate.
+  std::vector<uint32_t> input_to_mesh;
   size_t dropped_degenerate = 0, dropped_duplicate = 0, welded_vertices = 0, flipped_triangles = 0;
 };
 
@@ -43,6 +51,18 @@ size_t orient_pieces(const std::vector<Vec3>& points, std::vector<Tri>& triangle
 // Sharp (dihedral angle over feature_angle_deg), boundary and non-manifold edges.
 std::vector<FeatureEdge> find_feature_edges(const std::vector<Vec3>& points, const std::vector<Tri>& triangles,
                                             const std::vector<Vec3>& normals, double feature_angle_deg);
+
+// Intersection counts of the input mesh (MeshDiagnostics::intersecting_pairs / _triangles)
+// from the pairs found on the prepared mesh, so the input need not be searched a second
+// time. Copies of a triangle dropped as duplicates count as they do in the input: a copy
+// intersects the kept triangle and everything the kept triangle intersects. Differences
+// from a search on the raw input are limited to what prepare changes beyond duplicates:
+// nearly collinear triangles it drops, vertices it welds within the weld tolerance.
+struct InputIntersections {
+  size_t pairs = 0, triangles = 0;
+};
+InputIntersections input_intersections(const std::vector<check::TrianglePair>& mesh_pairs,
+                                       const std::vector<uint32_t>& input_to_mesh, size_t mesh_triangles);
 
 // The whole stage. Throws Error(InvalidInput) when nothing usable is left.
 PreparedInput prepare(const Mesh& input, const WrapParams& params, ProgressSink* progress);
