@@ -1,6 +1,7 @@
 #include "fit/feature_insert.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <set>
@@ -159,14 +160,23 @@ class Inserter {
   bool move(uint32_t v, const Vec3& to) {
     const Vec3 from = p_[v];
     std::vector<Vec3> before;
-    double deviation_before = 0;
-    for (uint32_t f : vf_[v]) before.push_back(normal_of(t_[f])), deviation_before = std::max(deviation_before, deviation(t_[f]));
+    std::vector<Tri> old_faces;
+    for (uint32_t f : vf_[v]) before.push_back(normal_of(t_[f])), old_faces.push_back(t_[f]);
     p_[v] = to;
     for (uint32_t f : vf_[v]) buckets_.update(f);
     bool ok = !crowded(v);
     for (size_t k = 0; ok && k < vf_[v].size(); ++k) ok = acceptable(vf_[v][k], before[k]);
-    const double allowed = std::max(prm_.max_deviation, deviation_before);
-    for (size_t k = 0; ok && k < vf_[v].size(); ++k) ok = deviation(t_[vf_[v][k]]) <= allowed;
+    if (ok) {
+      std::vector<Tri> fresh;
+      for (uint32_t f : vf_[v]) fresh.push_back(t_[f]);
+      // The old faces' deviation is measured with v back where it was.
+      ok = near_enough(fresh, [&] {
+        p_[v] = from;
+        const double d = max_deviation(old_faces);
+        p_[v] = to;
+        return d;
+      });
+    }
     if (!ok) {
       p_[v] = from;
       for (uint32_t f : vf_[v]) buckets_.update(f);
@@ -187,7 +197,6 @@ class Inserter {
     p_.push_back(at);
     vf_.emplace_back();
     const Tri old0 = t_[faces[0]], old1 = t_[faces[1]];
-    const double allowed = std::max({prm_.max_deviation, deviation(old0), deviation(old1)});
     const Vec3 n0 = normal_of(old0), n1 = normal_of(old1);
     // In each face (x, y, c) with x-y the edge in its own order: (x, m, c) and (m, y, c).
     auto halves = [&](const Tri& tri) {
@@ -205,8 +214,8 @@ class Inserter {
     t_.push_back(h11);
     for (uint32_t f : {faces[0], faces[1], f2, f3}) buckets_.update(f);
     const bool ok = !crowded(m) && acceptable(faces[0], n0) && acceptable(f2, n0) && acceptable(faces[1], n1) &&
-                    acceptable(f3, n1) && deviation(t_[faces[0]]) <= allowed && deviation(t_[f2]) <= allowed &&
-                    deviation(t_[faces[1]]) <= allowed && deviation(t_[f3]) <= allowed;
+                    acceptable(f3, n1) &&
+                    near_enough({t_[faces[0]], t_[f2], t_[faces[1]], t_[f3]}, [&] { return max_deviation({old0, old1}); });
     if (!ok) {
       t_[faces[0]] = old0;
       t_[faces[1]] = old1;
@@ -234,14 +243,28 @@ class Inserter {
 
   Vec3 normal_of(const Tri& tri) const { return area_vector(p_[tri[0]], p_[tri[1]], p_[tri[2]]); }
 
-  // How far a triangle strays from the input: the largest distance of its centroid and edge
+  // How far triangles stray from the input: the largest distance of their centroids and edge
   // midpoints (a node on a curve must not leave its triangles hanging away from the input).
-  double deviation(const Tri& tri) const {
+  std::array<Vec3, 4> probes(const Tri& tri) const {
     const Vec3 &a = p_[tri[0]], &b = p_[tri[1]], &c = p_[tri[2]];
+    return {(a + b + c) * (1.0 / 3.0), (a + b) * 0.5, (b + c) * 0.5, (c + a) * 0.5};
+  }
+  double max_deviation(const std::vector<Tri>& tris) const {
     double d2 = 0;
-    for (const Vec3& q : {(a + b + c) * (1.0 / 3.0), (a + b) * 0.5, (b + c) * 0.5, (c + a) * 0.5})
-      d2 = std::max(d2, input_.squared_distance(q - origin_));
+    for (const Tri& tri : tris)
+      for (const Vec3& q : probes(tri)) d2 = std::max(d2, input_.squared_distance(q - origin_));
     return std::sqrt(d2);
+  }
+  // New triangles within max_deviation of the input (cheap sphere tests), or else no farther
+  // than the ones they replace (exact distances, only then: they cost most of the stage).
+  template <typename OldDeviation>
+  bool near_enough(const std::vector<Tri>& fresh, OldDeviation&& old_deviation) const {
+    bool within = prm_.max_deviation > 0;
+    for (const Tri& tri : fresh)
+      for (const Vec3& q : probes(tri))
+        if (within && !input_.within(q - origin_, prm_.max_deviation)) within = false;
+    if (within) return true;
+    return max_deviation(fresh) <= std::max(prm_.max_deviation, old_deviation());
   }
 
   // A changed triangle: not degenerate, not flipped against the face it came from, clear of the
