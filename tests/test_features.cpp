@@ -125,6 +125,18 @@ TEST(FeatureSnapping, TurningFeaturesOffMeasurablyRoundsTheEdges) {
   EXPECT_GT(on.report.features.nodes_snapped, 0u);
 }
 
+// Insertion parameters of the unit tests: nodes 0.001 off the input, as `off` below.
+static fit::FeatureInsertParams insert_params(double spacing, double max_move) {
+  fit::FeatureInsertParams prm;
+  prm.spacing = spacing;
+  prm.tolerance = 0.002;
+  prm.max_move = max_move;
+  prm.offset = 0.001;
+  prm.min_area2 = 1e-12;
+  prm.min_separation = 0.01;
+  return prm;
+}
+
 // A concave crease (floor z = 0 meets wall x = 0 along the y axis) that a wrap strip bridges
 // with a chamfer 0.3 wide: the missed crease gets nodes of its own, and the strip stays
 // clear of the input and of itself.
@@ -153,13 +165,7 @@ TEST(FeatureInsertion, ChamferedConcaveCreaseGetsNodesOnIt) {
 
   fit::FeatureCurve crease;
   crease.points = {{0, 0, 0}, {0, 1, 0}};
-  fit::FeatureInsertParams prm;
-  prm.spacing = 0.05;
-  prm.tolerance = 0.002;
-  prm.max_move = 0.5;
-  prm.offset = off;
-  prm.min_area2 = 1e-12;
-  prm.min_separation = 0.01;
+  const fit::FeatureInsertParams prm = insert_params(0.05, 0.5);
   auto distance_to_wrap = [&](const Vec3& q) {
     fit::SurfaceIndex w(wrap.points, wrap.triangles);
     return std::sqrt(w.squared_distance(q));
@@ -200,13 +206,7 @@ TEST(FeatureInsertion, RefusesAMoveThroughTheInput) {
   const auto points = wrap.points;
   fit::FeatureCurve below;
   below.points = {{0.5, 0.2, 0.2}, {0.5, 0.8, 0.2}};
-  fit::FeatureInsertParams prm;
-  prm.spacing = 0.1;
-  prm.tolerance = 0.002;
-  prm.max_move = 1.0;
-  prm.offset = 0.001;
-  prm.min_area2 = 1e-12;
-  prm.min_separation = 0.01;
+  const fit::FeatureInsertParams prm = insert_params(0.1, 1.0);
   const auto stats = fit::insert_feature_nodes(wrap, {below}, index, Vec3{0, 0, 0}, prm);
   EXPECT_GT(stats.samples_missed, 0u);
   EXPECT_EQ(stats.nodes_inserted + stats.nodes_moved, 0u);

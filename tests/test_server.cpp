@@ -1191,32 +1191,26 @@ TEST_F(Service, CliWaitSurvivesAServerCrashAndRestart) {
   expect_valid_result(read_file(dir_ / "w" / "fuze_wrap.obj"), vdbwrap::io::Format::Obj, "fuze after restart");
 }
 
+// The long options (--name) a command's help text lists.
+std::set<std::string> long_options(const std::string& help) {
+  std::set<std::string> out;
+  const std::regex opt("--[a-z][a-z0-9-]+");
+  for (auto it = std::sregex_iterator(help.begin(), help.end(), opt); it != std::sregex_iterator(); ++it) out.insert(it->str());
+  return out;
+}
+
 TEST_F(Service, CliSubmitTakesEveryWrapOption) {
   // `submit` mirrors `wrap`: every long option of one is an option of the other.
-  auto options = [](const std::string& help) {
-    std::set<std::string> out;
-    const std::regex opt("--[a-z][a-z0-9-]+");
-    for (auto it = std::sregex_iterator(help.begin(), help.end(), opt); it != std::sregex_iterator(); ++it)
-      out.insert(it->str());
-    return out;
-  };
   CliRun wrap_help = cli("wrap --help");
   CliRun submit_help = cli("submit --help");
-  std::set<std::string> wrap_options = options(wrap_help.out), submit_options = options(submit_help.out);
+  std::set<std::string> wrap_options = long_options(wrap_help.out), submit_options = long_options(submit_help.out);
   ASSERT_GT(wrap_options.size(), 5u) << wrap_help.out;
   for (const auto& o : wrap_options) EXPECT_TRUE(submit_options.count(o)) << "submit lacks wrap's " << o;
 }
 
 TEST_F(Service, CliSubmitRepairRunsTheRepairOnTheServer) {
   // `submit --repair` takes every option of `vdbwrap repair`, and gives its exit codes.
-  auto options = [](const std::string& help) {
-    std::set<std::string> out;
-    const std::regex opt("--[a-z][a-z0-9-]+");
-    for (auto it = std::sregex_iterator(help.begin(), help.end(), opt); it != std::sregex_iterator(); ++it)
-      out.insert(it->str());
-    return out;
-  };
-  const std::set<std::string> repair_options = options(cli("repair --help").out), submit_options = options(cli("submit --help").out);
+  const std::set<std::string> repair_options = long_options(cli("repair --help").out), submit_options = long_options(cli("submit --help").out);
   ASSERT_GT(repair_options.size(), 10u);
   for (const auto& o : repair_options) EXPECT_TRUE(submit_options.count(o)) << "submit lacks repair's " << o;
 

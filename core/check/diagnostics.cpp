@@ -11,6 +11,7 @@
 #include <tbb/parallel_sort.h>
 
 #include "check/intersections.h"
+#include "common/edge_key.h"
 #include "common/vec.h"
 #include "prep/prepare.h"
 #include "vdbwrap/wrap.h"
@@ -30,11 +31,6 @@ struct PointHash {
     return size_t(h);
   }
 };
-
-uint64_t edge_key(uint32_t a, uint32_t b) {
-  if (a > b) std::swap(a, b);
-  return (uint64_t(a) << 32) | b;
-}
 
 struct UnionFind {
   std::vector<uint32_t> parent;

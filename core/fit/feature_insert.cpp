@@ -7,6 +7,7 @@
 #include <set>
 
 #include "check/intersections.h"
+#include "common/closest_point.h"
 #include "common/float_round.h"
 #include "common/triangle_buckets.h"
 #include "common/vec.h"
@@ -14,26 +15,6 @@
 namespace vdbwrap::fit {
 namespace {
 
-// Closest point of triangle abc to p (Ericson, Real-Time Collision Detection, 5.1.5).
-Vec3 closest_on_triangle(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c) {
-  const Vec3 ab = b - a, ac = c - a, ap = p - a;
-  const double d1 = dot(ab, ap), d2 = dot(ac, ap);
-  if (d1 <= 0 && d2 <= 0) return a;
-  const Vec3 bp = p - b;
-  const double d3 = dot(ab, bp), d4 = dot(ac, bp);
-  if (d3 >= 0 && d4 <= d3) return b;
-  const double vc = d1 * d4 - d3 * d2;
-  if (vc <= 0 && d1 >= 0 && d3 <= 0) return a + ab * (d1 / (d1 - d3));
-  const Vec3 cp = p - c;
-  const double d5 = dot(ab, cp), d6 = dot(ac, cp);
-  if (d6 >= 0 && d5 <= d6) return c;
-  const double vb = d5 * d2 - d1 * d6;
-  if (vb <= 0 && d2 >= 0 && d6 <= 0) return a + ac * (d2 / (d2 - d6));
-  const double va = d3 * d6 - d5 * d4;
-  if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0) return b + (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6)));
-  const double denom = 1.0 / (va + vb + vc);
-  return a + ab * (vb * denom) + ac * (vc * denom);
-}
 
 class Inserter {
  public:
@@ -100,10 +81,8 @@ class Inserter {
       for (int e = 0; e < 3; ++e) {
         const uint32_t u = tri[e], w = tri[(e + 1) % 3];
         if (u > w) continue;  // each interior edge once (from the face that has it as u < w)
-        const Vec3 d = p_[w] - p_[u];
-        const double len2 = norm2(d);
-        const double t = len2 > 0 ? std::clamp(dot(q - p_[u], d) / len2, 0.0, 1.0) : 0.0;
-        const double dist = norm(p_[u] + d * t - q);
+        double t;
+        const double dist = norm(closest_on_segment(p_[u], p_[w], q, t) - q);
         if (dist <= r) edges.push_back({dist, t, u, w});
       }
     });
@@ -126,7 +105,7 @@ class Inserter {
       const double d = norm(away);
       Vec3 target = d > 0 ? q + away * (std::min(prm_.offset, d) / d) : q;
       // A curve point behind the input (a buried intersection line) is out of reach.
-      if (d > prm_.offset && input_.touches(from - origin_, q + away * (0.5 * prm_.offset / d) - origin_)) continue;
+      if (!input_.in_view(from - origin_, q - origin_, prm_.offset)) continue;
       refused = true;
       if (prm_.float_coordinates) target = round_to_float(target);
       // Near an end of the edge, that end goes (unless it is on a curve already); else a split,

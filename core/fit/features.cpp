@@ -7,6 +7,7 @@
 #include <queue>
 #include <unordered_map>
 
+#include "common/closest_point.h"
 #include "common/grid_key.h"
 #include "common/vec.h"
 
@@ -15,14 +16,6 @@ namespace {
 
 using Key = GridKey;
 using KeyHash = GridKeyHash;
-
-// Nearest point of segment ab to p, and its parameter in [0,1].
-Vec3 closest_on_segment(const Vec3& a, const Vec3& b, const Vec3& p, double& t) {
-  Vec3 ab = b - a;
-  double len2 = norm2(ab);
-  t = len2 > 0 ? std::clamp(dot(p - a, ab) / len2, 0.0, 1.0) : 0.0;
-  return a + ab * t;
-}
 
 // A piece of a curve with arc-length parameters at its points.
 struct Piece {

@@ -193,13 +193,7 @@ FittedSurface fit_to_input(const extract::LatticeSurface& surf, const grid::Adap
       graph.neighbours[q[0]].push_back(q[2]), graph.neighbours[q[2]].push_back(q[0]);
       graph.neighbours[q[1]].push_back(q[3]), graph.neighbours[q[3]].push_back(q[1]);
     }
-    // Clear of the input on the way: the segment from the node to half the offset short of
-    // the curve point (which lies on the input) touches nothing.
-    auto reachable = [&](const Vec3& from, const Vec3& to) {
-      const Vec3 d = from - to;
-      const double len = norm(d);
-      return len <= offset || !input.touches(from, to + d * (0.5 * offset / len));
-    };
+    auto reachable = [&](const Vec3& from, const Vec3& to) { return input.in_view(from, to, offset); };
     for (const auto& [a, b] : snap_to_curves(curves, graph, lattice, target, snapped, trace_radius, std::max(8.0 * hf, 2.0 * trace_radius), offset, out.snap, reachable))
       traced.insert({std::min(a, b), std::max(a, b)});
     // Relax the unsnapped nodes within three rings of a snapped one.

@@ -60,10 +60,13 @@ bool SurfaceIndex::touches(const Vec3& a, const Vec3& b, const Vec3& c) const {
   return impl_->tree.do_intersect(t);
 }
 
-bool SurfaceIndex::touches(const Vec3& a, const Vec3& b) const {
-  const K::Segment_3 s(K::Point_3(a[0], a[1], a[2]), K::Point_3(b[0], b[1], b[2]));
-  if (s.is_degenerate()) return false;
-  return impl_->tree.do_intersect(s);
+bool SurfaceIndex::in_view(const Vec3& from, const Vec3& on, double near) const {
+  const double dx = from[0] - on[0], dy = from[1] - on[1], dz = from[2] - on[2];
+  const double len = std::sqrt(dx * dx + dy * dy + dz * dz);
+  if (len <= near) return true;
+  const double k = 0.5 * near / len;  // stop short: the segment's end lies on the input
+  const K::Segment_3 s(K::Point_3(from[0], from[1], from[2]), K::Point_3(on[0] + dx * k, on[1] + dy * k, on[2] + dz * k));
+  return !impl_->tree.do_intersect(s);
 }
 
 }  // namespace vdbwrap::fit

@@ -27,8 +27,9 @@ class SurfaceIndex {
   bool within(const Vec3& query, double radius) const;
   // Does triangle abc touch or cross the input? (Floating point: a near miss may count.)
   bool touches(const Vec3& a, const Vec3& b, const Vec3& c) const;
-  // Does segment ab touch or cross the input?
-  bool touches(const Vec3& a, const Vec3& b) const;
+  // Is input point `on` in view from `from`: within `near` of it, or the segment from `from`
+  // to half `near` short of it clear of the input? (Curves buried inside the input are not.)
+  bool in_view(const Vec3& from, const Vec3& on, double near) const;
 
  private:
   struct Impl;

@@ -6,17 +6,13 @@
 #include <cmath>
 
 #include "check/intersections.h"
+#include "common/edge_key.h"
 #include "common/vec.h"
 
 namespace vdbwrap::post {
 namespace {
 
 constexpr double kDeg = 180.0 / M_PI;
-
-uint64_t edge_key(uint32_t a, uint32_t b) {
-  if (a > b) std::swap(a, b);
-  return (uint64_t(a) << 32) | b;
-}
 
 double angle_deg(const Vec3& u, const Vec3& w) { return std::atan2(norm(cross(u, w)), dot(u, w)) * kDeg; }
 

@@ -8,6 +8,7 @@
 #include <unordered_set>
 
 #include "check/intersections.h"
+#include "common/edge_key.h"
 #include "common/float_round.h"
 #include "common/grid_key.h"
 #include "common/triangle_buckets.h"
@@ -18,10 +19,6 @@
 namespace vdbwrap::post {
 namespace {
 
-uint64_t edge_key(uint32_t a, uint32_t b) {
-  if (a > b) std::swap(a, b);
-  return (uint64_t(a) << 32) | b;
-}
 uint64_t directed_key(uint32_t a, uint32_t b) { return (uint64_t(a) << 32) | b; }
 
 // Points where a triangle set is measured: its corners, edge midpoints and centroids, each once.

@@ -9,17 +9,13 @@
 #include <tbb/parallel_sort.h>
 
 #include "check/intersections.h"
+#include "common/edge_key.h"
 #include "common/grid_key.h"
 #include "common/vec.h"
 #include "vdbwrap/errors.h"
 
 namespace vdbwrap::prep {
 namespace {
-
-uint64_t edge_key(uint32_t a, uint32_t b) {
-  if (a > b) std::swap(a, b);
-  return (uint64_t(a) << 32) | b;
-}
 
 // The triangles around each edge, in increasing order: runs of `tris` sorted by edge key.
 // Built by one parallel sort instead of a hash map of vectors (a heap block per edge), which

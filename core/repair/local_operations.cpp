@@ -7,15 +7,11 @@
 #include <map>
 #include <unordered_map>
 
+#include "common/edge_key.h"
 #include "common/vec.h"
 
 namespace vdbwrap::local_repair {
 namespace {
-
-uint64_t edge_key(uint32_t a, uint32_t b) {
-  if (a > b) std::swap(a, b);
-  return (uint64_t(a) << 32) | b;
-}
 
 bool has_vertex(const Tri& t, uint32_t v) { return t[0] == v || t[1] == v || t[2] == v; }
 

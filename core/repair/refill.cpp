@@ -13,6 +13,7 @@
 #include <unordered_set>
 
 #include "check/intersections.h"
+#include "common/edge_key.h"
 #include "common/float_round.h"
 #include "common/vec.h"
 #include "fit/surface_index.h"
@@ -23,11 +24,6 @@ namespace {
 using K = CGAL::Exact_predicates_inexact_constructions_kernel;
 using SurfaceMesh = CGAL::Surface_mesh<K::Point_3>;
 namespace PMP = CGAL::Polygon_mesh_processing;
-
-uint64_t edge_key(uint32_t a, uint32_t b) {
-  if (a > b) std::swap(a, b);
-  return (uint64_t(a) << 32) | b;
-}
 
 Refill fail(const std::string& why) {
   Refill r;
