@@ -49,3 +49,15 @@ TEST(Coarsen, FewerTrianglesSameValidityDistanceAndEdges) {
     EXPECT_LE(b.report.sharp_edges_to_output.mean, a.report.sharp_edges_to_output.mean + 1e-4 * b.report.diagonal);
   }
 }
+
+TEST(Coarsen, OneThreadAndTwoGiveTheSameSurface) {
+  // The collapses are checked in parallel batches; the batches depend on the queue alone.
+  WrapParams one, two;
+  one.threads = 1;
+  two.threads = 2;
+  one.compute_distances = two.compute_distances = false;
+  WrapResult a = wrap(rotated_cube(), one), b = wrap(rotated_cube(), two);
+  ASSERT_GT(a.report.triangles_before_coarsening, 2 * a.surface.triangles.size());
+  EXPECT_EQ(a.surface.triangles, b.surface.triangles);
+  EXPECT_EQ(a.surface.points, b.surface.points);
+}

@@ -1,6 +1,9 @@
 // Stage 1: weld, degenerate removal, orientation, feature edges.
 #include <gtest/gtest.h>
 
+#include <random>
+
+#include "check/intersections.h"
 #include "prep/prepare.h"
 #include "test_meshes.h"
 
@@ -113,6 +116,42 @@ TEST(Intersections, FansMeetOnlyAtTheirCentreUnlessTheyOverlapOrFold) {
   // The same pair with the second triangle lifted off the plane on one side: apart.
   p[3] = {0.2, 0.2, 0.1};
   EXPECT_FALSE(check::triangle_pair_intersects(p, {0, 1, 2}, {0, 3, 4}));
+}
+
+TEST(Intersections, TheFastProofsInDoublesNeverChangeTheExactAnswer) {
+  // Pairs sharing 0, 1 or 2 vertices: exactly coplanar on lattice points (an axis plane and a
+  // tilted one), nearly coplanar, general, and small triangles far from the origin. With
+  // and without the fast proofs, the answers must agree; the coplanar ones are mixed.
+  std::mt19937 rng(7);
+  std::uniform_int_distribution<int> lattice(-4, 4);
+  std::uniform_real_distribution<double> uni(-1, 1);
+  size_t checked = 0, intersecting = 0;
+  for (int kind = 0; kind < 5; ++kind)
+    for (int trial = 0; trial < 4000; ++trial) {
+      std::vector<Vec3> p(6);
+      for (Vec3& q : p) {
+        const double x = lattice(rng), y = lattice(rng);
+        switch (kind) {
+          case 0: q = {x, y, 0}; break;                                        // axis plane
+          case 1: q = {x, y, 3 - x - y}; break;                                // tilted plane
+          case 2: q = {x, y, 1e-12 * uni(rng)}; break;                         // nearly coplanar
+          case 3: q = {uni(rng), uni(rng), uni(rng)}; break;                   // general
+          default: q = {1e4 + 1e-3 * x, -2e4 + 1e-3 * y, 5e3 + 1e-3 * (x - y)}; // far away, tilted
+        }
+      }
+      const int shared = trial % 3;
+      Tri a{0, 1, 2}, b{3, 4, 5};
+      if (shared >= 1) b[0] = 0;
+      if (shared == 2) b[1] = 2, b[2] = 1, b[0] = 3;  // the common edge reversed, as in a mesh
+      if (check::triangle_is_degenerate(p, a) || check::triangle_is_degenerate(p, b)) continue;
+      const bool exact = check::triangle_pair_intersects(p, a, b, false);
+      ASSERT_EQ(check::triangle_pair_intersects(p, a, b), exact) << "kind " << kind << " trial " << trial;
+      ++checked;
+      intersecting += exact;
+    }
+  EXPECT_GT(checked, 10000u);
+  EXPECT_GT(intersecting, checked / 10);
+  EXPECT_LT(intersecting, checked - checked / 10);
 }
 
 TEST(InputIntersections, CopiesOfATriangleCountAsTheyDoInTheInput) {

@@ -13,6 +13,8 @@
 #include <algorithm>
 #include <cmath>
 #include <array>
+#include <initializer_list>
+#include <limits>
 #include <mutex>
 
 namespace vdbwrap::check {
@@ -30,46 +32,102 @@ bool is_degenerate(const std::vector<P3>& p, const Tri& t) {
   return t[0] == t[1] || t[1] == t[2] || t[0] == t[2] || CGAL::collinear(p[t[0]], p[t[1]], p[t[2]]);
 }
 
+// Proofs in the plane. Projected along an axis, triangles that meet only at their shared
+// vertices (or not at all) in 2D meet only there in 3D too: a common point would project to a
+// common point. Projected along the dominant axis of one triangle's normal, this settles the
+// nearly coplanar pairs (flat regions of a wrap, where the exact predicates are slow because
+// the points are exactly coplanar) in doubles. Every test keeps a relative margin; anything
+// close gives no proof and goes to the exact predicates.
+struct Plane2 {
+  int u = 0, v = 1;
+  double err = 0;  // bound on the rounding of a coordinate difference: the points' magnitude
+  Plane2(const P3& a, const P3& b, const P3& c) {
+    const double n[3] = {(b.y() - a.y()) * (c.z() - a.z()) - (b.z() - a.z()) * (c.y() - a.y()),
+                         (b.z() - a.z()) * (c.x() - a.x()) - (b.x() - a.x()) * (c.z() - a.z()),
+                         (b.x() - a.x()) * (c.y() - a.y()) - (b.y() - a.y()) * (c.x() - a.x())};
+    int drop = 0;
+    for (int k = 1; k < 3; ++k)
+      if (std::fabs(n[k]) > std::fabs(n[drop])) drop = k;
+    u = (drop + 1) % 3, v = (drop + 2) % 3;
+  }
+  std::array<double, 2> operator()(const P3& q, const P3& origin) const { return {q[u] - origin[u], q[v] - origin[v]}; }
+  void covers(std::initializer_list<const P3*> points) {
+    double m = 0;
+    for (const P3* q : points) m = std::max({m, std::fabs((*q)[u]), std::fabs((*q)[v])});
+    err = 8 * std::numeric_limits<double>::epsilon() * m;
+  }
+};
+using V2 = std::array<double, 2>;
+constexpr double kMargin = 1e-9;
+double cross2(const V2& p, const V2& q) { return p[0] * q[1] - p[1] * q[0]; }
+double len2(const V2& p) { return std::hypot(p[0], p[1]); }
+// The side of p relative to the line along `dir` through the origin: +1 / -1 when clearly off
+// it, 0 when too close to tell.
+int side(const V2& dir, const V2& p, double err) {
+  const double ld = len2(dir), lp = len2(p);
+  const double c = cross2(dir, p), m = kMargin * ld * lp + err * (ld + lp + err);
+  return c > m ? 1 : c < -m ? -1 : 0;
+}
+
+// Triangles (c, a, b) and (c, d, e), sharing only vertex c, meet only there: the two angular
+// sectors at c are disjoint when a line through c along one of their four sides leaves the
+// other sector strictly on its far side.
+bool apart_at_shared_vertex_2d(const P3& c, const P3& a, const P3& b, const P3& d, const P3& e) {
+  Plane2 pl(c, a, b);
+  pl.covers({&c, &a, &b, &d, &e});
+  const V2 va = pl(a, c), vb = pl(b, c), vd = pl(d, c), ve = pl(e, c);
+  auto separates = [&](const V2& side_dir, const V2& other, const V2& p, const V2& q) {
+    const int inside = side(side_dir, other, pl.err);
+    return inside != 0 && side(side_dir, p, pl.err) == -inside && side(side_dir, q, pl.err) == -inside;
+  };
+  return separates(va, vb, vd, ve) || separates(vb, va, vd, ve) || separates(vd, ve, va, vb) || separates(ve, vd, va, vb);
+}
+
+// Triangles (s, t, a) and (t, s, b) sharing edge s-t meet only there when a and b lie clearly
+// on opposite sides of it.
+bool apart_at_shared_edge_2d(const P3& s, const P3& t, const P3& a, const P3& b) {
+  Plane2 pl(s, t, a);
+  pl.covers({&s, &t, &a, &b});
+  const V2 dir = pl(t, s);
+  const int sa = side(dir, pl(a, s), pl.err), sb = side(dir, pl(b, s), pl.err);
+  return sa != 0 && sb == -sa;
+}
+
+// Triangles with no shared vertex are apart when a line along one of their six edges leaves
+// the other triangle clearly on the far side.
+bool apart_2d(const std::array<P3, 3>& x, const std::array<P3, 3>& y) {
+  Plane2 pl(x[0], x[1], x[2]);
+  pl.covers({&x[0], &x[1], &x[2], &y[0], &y[1], &y[2]});
+  auto splits = [&](const std::array<P3, 3>& own, const std::array<P3, 3>& other) {
+    for (int i = 0; i < 3; ++i) {
+      const P3& o = own[i];
+      const V2 dir = pl(own[(i + 1) % 3], o);
+      const int inside = side(dir, pl(own[(i + 2) % 3], o), pl.err);
+      if (inside == 0) continue;
+      bool all = true;
+      for (int k = 0; k < 3 && all; ++k) all = side(dir, pl(other[k], o), pl.err) == -inside;
+      if (all) return true;
+    }
+    return false;
+  };
+  return splits(x, y) || splits(y, x);
+}
+
 // Fast proof that triangles (c, a, b) and (c, d, e), sharing only vertex c, meet only there
 // (false: no proof, run the exact tests). Fans of triangles around one vertex (cylinder caps,
 // cone tips) make such pairs by the hundred million, nearly all far apart.
 bool apart_at_shared_vertex(const P3& c, const P3& a, const P3& b, const P3& d, const P3& e) {
+  if (apart_at_shared_vertex_2d(c, a, b, d, e)) return true;
   // d and e strictly on one side of plane (c, a, b): the second triangle meets that plane at c
   // only (and the same the other way round). Filtered predicates: fast when not coplanar.
   const CGAL::Orientation od = CGAL::orientation(c, a, b, d);
   if (od != CGAL::COPLANAR && od == CGAL::orientation(c, a, b, e)) return true;
   const CGAL::Orientation oa = CGAL::orientation(c, d, e, a);
-  if (oa != CGAL::COPLANAR && oa == CGAL::orientation(c, d, e, b)) return true;
-  if (od != CGAL::COPLANAR || oa != CGAL::COPLANAR) return false;
-  // Coplanar: the two angular sectors at c are disjoint when a line through c along one of
-  // their four sides leaves the other sector strictly on its far side. Doubles with a margin;
-  // anything close is left to the exact tests.
-  const double n[3] = {(a.y() - c.y()) * (b.z() - c.z()) - (a.z() - c.z()) * (b.y() - c.y()),
-                       (a.z() - c.z()) * (b.x() - c.x()) - (a.x() - c.x()) * (b.z() - c.z()),
-                       (a.x() - c.x()) * (b.y() - c.y()) - (a.y() - c.y()) * (b.x() - c.x())};
-  int drop = 0;
-  for (int k = 1; k < 3; ++k)
-    if (std::fabs(n[k]) > std::fabs(n[drop])) drop = k;
-  const int u = (drop + 1) % 3, v = (drop + 2) % 3;
-  auto vec = [&](const P3& q) { return std::array<double, 2>{q[u] - c[u], q[v] - c[v]}; };
-  auto cross = [](const std::array<double, 2>& p, const std::array<double, 2>& q) { return p[0] * q[1] - p[1] * q[0]; };
-  auto len = [](const std::array<double, 2>& p) { return std::hypot(p[0], p[1]); };
-  const auto va = vec(a), vb = vec(b), vd = vec(d), ve = vec(e);
-  // Does the line along `side` (with `other` the sector's other side) keep p and q strictly
-  // outside the sector's half-plane?
-  auto separates = [&](const std::array<double, 2>& side, const std::array<double, 2>& other, const std::array<double, 2>& p,
-                       const std::array<double, 2>& q) {
-    const double inside = cross(side, other);
-    const double margin = 1e-9 * len(side);
-    const double sp = cross(side, p), sq = cross(side, q);
-    if (std::fabs(inside) <= margin * len(other)) return false;
-    return (inside > 0 ? sp < -margin * len(p) && sq < -margin * len(q) : sp > margin * len(p) && sq > margin * len(q));
-  };
-  return separates(va, vb, vd, ve) || separates(vb, va, vd, ve) || separates(vd, ve, va, vb) || separates(ve, vd, va, vb);
+  return oa != CGAL::COPLANAR && oa == CGAL::orientation(c, d, e, b);
 }
 
 // Triangles intersect when they share points other than their common vertices/edge.
-bool triangles_intersect(const std::vector<P3>& p, const Tri& x, const Tri& y) {
+bool triangles_intersect(const std::vector<P3>& p, const Tri& x, const Tri& y, bool use_proofs_2d = true) {
   int shared = 0;
   int xi[3], yi[3];  // positions of shared vertices
   for (int i = 0; i < 3; ++i)
@@ -79,14 +137,18 @@ bool triangles_intersect(const std::vector<P3>& p, const Tri& x, const Tri& y) {
         yi[shared] = j;
         ++shared;
       }
-  if (shared == 0) return CGAL::do_intersect(T3(p[x[0]], p[x[1]], p[x[2]]), T3(p[y[0]], p[y[1]], p[y[2]]));
+  if (shared == 0) {
+    if (use_proofs_2d && apart_2d({p[x[0]], p[x[1]], p[x[2]]}, {p[y[0]], p[y[1]], p[y[2]]})) return false;
+    return CGAL::do_intersect(T3(p[x[0]], p[x[1]], p[x[2]]), T3(p[y[0]], p[y[1]], p[y[2]]));
+  }
   if (shared == 3) return true;  // the same triangle twice
   if (shared == 1) {
     int i = xi[0], j = yi[0];
-    if (apart_at_shared_vertex(p[x[i]], p[x[(i + 1) % 3]], p[x[(i + 2) % 3]], p[y[(j + 1) % 3]], p[y[(j + 2) % 3]])) return false;
+    const P3 &c = p[x[i]], &a = p[x[(i + 1) % 3]], &b = p[x[(i + 2) % 3]], &d = p[y[(j + 1) % 3]], &e = p[y[(j + 2) % 3]];
+    if (use_proofs_2d && apart_at_shared_vertex(c, a, b, d, e)) return false;
     // A crossing that starts at the common vertex leaves one triangle through its opposite edge.
-    S3 opp_x(p[x[(i + 1) % 3]], p[x[(i + 2) % 3]]);
-    S3 opp_y(p[y[(j + 1) % 3]], p[y[(j + 2) % 3]]);
+    S3 opp_x(a, b);
+    S3 opp_y(d, e);
     return CGAL::do_intersect(opp_x, T3(p[y[0]], p[y[1]], p[y[2]])) ||
            CGAL::do_intersect(opp_y, T3(p[x[0]], p[x[1]], p[x[2]]));
   }
@@ -95,13 +157,14 @@ bool triangles_intersect(const std::vector<P3>& p, const Tri& x, const Tri& y) {
   const P3& t = p[x[xi[1]]];
   const P3& a = p[x[3 - xi[0] - xi[1]]];
   const P3& b = p[y[3 - yi[0] - yi[1]]];
+  if (use_proofs_2d && apart_at_shared_edge_2d(s, t, a, b)) return false;
   if (!CGAL::coplanar(s, t, a, b)) return false;
   return CGAL::coplanar_orientation(s, t, a, b) == CGAL::POSITIVE;
 }
 
 }  // namespace
 
-bool triangle_pair_intersects(const std::vector<Vec3>& points, const Tri& a, const Tri& b) {
+bool triangle_pair_intersects(const std::vector<Vec3>& points, const Tri& a, const Tri& b, bool use_proofs_2d) {
   // Only the six points involved are converted; the index map keeps the shared-vertex logic.
   std::vector<P3> p;
   p.reserve(6);
@@ -117,7 +180,7 @@ bool triangle_pair_intersects(const std::vector<Vec3>& points, const Tri& a, con
   };
   for (int k = 0; k < 3; ++k) la[k] = local(a[k]);
   for (int k = 0; k < 3; ++k) lb[k] = local(b[k]);
-  return triangles_intersect(p, la, lb);
+  return triangles_intersect(p, la, lb, use_proofs_2d);
 }
 
 bool triangle_is_degenerate(const std::vector<Vec3>& points, const Tri& t) {

@@ -22,8 +22,10 @@ std::vector<TrianglePair> find_intersecting_pairs(const std::vector<Vec3>& point
 std::vector<TrianglePair> find_intersecting_pairs_with(const std::vector<Vec3>& points, const std::vector<Tri>& triangles,
                                                        const std::vector<uint32_t>& subset);
 
-// The exact tests behind the functions above, for one pair / one triangle.
-bool triangle_pair_intersects(const std::vector<Vec3>& points, const Tri& a, const Tri& b);
+// The exact tests behind the functions above, for one pair / one triangle. use_proofs_2d =
+// false skips the fast proofs in doubles that settle most pairs first (for tests: the answer
+// must be the same).
+bool triangle_pair_intersects(const std::vector<Vec3>& points, const Tri& a, const Tri& b, bool use_proofs_2d = true);
 bool triangle_is_degenerate(const std::vector<Vec3>& points, const Tri& t);
 
 struct Segment {

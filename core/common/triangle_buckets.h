@@ -49,6 +49,27 @@ class TriangleBuckets {
     });
   }
 
+  // The same as for_each_in_box, but const, so that several threads may query at once while
+  // nothing is updated; each thread brings its own marks (`seen` and `stamp`, both start at 0).
+  template <typename F>
+  void for_each_in_box(const Box3& b, std::vector<uint32_t>& seen, uint32_t& stamp, F&& fn) const {
+    if (seen.size() < boxes_.size()) seen.resize(boxes_.size(), 0);
+    ++stamp;
+    for_cells(b, [&](const Key& k) {
+      auto it = cells_.find(k);
+      if (it == cells_.end()) return;
+      for (uint32_t g : it->second) {
+        if (seen[g] == stamp) continue;
+        seen[g] = stamp;
+        const Box3& o = boxes_[g];
+        if (o.lo[0] > b.hi[0] || o.hi[0] < b.lo[0] || o.lo[1] > b.hi[1] || o.hi[1] < b.lo[1] || o.lo[2] > b.hi[2] ||
+            o.hi[2] < b.lo[2])
+          continue;
+        fn(g);
+      }
+    });
+  }
+
  private:
   using Key = GridKey;
   template <typename F>

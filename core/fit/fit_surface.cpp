@@ -23,8 +23,17 @@ std::vector<uint32_t> invalid_triangles(const std::vector<Vec3>& points, const s
     const Tri& tri = triangles[t];
     if (norm(area_vector(points[tri[0]], points[tri[1]], points[tri[2]])) < min_area2) bad.push_back(t);
   }
-  if (!bad.empty()) return bad;  // CGAL's test wants non-degenerate faces first
-  return check::mesh_self_intersecting_faces(points, triangles);
+  if (!bad.empty()) return bad;
+  // Box intersection and exact predicates, with the fast proofs in doubles first: on a
+  // lattice surface most candidate pairs are exactly coplanar neighbours, slow for the exact
+  // predicates alone. (The final validation still asks CGAL's own self-intersection test.)
+  for (const check::TrianglePair& pair : check::find_intersecting_pairs(points, triangles)) {
+    bad.push_back(pair.a);
+    bad.push_back(pair.b);
+  }
+  std::sort(bad.begin(), bad.end());
+  bad.erase(std::unique(bad.begin(), bad.end()), bad.end());
+  return bad;
 }
 
 namespace {
@@ -319,7 +328,7 @@ FittedSurface fit_to_input(const extract::LatticeSurface& surf, const grid::Adap
     if (progress && progress->cancelled()) throw Error(ErrorKind::Cancelled, "cancelled");
     size_t flagged = size_t(std::count(flag.begin(), flag.end(), 1));
     if (flagged == 0) {
-      full_check(flag);  // confirm with CGAL on the whole surface
+      full_check(flag);  // confirm on the whole surface
       flagged = size_t(std::count(flag.begin(), flag.end(), 1));
       if (flagged == 0) {
         valid = true;

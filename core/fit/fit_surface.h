@@ -28,7 +28,7 @@ struct FittedSurface {
 };
 
 
-// Offending triangles: CGAL self-intersections, degenerate faces, and triangles whose
+// Offending triangles: self-intersecting ones, degenerate faces, and triangles whose
 // doubled area is below min_area2.
 std::vector<uint32_t> invalid_triangles(const std::vector<Vec3>& points, const std::vector<Tri>& triangles, double min_area2);
 

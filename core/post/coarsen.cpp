@@ -4,7 +4,12 @@
 #include <cmath>
 #include <queue>
 
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
+#include <unordered_map>
+
 #include "check/intersections.h"
+#include "common/grid_key.h"
 #include "common/triangle_buckets.h"
 #include "common/vec.h"
 #include "vdbwrap/errors.h"
@@ -32,6 +37,10 @@ class Coarsener {
     vertex_alive_.assign(p.size(), 1);
     stamp_.assign(p.size(), 0);
     vf_.resize(p.size());
+    ring_claim_.assign(p.size(), 0);
+    end_claim_.assign(p.size(), 0);
+    changed_in_.assign(p.size(), 0);
+    made_in_.assign(t.size(), 0);
     for (uint32_t f = 0; f < t.size(); ++f)
       for (uint32_t v : t[f]) vf_[v].push_back(f);
     cos_turn_ = std::cos(prm_.max_normal_turn_deg * M_PI / 180.0);
@@ -44,7 +53,9 @@ class Coarsener {
       }
   }
 
-  // Passes over every edge, shortest first, until one pass changes nothing (or a few).
+  // Passes over the edges, shortest first, until one pass changes little (at most four). A
+  // later pass retries only edges next to a collapse of the pass before: elsewhere nothing
+  // the checks read has changed.
   size_t run(ProgressSink* progress) {
     size_t total = 0;
     for (int pass = 0; pass < 4; ++pass) {
@@ -53,8 +64,9 @@ class Coarsener {
           if (alive_[f])
             for (int e = 0; e < 3; ++e) {
               uint32_t a = t_[f][e], b = t_[f][(e + 1) % 3];
-              if (a < b) push(a, b);
+              if (a < b && (changed_in_[a] == pass || changed_in_[b] == pass)) push(a, b);
             }
+      pass_ = pass + 1;
       size_t n = one_pass(progress);
       total += n;
       if (n < 16) break;
@@ -62,28 +74,82 @@ class Coarsener {
     return total;
   }
 
+  // One pass in batches: collapses whose closed 1-rings are disjoint do not read what the
+  // others write, so a batch is checked in parallel against the frozen mesh and then applied
+  // in queue order. The batches depend on the queue alone, so the result is the same for any
+  // number of threads.
   size_t one_pass(ProgressSink* progress) {
-    size_t collapses = 0, popped = 0;
+    size_t collapses = 0;
+    std::vector<Entry> batch, deferred;
+    std::vector<uint32_t> ring;
     while (!queue_.empty()) {
-      Entry e = queue_.top();
-      queue_.pop();
-      if (progress && (++popped & 0x3FFF) == 0 && progress->cancelled()) throw Error(ErrorKind::Cancelled, "cancelled");
-      if (!vertex_alive_[e.a] || !vertex_alive_[e.b] || stamp_[e.a] != e.sa || stamp_[e.b] != e.sb) continue;
-      bool done = (removable(e.a, e.b) && collapse(e.a, e.b)) || (removable(e.b, e.a) && collapse(e.b, e.a));
-      if (done) ++collapses;
+      if (progress && progress->cancelled()) throw Error(ErrorKind::Cancelled, "cancelled");
+      ++batch_id_;
+      batch.clear();
+      deferred.clear();
+      while (!queue_.empty() && batch.size() < kBatch && deferred.size() < 4 * kBatch) {
+        Entry e = queue_.top();
+        queue_.pop();
+        if (!vertex_alive_[e.a] || !vertex_alive_[e.b] || stamp_[e.a] != e.sa || stamp_[e.b] != e.sb) continue;
+        // Compatible with the batch when neither end is in a claimed ring and no claimed end
+        // is in this ring.
+        bool free = ring_claim_[e.a] != batch_id_ && ring_claim_[e.b] != batch_id_;
+        if (free) {
+          closed_ring(e.a, e.b, ring);
+          for (uint32_t w : ring) free = free && end_claim_[w] != batch_id_;
+        }
+        if (!free) {
+          deferred.push_back(e);
+          continue;
+        }
+        for (uint32_t w : ring) ring_claim_[w] = batch_id_;
+        end_claim_[e.a] = end_claim_[e.b] = batch_id_;
+        batch.push_back(e);
+      }
+      std::vector<Plan> plans(batch.size());
+      batch_made_.clear();
+      tbb::parallel_for(tbb::blocked_range<size_t>(0, batch.size(), 4), [&](const tbb::blocked_range<size_t>& r) {
+        for (size_t i = r.begin(); i != r.end(); ++i) {
+          const Entry& e = batch[i];
+          if (!(removable(e.a, e.b) && plan(e.a, e.b, plans[i])) && !(removable(e.b, e.a) && plan(e.b, e.a, plans[i])))
+            plans[i].ok = false;
+        }
+      });
+      for (Plan& pl : plans)
+        if (pl.ok && clear_of_batch(pl)) apply(pl), ++collapses;
+      for (const Entry& e : deferred) queue_.push(e);
     }
     return collapses;
   }
 
  private:
+  // Large enough to keep two threads busy between the serial steps, small enough that the
+  // order stays close to shortest first.
+  static constexpr size_t kBatch = 512;
   struct Entry {
     double length2;
     uint32_t a, b, sa, sb;
     bool operator<(const Entry& o) const { return length2 > o.length2; }  // shortest first
   };
+  // A checked collapse of u into v: the two faces on the edge go, the others of u are rewritten.
+  struct Plan {
+    bool ok = false;
+    uint32_t u = 0, v = 0;
+    std::vector<uint32_t> shared, moved;
+    std::vector<Tri> fresh;
+  };
   void push(uint32_t a, uint32_t b) {
     double l2 = norm2(p_[a] - p_[b]);
     if (l2 <= prm_.max_edge * prm_.max_edge) queue_.push({l2, a, b, stamp_[a], stamp_[b]});
+  }
+  // a, b and all their neighbours: everything a collapse of the edge reads or writes.
+  void closed_ring(uint32_t a, uint32_t b, std::vector<uint32_t>& out) const {
+    out.clear();
+    for (uint32_t x : {a, b})
+      for (uint32_t f : vf_[x])
+        for (uint32_t w : t_[f]) out.push_back(w);
+    out.push_back(a);
+    out.push_back(b);
   }
   // A free node may always go. A node on a feature curve may go only into a neighbour on the
   // same straight run of the curve: it has exactly two feature neighbours, v and one more, and
@@ -102,23 +168,22 @@ class Coarsener {
 
   bool near_input(const Vec3& q) const { return input_.within(q - origin_, prm_.max_deviation); }
 
-  // Merges u into v when every check passes.
-  bool collapse(uint32_t u, uint32_t v) {
+  // Checks merging u into v against the current mesh (read only: safe in parallel).
+  bool plan(uint32_t u, uint32_t v, Plan& out) const {
+    out = Plan{};
     // The two faces on edge u-v, and the link condition: u and v share exactly their two
     // opposite vertices as neighbours (else the collapse pinches the surface).
-    std::vector<uint32_t> shared, moved;
     for (uint32_t f : vf_[u]) {
       const Tri& tri = t_[f];
-      (tri[0] == v || tri[1] == v || tri[2] == v ? shared : moved).push_back(f);
+      (tri[0] == v || tri[1] == v || tri[2] == v ? out.shared : out.moved).push_back(f);
     }
-    if (shared.size() != 2) return false;
+    if (out.shared.size() != 2) return false;
     std::vector<uint32_t> nu = neighbours(u), nv = neighbours(v), common;
     std::set_intersection(nu.begin(), nu.end(), nv.begin(), nv.end(), std::back_inserter(common));
     if (common.size() != 2) return false;
-    if (vf_[v].size() + moved.size() > 24) return false;  // a star vertex makes slivers
+    if (vf_[v].size() + out.moved.size() > 24) return false;  // a star vertex makes slivers
 
-    std::vector<Tri> fresh;
-    for (uint32_t f : moved) {
+    for (uint32_t f : out.moved) {
       Tri n = t_[f];
       for (uint32_t& w : n)
         if (w == u) w = v;
@@ -133,51 +198,97 @@ class Coarsener {
         if (norm2(p_[n[k]] - p_[n[(k + 1) % 3]]) > prm_.max_edge * prm_.max_edge) return false;
       const double cos_new = min_angle_cos_max(a, b, c);
       if (cos_new > cos_min_angle_ && cos_new > min_angle_cos_max(p_[o[0]], p_[o[1]], p_[o[2]])) return false;
-      fresh.push_back(n);
+      out.fresh.push_back(n);
     }
     // Close to the input: the centroid and the edge midpoints of every new triangle.
-    for (const Tri& n : fresh) {
+    for (const Tri& n : out.fresh) {
       const Vec3 &a = p_[n[0]], &b = p_[n[1]], &c = p_[n[2]];
       if (!near_input((a + b + c) * (1.0 / 3.0)) || !near_input((a + b) * 0.5) || !near_input((b + c) * 0.5) ||
           !near_input((c + a) * 0.5))
         return false;
     }
     // No intersection with the rest of the surface, nor among the new triangles.
-    for (size_t i = 0; i < fresh.size(); ++i) {
-      if (check::triangle_is_degenerate(p_, fresh[i])) return false;
+    Marks& marks = marks_.local();
+    for (size_t i = 0; i < out.fresh.size(); ++i) {
+      if (check::triangle_is_degenerate(p_, out.fresh[i])) return false;
       for (size_t j = 0; j < i; ++j)
-        if (check::triangle_pair_intersects(p_, fresh[i], fresh[j])) return false;
-      Box3 box;
-      for (uint32_t w : fresh[i]) box.add(p_[w]);
+        if (check::triangle_pair_intersects(p_, out.fresh[i], out.fresh[j])) return false;
       bool hit = false;
-      buckets_.for_each_in_box(box, [&](uint32_t g) {
+      buckets_.for_each_in_box(box_of(out.fresh[i]), marks.seen, marks.stamp, [&](uint32_t g) {
         if (hit || !alive_[g]) return;
         const Tri& other = t_[g];
         if (other[0] == u || other[1] == u || other[2] == u) return;  // replaced or removed
-        hit = check::triangle_pair_intersects(p_, fresh[i], other);
+        hit = check::triangle_pair_intersects(p_, out.fresh[i], other);
       });
       if (hit) return false;
     }
+    out.u = u, out.v = v, out.ok = true;
+    return true;
+  }
 
-    // Apply.
-    for (uint32_t f : shared) {
+  // The plans of one batch were checked against the mesh before the batch: each must also
+  // clear the triangles the earlier plans of the batch made.
+  bool clear_of_batch(const Plan& pl) {
+    for (const Tri& n : pl.fresh) {
+      const Box3 b = box_of(n);
+      bool hit = false;
+      for_batch_cells(b, [&](const GridKey& k) {
+        auto it = batch_made_.find(k);
+        if (hit || it == batch_made_.end()) return;
+        for (uint32_t g : it->second) {
+          if (hit || !alive_[g] || made_in_[g] != batch_id_) continue;
+          const Tri& other = t_[g];
+          if (other[0] == pl.u || other[1] == pl.u || other[2] == pl.u || !overlap(b, box_of(other))) continue;
+          hit = check::triangle_pair_intersects(p_, n, other);
+        }
+      });
+      if (hit) return false;
+    }
+    return true;
+  }
+  // Coarse cells (the longest edge wide) that a box covers.
+  template <typename F>
+  void for_batch_cells(const Box3& b, F&& fn) const {
+    const double inv = 1.0 / std::max(prm_.max_edge, 1e-300);
+    const GridKey lo = grid_key(b.lo, inv), hi = grid_key(b.hi, inv);
+    for (int64_t x = lo.x; x <= hi.x; ++x)
+      for (int64_t y = lo.y; y <= hi.y; ++y)
+        for (int64_t z = lo.z; z <= hi.z; ++z) fn(GridKey{x, y, z});
+  }
+
+  void apply(const Plan& pl) {
+    for (uint32_t f : pl.shared) {
       alive_[f] = 0;
       for (uint32_t w : t_[f]) {
         auto& list = vf_[w];
         list.erase(std::remove(list.begin(), list.end(), f), list.end());
       }
     }
-    for (size_t i = 0; i < moved.size(); ++i) {
-      t_[moved[i]] = fresh[i];
-      vf_[v].push_back(moved[i]);
-      buckets_.update(moved[i]);
+    for (size_t i = 0; i < pl.moved.size(); ++i) {
+      t_[pl.moved[i]] = pl.fresh[i];
+      made_in_[pl.moved[i]] = batch_id_;
+      for_batch_cells(box_of(pl.fresh[i]), [&](const GridKey& k) { batch_made_[k].push_back(pl.moved[i]); });
+      vf_[pl.v].push_back(pl.moved[i]);
+      buckets_.update(pl.moved[i]);
     }
-    vf_[u].clear();
-    vertex_alive_[u] = 0;
+    for (uint32_t f : vf_[pl.v])
+      for (uint32_t w : t_[f]) changed_in_[w] = uint32_t(pass_);
+    vf_[pl.u].clear();
+    vertex_alive_[pl.u] = 0;
     // Only v's edges changed length; the others are re-checked whenever they come up.
-    ++stamp_[v];
-    for (uint32_t w : neighbours(v)) push(std::min(v, w), std::max(v, w));
+    ++stamp_[pl.v];
+    for (uint32_t w : neighbours(pl.v)) push(std::min(pl.v, w), std::max(pl.v, w));
+  }
+
+  static bool overlap(const Box3& a, const Box3& b) {
+    for (int k = 0; k < 3; ++k)
+      if (a.lo[k] > b.hi[k] || b.lo[k] > a.hi[k]) return false;
     return true;
+  }
+  Box3 box_of(const Tri& t) const {
+    Box3 b;
+    for (uint32_t w : t) b.add(p_[w]);
+    return b;
   }
 
   std::vector<uint32_t> neighbours(uint32_t v) const {
@@ -214,6 +325,17 @@ class Coarsener {
   TriangleBuckets buckets_;
   std::vector<uint8_t> alive_, vertex_alive_;
   std::vector<uint32_t> stamp_;
+  // The batch whose ring / whose edge ends hold a vertex, the batch that rewrote a triangle,
+  // the pass that last changed a vertex's neighbourhood.
+  std::vector<uint32_t> ring_claim_, end_claim_, made_in_, changed_in_;
+  uint32_t batch_id_ = 0;
+  std::unordered_map<GridKey, std::vector<uint32_t>, GridKeyHash> batch_made_;  // the batch's new triangles
+  struct Marks {
+    std::vector<uint32_t> seen;
+    uint32_t stamp = 0;
+  };
+  mutable tbb::enumerable_thread_specific<Marks> marks_;
+  int pass_ = 0;
   std::vector<std::vector<uint32_t>> vf_;
   std::priority_queue<Entry> queue_;
   double cos_turn_ = 0, cos_min_angle_ = 0, dev2_ = 0;

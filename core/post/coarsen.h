@@ -3,6 +3,8 @@
 // a neighbour, no new positions, so every kept node stays where projection put it) remove
 // them while the surface stays closed, 2-manifold, free of self-intersections and close to
 // the input; nodes snapped onto feature curves go only along straight runs of their chain.
+// Collapses are checked in parallel, in batches of edges whose 1-rings do not touch, and
+// applied in queue order: the result does not depend on the number of threads.
 #pragma once
 #include <cstdint>
 #include <vector>
