@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <initializer_list>
 #include <limits>
 #include <set>
 
@@ -38,13 +39,17 @@ class Inserter {
         const Vec3 &a = c.points[i], &b = c.points[i + 1];
         const size_t k = std::max<size_t>(1, size_t(std::ceil(norm(b - a) / prm_.spacing)));
         for (size_t j = (i == 0 ? 0 : 1); j <= k; ++j, ++index) {
-          if (first) retry.push_back(1);
-          if (!retry[index]) {
+          if (first) retry.push_back(1), seen_.push_back(0);
+          const Vec3 q = world(lerp(a, b, double(j) / double(k)));
+          // A refused point is retried only when the wrap near it changed since: else every
+          // check would give what it gave before.
+          if (!retry[index] || (!first && !changed_near(q, seen_[index]))) {
             previous = UINT32_MAX;
             continue;
           }
           bool again = false;
-          const uint32_t v = visit(world(lerp(a, b, double(j) / double(k))), again, stats);
+          seen_[index] = clock_;
+          const uint32_t v = visit(q, again, stats);
           retry[index] = again;
           if (v == UINT32_MAX) continue;
           if (previous != UINT32_MAX && previous != v && adjacent(previous, v)) add_feature_edge(previous, v);
@@ -56,6 +61,26 @@ class Inserter {
   }
 
  private:
+  // Has any triangle within reach of q changed after time `since`? Reach: the farthest a
+  // change can be from q and still alter the checks of a change at q (the move radius plus
+  // two edges: the changed triangles and the ones they are tested against).
+  bool changed_near(const Vec3& q, uint64_t since) {
+    const double r = 1.5 * prm_.max_move;
+    Box3 box;
+    box.add(q - Vec3{r, r, r});
+    box.add(q + Vec3{r, r, r});
+    bool changed = false;
+    buckets_.for_each_in_box(box, [&](uint32_t f) { changed = changed || (f < changed_at_.size() && changed_at_[f] > since); });
+    return changed;
+  }
+  void mark_changed(std::initializer_list<uint32_t> faces) {
+    ++clock_;
+    for (uint32_t f : faces) {
+      if (f >= changed_at_.size()) changed_at_.resize(f + 1, 0);
+      changed_at_[f] = clock_;
+    }
+  }
+
   Vec3 world(const Vec3& local) const {
     Vec3 w = local + origin_;
     return prm_.float_coordinates ? round_to_float(w) : w;
@@ -162,6 +187,11 @@ class Inserter {
       return false;
     }
     s_.snapped[v] = 1;
+    ++clock_;
+    for (uint32_t f : vf_[v]) {
+      if (f >= changed_at_.size()) changed_at_.resize(f + 1, 0);
+      changed_at_[f] = clock_;
+    }
     return true;
   }
 
@@ -214,6 +244,7 @@ class Inserter {
       std::replace(ly.begin(), ly.end(), face, half);
       vf_[h[2]].push_back(half);
     }
+    mark_changed({faces[0], faces[1], f2, f3});
     s_.snapped.push_back(1);
     s_.cell_size.push_back(std::min(s_.cell_size[a], s_.cell_size[b]));
     if (edges_.erase({std::min(a, b), std::max(a, b)})) add_feature_edge(a, m), add_feature_edge(m, b);
@@ -292,6 +323,10 @@ class Inserter {
   TriangleBuckets buckets_;
   std::vector<std::vector<uint32_t>> vf_;
   std::set<std::pair<uint32_t, uint32_t>> edges_;
+  // Change times: a counter that ticks with every accepted change, the time each triangle
+  // last changed, and the time each curve point was last visited.
+  uint64_t clock_ = 0;
+  std::vector<uint64_t> changed_at_, seen_;
 };
 
 }  // namespace
@@ -302,7 +337,8 @@ FeatureInsertStats insert_feature_nodes(FittedSurface& surface, const std::vecto
   if (curves.empty() || surface.triangles.empty() || !(params.spacing > 0)) return stats;
   Inserter inserter(surface, input, origin, params);
   // More passes while they place nodes: the nodes of one pass give the points it refused new
-  // edges to split. The missed count is the first pass's, the refused count the last's.
+  // edges to split. The missed count is the first pass's; a refused point is retried only
+  // when the wrap near it changed.
   std::vector<uint8_t> retry;
   inserter.run(curves, retry, stats);
   for (int pass = 1; pass < 4; ++pass) {
@@ -310,9 +346,10 @@ FeatureInsertStats insert_feature_nodes(FittedSurface& surface, const std::vecto
     inserter.run(curves, retry, more);
     stats.nodes_inserted += more.nodes_inserted;
     stats.nodes_moved += more.nodes_moved;
-    stats.refused = more.refused;
     if (more.nodes_inserted + more.nodes_moved == 0) break;
   }
+  // Refused: points still missed where some change in reach was refused (skipped ones too).
+  stats.refused = size_t(std::count(retry.begin(), retry.end(), 1));
   return stats;
 }
 
