@@ -39,7 +39,20 @@ SurfaceIndex::~SurfaceIndex() = default;
 
 SurfaceIndex::Hit SurfaceIndex::closest(const Vec3& q) const {
   K::Point_3 query(q[0], q[1], q[2]);
-  auto [point, it] = impl_->tree.closest_point_and_primitive(query);
+  // The search prunes by the best distance so far, so a close first guess saves most of it.
+  // Queries come in runs of neighbours (the nodes or triangles of one block of a parallel
+  // loop), so the triangle this thread found last is usually nearest again, or nearly so.
+  thread_local const Impl* last_index = nullptr;
+  thread_local size_t last_triangle = 0;
+  Tree::Point_and_primitive_id hint = impl_->tree.best_hint(query);
+  if (last_index == impl_.get() && last_triangle < impl_->triangles.size()) {
+    const auto it = impl_->triangles.cbegin() + long(last_triangle);
+    const K::Point_3 on = K::Construct_projected_point_3()(*it, query);
+    if (CGAL::squared_distance(query, on) < CGAL::squared_distance(query, hint.first)) hint = {on, it};
+  }
+  auto [point, it] = impl_->tree.closest_point_and_primitive(query, hint);
+  last_index = impl_.get();
+  last_triangle = size_t(it - impl_->triangles.cbegin());
   Hit hit;
   hit.point = {point.x(), point.y(), point.z()};
   hit.triangle = uint32_t(it - impl_->triangles.cbegin());
