@@ -535,14 +535,20 @@ size_t refine_around(Work& w, int32_t r, double h, size_t budget, bool float_coo
     return best;
   };
   for (int round = 0; round < 64 && w.tris.size() - start < budget; ++round) {
-    std::set<uint32_t> ring;
-    for (uint32_t t : local_repair::triangles_of(pairs_of_region(w, r)))
-      for (uint32_t v : w.tris[t]) ring.insert(vf[v].begin(), vf[v].end());
+    // The intersecting triangles first: while they are long, their ring is far-reaching (a
+    // fan's hub) and needs no cutting; then the ring around them.
     std::vector<std::pair<double, uint32_t>> todo;
-    for (uint32_t t : ring) {
-      uint32_t u = 0, v = 0;
-      double len = longest(w.tris[t], u, v);
-      if (len > h) todo.push_back({-len, t});
+    const std::vector<uint32_t> cut = local_repair::triangles_of(pairs_of_region(w, r));
+    for (int pass = 0; pass < 2 && todo.empty(); ++pass) {
+      std::set<uint32_t> ring(cut.begin(), cut.end());
+      if (pass == 1)
+        for (uint32_t t : cut)
+          for (uint32_t v : w.tris[t]) ring.insert(vf[v].begin(), vf[v].end());
+      for (uint32_t t : ring) {
+        uint32_t u = 0, v = 0;
+        double len = longest(w.tris[t], u, v);
+        if (len > h) todo.push_back({-len, t});
+      }
     }
     if (todo.empty()) break;
     std::sort(todo.begin(), todo.end());  // longest first
