@@ -280,10 +280,23 @@ Refill refill_region(const std::vector<Vec3>& points, const std::vector<Tri>& tr
       loops.size() > 1 && params.max_deviation > 0
           ? pieces_beyond(triangles, faces, in_region, loops, std::max<size_t>(64, 4 * region.size()))
           : std::vector<Piece>{};
+  // Only a piece bounded by closed loops may go: a loop along the mesh's border can run
+  // between several components, and deleting one would leave the others' edges free.
+  std::unordered_set<uint32_t> on_open;
+  for (size_t i = 0; i < loops.size(); ++i)
+    if (open[i]) on_open.insert(loops[i].begin(), loops[i].end());
+  auto pinned = [&](const Piece& p) {
+    for (size_t i : p.loops)
+      if (open[i]) return true;
+    for (uint32_t t : p.triangles)
+      for (uint32_t v : triangles[t])
+        if (on_open.count(v)) return true;
+    return false;
+  };
   std::vector<size_t> small;  // pieces that may be deleted, largest (by area) first
   std::vector<uint8_t> always(loops.size(), 1);
   for (size_t p = 0; p < pieces.size(); ++p)
-    if (!pieces[p].large) {
+    if (!pieces[p].large && !pinned(pieces[p])) {
       small.push_back(p);
       for (size_t i : pieces[p].loops) always[i] = 0;
     }

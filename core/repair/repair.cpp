@@ -383,6 +383,11 @@ void run_refill(Work& w, const RepairParams& params, double max_dev, const fit::
                                    return std::none_of(r.begin(), r.end(), [&](uint32_t t) { return intersecting.count(t) > 0; });
                                  }),
                   regions.end());
+    // The regions' vertices: a refill may delete a piece beyond its region only where no other
+    // region is (the other's patch would border on nothing).
+    std::unordered_map<uint32_t, size_t> owner;
+    for (size_t i = 0; i < regions.size(); ++i)
+      for (uint32_t v : local_repair::vertices_of(w.tris, regions[i])) owner.emplace(v, i);
     std::vector<local_repair::Refill> fills(regions.size());
     tbb::parallel_for(size_t(0), regions.size(), [&](size_t i) {
       fills[i] = local_repair::refill_region(w.points, w.tris, faces, regions[i], rp, &original);
@@ -393,17 +398,21 @@ void run_refill(Work& w, const RepairParams& params, double max_dev, const fit::
     std::vector<Trial> trials;
     std::vector<size_t> who;
     std::vector<std::vector<Tri>> removed;
-    // A refill may delete a piece beyond its contour: never one another refill changes too.
-    std::unordered_set<uint32_t> claimed;
-    for (const auto& r : regions) claimed.insert(r.begin(), r.end());
     for (size_t i = 0; i < regions.size(); ++i) {
-      if (fills[i].ok)
-        for (uint32_t t : fills[i].also_removed)
-          if (!claimed.insert(t).second) {
-            fills[i].ok = false;
-            fills[i].why = "would delete a piece another refill changes";
+      if (fills[i].ok) {
+        std::vector<uint32_t> reach = regions[i];
+        reach.insert(reach.end(), fills[i].also_removed.begin(), fills[i].also_removed.end());
+        for (uint32_t t : reach) {
+          for (uint32_t v : w.tris[t]) {
+            auto [it, added] = owner.emplace(v, i);
+            if (!added && it->second != i) fills[i].ok = false;
+          }
+          if (!fills[i].ok) {
+            fills[i].why = "would reach a region another refill changes";
             break;
           }
+        }
+      }
       if (!fills[i].ok) {
         ++report.refill_failures;
         ++report.refusals["refill: " + fills[i].why];
@@ -519,13 +528,15 @@ void split_edge(Work& w, std::vector<std::vector<uint32_t>>& vf, uint32_t u, uin
 
 // Bisects the longest edge of every triangle within a ring of input region `r`'s
 // intersecting triangles while it is longer than `h`, at most `budget` new triangles.
-// Returns the triangles added.
-size_t refine_around(Work& w, int32_t r, double h, size_t budget, bool float_coordinates) {
+// Returns false when it gave up: the intersecting triangles multiplied as if the crossing were
+// an area, not a curve (coplanar overlaps, a triangle soup), which no narrow band fixes.
+bool refine_around(Work& w, int32_t r, double h, size_t budget, bool float_coordinates, size_t& added) {
   std::vector<std::vector<uint32_t>> vf(w.points.size());
   for (uint32_t t = 0; t < w.tris.size(); ++t)
     if (!local_repair::is_dead(w.tris[t]))
       for (uint32_t v : w.tris[t]) vf[v].push_back(t);
   const size_t start = w.tris.size();
+  size_t first = 0;
   auto longest = [&](const Tri& t, uint32_t& u, uint32_t& v) {
     double best = -1;
     for (int k = 0; k < 3; ++k) {
@@ -539,6 +550,11 @@ size_t refine_around(Work& w, int32_t r, double h, size_t budget, bool float_coo
     // fan's hub) and needs no cutting; then the ring around them.
     std::vector<std::pair<double, uint32_t>> todo;
     const std::vector<uint32_t> cut = local_repair::triangles_of(pairs_of_region(w, r));
+    if (round == 0) first = cut.size();
+    if (cut.size() > 32 * first) {
+      added = w.tris.size() - start;
+      return false;
+    }
     for (int pass = 0; pass < 2 && todo.empty(); ++pass) {
       std::set<uint32_t> ring(cut.begin(), cut.end());
       if (pass == 1)
@@ -574,7 +590,8 @@ size_t refine_around(Work& w, int32_t r, double h, size_t budget, bool float_coo
     auto found = check::find_intersecting_pairs_with(w.points, w.tris, changed);
     w.update_pairs(std::unordered_set<uint32_t>(changed.begin(), changed.end()), found);
   }
-  return w.tris.size() - start;
+  added = w.tris.size() - start;
+  return added < budget;
 }
 
 // Part 2 again, region by region, for the regions the plain refill left: refine around the
@@ -587,12 +604,18 @@ void run_refine_and_refill(Work& w, const RepairParams& params, double max_dev, 
   for (int32_t r = 0; r < int32_t(regions_found); ++r) {
     if (!has_pairs(r)) continue;
     check_cancel(progress);
+    Work unrefined = w;
+    size_t added = 0;
+    if (!refine_around(w, r, max_dev / 3, budget, params.float_coordinates, added)) {
+      w = std::move(unrefined);
+      ++report.refusals["refine and refill: intersections cover an area, not a curve (not refined)"];
+      continue;
+    }
     bool fixed = false;
+    const Work refined = w;
     for (bool fair : {true, false}) {
       if (fair && !params.fair) continue;
-      Work saved = w;
       const auto refills = report.refills;
-      const size_t added = refine_around(w, r, max_dev / 3, budget, params.float_coordinates);
       run_refill(w, params, max_dev, original, report, progress, r, fair);
       if (!has_pairs(r)) {
         fixed = true;
@@ -600,10 +623,13 @@ void run_refine_and_refill(Work& w, const RepairParams& params, double max_dev, 
         report.refined_triangles_added += added;
         break;
       }
-      w = std::move(saved);
+      w = refined;
       report.refills = refills;
     }
-    if (!fixed) ++report.refusals["refine and refill: region still intersecting (refinement undone)"];
+    if (!fixed) {
+      w = std::move(unrefined);
+      ++report.refusals["refine and refill: region still intersecting (refinement undone)"];
+    }
   }
 }
 
