@@ -583,6 +583,23 @@ TEST(Repair, PinPushedIntoAPlateIsRepairedAsABandCutFromBoth) {
   EXPECT_DOUBLE_EQ(z_top, 0.315);  // the pin's top is untouched
 }
 
+TEST(Repair, SheetsCrossingEdgeToEdgeAreLeftAsTheyWere) {
+  // Nothing to cap: the crossing runs into both sheets' borders. The refinement tried for the
+  // second refill is undone, so the mesh keeps its triangles, with the region reported.
+  Mesh m = vdbwrap::testing::crossing_sheets();
+  RepairResult r = repair(m, RepairParams{});
+  print(r.report, "crossing sheets");
+  EXPECT_EQ(r.report.left_unfixed, 1u);
+  ASSERT_EQ(r.report.unfixed.size(), 1u);
+  EXPECT_EQ(r.report.regions_refined, 0u);
+  EXPECT_EQ(r.mesh.triangles.size(), m.triangles.size());
+  EXPECT_EQ(r.mesh.points.size(), m.points.size());
+  EXPECT_EQ(border_edges(r.mesh), border_edges(m));
+  EXPECT_GT(r.report.after.intersecting_pairs, 0u);  // a vertex shift may clear a pair, not the crossing
+  EXPECT_LE(r.report.after.intersecting_pairs, r.report.before.intersecting_pairs);
+  EXPECT_LE(r.report.deviation, 1.05 * 0.005);
+}
+
 TEST(Repair, SinglePrecisionRepairStaysRepairedInFloats) {
   Mesh m = plate_with_defects(true, false);
   RepairParams p;
