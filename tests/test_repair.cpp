@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <map>
 #include <random>
 
 #include "check/intersections.h"
@@ -350,6 +351,47 @@ TEST(RepairRefill, ContourSplitsIntoSimpleLoops) {
   // Vertex 1 starts two edges: a pinch, not a simple loop.
   EXPECT_TRUE(contour_loops({{1, 2}, {2, 3}, {3, 1}, {1, 4}, {4, 5}, {5, 1}}, why).empty());
   EXPECT_EQ(why, "contour is not a simple loop");
+}
+
+TEST(RepairRegions, PinchedBorderIsClosedByTheTrianglesAroundThePinch) {
+  // Two triangles of a flat grid touching at one vertex only: their border passes through
+  // that vertex twice. Taking the triangles around it leaves one simple loop.
+  Mesh m;
+  const int n = 4;
+  for (int j = 0; j <= n; ++j)
+    for (int i = 0; i <= n; ++i) m.points.push_back({double(i), double(j), 0.0});
+  auto at = [&](int i, int j) { return uint32_t(j * (n + 1) + i); };
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i) {
+      m.triangles.push_back({at(i, j), at(i + 1, j), at(i + 1, j + 1)});
+      m.triangles.push_back({at(i, j), at(i + 1, j + 1), at(i, j + 1)});
+    }
+  const uint32_t below = 2 * (1 * n + 1), above = 2 * (2 * n + 2) + 1;  // meet at (2, 2) only
+  auto border = [&](const std::vector<uint32_t>& set) {
+    std::map<std::pair<uint32_t, uint32_t>, int> count;
+    for (uint32_t t : set)
+      for (int k = 0; k < 3; ++k) {
+        uint32_t u = m.triangles[t][k], v = m.triangles[t][(k + 1) % 3];
+        ++count[{std::min(u, v), std::max(u, v)}];
+      }
+    std::vector<std::pair<uint32_t, uint32_t>> edges;
+    for (uint32_t t : set)
+      for (int k = 0; k < 3; ++k) {
+        uint32_t u = m.triangles[t][k], v = m.triangles[t][(k + 1) % 3];
+        if (count[{std::min(u, v), std::max(u, v)}] == 1) edges.push_back({u, v});
+      }
+    return edges;
+  };
+  std::string why;
+  EXPECT_TRUE(contour_loops(border({below, above}), why).empty());
+  EXPECT_EQ(why, "contour is not a simple loop");
+  VertexFaces faces = vertex_faces(m.points.size(), m.triangles);
+  std::vector<uint32_t> closed = close_pinches(m.triangles, faces, {below, above});
+  EXPECT_EQ(closed.size(), 6u);  // the six triangles around (2, 2)
+  why.clear();
+  EXPECT_EQ(contour_loops(border(closed), why).size(), 1u) << why;
+  // A set without a pinch is left as it is.
+  EXPECT_EQ(close_pinches(m.triangles, faces, {below}), (std::vector<uint32_t>{below}));
 }
 
 TEST(RepairRefill, BandAroundACylinderIsFilledLoopByLoop) {

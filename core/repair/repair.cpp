@@ -383,8 +383,12 @@ void run_refill(Work& w, const RepairParams& params, double max_dev, const fit::
                                    return std::none_of(r.begin(), r.end(), [&](uint32_t t) { return intersecting.count(t) > 0; });
                                  }),
                   regions.end());
+    // Where a region's border pinches (refined meshes: vertices of high valence), its contour
+    // is no simple loop: the region takes the triangles around the pinch.
+    for (auto& r : regions) r = local_repair::close_pinches(w.tris, faces, std::move(r));
     // The regions' vertices: a refill may delete a piece beyond its region only where no other
-    // region is (the other's patch would border on nothing).
+    // region is (the other's patch would border on nothing); grown regions that now overlap
+    // are refused below.
     std::unordered_map<uint32_t, size_t> owner;
     for (size_t i = 0; i < regions.size(); ++i)
       for (uint32_t v : local_repair::vertices_of(w.tris, regions[i])) owner.emplace(v, i);
