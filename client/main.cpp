@@ -64,6 +64,9 @@ void print_repair_report(const std::string& output, const RepairReport& r) {
               r.local_iterations_run, r.vertex_shifts, r.triangle_shifts, r.refill_iterations_run, r.refills,
               r.refill_failures);
   for (const auto& [why, count] : r.refusals) std::printf("  refused %zux: %s\n", count, why.c_str());
+  if (r.regions_refined > 0)
+    std::printf("  refined before refilling: %zu regions (%zu triangles added)\n", r.regions_refined,
+                r.refined_triangles_added);
   if (r.pieces_removed > 0)
     std::printf("  small pieces removed: %zu (%zu triangles)\n", r.pieces_removed, r.piece_triangles_removed);
   std::printf("  intersecting pairs %zu -> %zu, border edges %zu -> %zu, non-manifold edges %zu -> %zu, triangles %zu -> %zu\n",

@@ -248,11 +248,9 @@ TEST_F(Cli, RepairFixesADentAndReportsIt) {
 }
 
 TEST_F(Cli, RepairWithIntersectionsLeftExitsFourAndStillWrites) {
-  // A pin pushed into a plate: the two solids cross along a curve, beyond local repair.
-  Mesh m;
-  vdbwrap::testing::add_cylinder(m, {0, 0, 0}, 1.0, 0.02, 128, 0);
-  vdbwrap::testing::add_cylinder(m, {0.3, 0.2, 0.015}, 0.1, 0.3, 32, 1);
-  std::string in = (dir / "pin.ply").string();
+  // Two open sheets crossing edge to edge: the crossing runs into both borders, beyond repair.
+  Mesh m = vdbwrap::testing::crossing_sheets();
+  std::string in = (dir / "sheets.ply").string();
   io::write_mesh(m, in);
   CliRun r = run("repair " + in + " -o " + (dir / "out.ply").string() + " --report " + (dir / "r.json").string());
   EXPECT_EQ(r.code, 4) << r.err;

@@ -585,12 +585,10 @@ TEST_F(Service, RepairJobRepairsAnUploadedMesh) {
   ASSERT_TRUE(c.download(st.job_id(), result, pb::MESH_FORMAT_STL).ok());
   EXPECT_EQ(vdbwrap::diagnose(vdbwrap::io::read_mesh_from_bytes(result, vdbwrap::io::Format::Stl, "r"), true).intersecting_pairs, 0u);
 
-  // Two boxes pushed into each other cross along a curve: not a local defect. The job
-  // succeeds with the result written and says how many pairs are left.
-  vdbwrap::Mesh boxes = vdbwrap::testing::box_mesh({0, 0, 0}, {1, 1, 1});
-  vdbwrap::testing::add_box(boxes, {0.5, 0.3, 0.3}, {1.5, 0.7, 0.7}, 1);
-  spec.set_file_name("boxes.obj");
-  o = c.submit_spec(vdbwrap::io::write_mesh_to_bytes(boxes, vdbwrap::io::Format::Obj), spec);
+  // Two open sheets crossing edge to edge: beyond repair (nothing to cap). The job succeeds
+  // with the result written and says how many pairs are left.
+  spec.set_file_name("sheets.obj");
+  o = c.submit_spec(vdbwrap::io::write_mesh_to_bytes(vdbwrap::testing::crossing_sheets(), vdbwrap::io::Format::Obj), spec);
   ASSERT_TRUE(o.status.ok()) << o.status.error_message();
   const pb::JobStatus left = c.wait_done(o.job_id);
   ASSERT_EQ(left.state(), pb::JOB_STATE_SUCCEEDED) << left.error_message();

@@ -1,6 +1,9 @@
 // Part 2 of the repair: remove a region and fill its hole from the contour vertices (Liepa
 // 2003: minimal-area triangulation, then refinement), fair the new vertices (bi-Laplacian,
 // Botsch & Sorkine 2008), and check the result. A pure function: the mesh is not touched.
+// The contour may be several loops (a band cut out of two crossing bodies): each loop is
+// filled on its own, and a small piece the region cuts off (the buried end of a pin, a patch
+// of a face under it) is deleted instead when it lies within max_deviation of the fill.
 #pragma once
 #include <cstdint>
 #include <string>
@@ -30,12 +33,18 @@ struct Refill {
   // new_points[index - points.size()].
   std::vector<Tri> triangles;
   std::vector<uint32_t> replaces;  // per new triangle, the nearest removed triangle (for its part)
+  std::vector<uint32_t> also_removed;  // pieces cut off by the region and deleted with it (sorted)
+  size_t loops = 0;                    // contour loops filled
   bool faired = false;
 };
 
 // The refill of `region` (sorted live triangle ids). `original`, when given, is the input
 // surface: new points must stay within max_deviation of it, as the removed surface must
 // stay within max_deviation of the refill.
+// A contour as directed edges (vertex -> next vertex) split into simple loops; empty with
+// `why` set when it is not closed or a vertex lies on two loops.
+std::vector<std::vector<uint32_t>> contour_loops(const std::vector<std::pair<uint32_t, uint32_t>>& edges, std::string& why);
+
 Refill refill_region(const std::vector<Vec3>& points, const std::vector<Tri>& triangles, const VertexFaces& faces,
                      const std::vector<uint32_t>& region, const RefillParams& params,
                      const fit::SurfaceIndex* original = nullptr);

@@ -120,4 +120,31 @@ EdgeRange edge_range(const std::vector<Vec3>& points, const std::vector<Tri>& al
   return {lo, hi};
 }
 
+std::vector<uint32_t> close_pinches(const std::vector<Tri>& all, const VertexFaces& faces, std::vector<uint32_t> set,
+                                    int rounds) {
+  for (int round = 0; round < rounds; ++round) {
+    // Border edges of the set: used once by it. A vertex starting two of them is a pinch.
+    std::unordered_map<uint64_t, int> used;
+    for (uint32_t t : set)
+      for (int k = 0; k < 3; ++k) {
+        uint32_t u = all[t][k], v = all[t][(k + 1) % 3];
+        ++used[u < v ? (uint64_t(u) << 32 | v) : (uint64_t(v) << 32 | u)];
+      }
+    std::unordered_map<uint32_t, int> starts;
+    for (uint32_t t : set)
+      for (int k = 0; k < 3; ++k) {
+        uint32_t u = all[t][k], v = all[t][(k + 1) % 3];
+        if (used[u < v ? (uint64_t(u) << 32 | v) : (uint64_t(v) << 32 | u)] == 1) ++starts[u];
+      }
+    std::vector<uint32_t> grown = set;
+    for (const auto& [v, n] : starts)
+      if (n > 1) grown.insert(grown.end(), faces.begin(v), faces.end(v));
+    if (grown.size() == set.size()) break;
+    std::sort(grown.begin(), grown.end());
+    grown.erase(std::unique(grown.begin(), grown.end()), grown.end());
+    set = std::move(grown);
+  }
+  return set;
+}
+
 }  // namespace vdbwrap::local_repair

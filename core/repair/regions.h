@@ -33,6 +33,12 @@ std::vector<uint32_t> triangles_of(const std::vector<check::TrianglePair>& pairs
 // `set` (sorted) plus every live triangle that shares a vertex with it, sorted.
 std::vector<uint32_t> grow_ring(const std::vector<Tri>& all, const VertexFaces& faces, const std::vector<uint32_t>& set);
 
+// `set` (sorted) plus every live triangle around each vertex where the set's border pinches
+// (a vertex that two of its border loops pass through), repeated up to `rounds` times: a
+// contour of simple loops, grown only where it needed to be. Sorted.
+std::vector<uint32_t> close_pinches(const std::vector<Tri>& all, const VertexFaces& faces, std::vector<uint32_t> set,
+                                    int rounds = 3);
+
 // The distinct vertices of a triangle set, sorted.
 std::vector<uint32_t> vertices_of(const std::vector<Tri>& all, const std::vector<uint32_t>& set);
 

@@ -348,13 +348,22 @@ void run_local(Work& w, const RepairParams& params, const local_repair::LocalPar
 // ---------------------------------------------------------------------------------------
 // Part 2: remove and refill.
 
+// The pairs with a triangle of input region `only` (all pairs when it is negative).
+std::vector<TrianglePair> pairs_of_region(const Work& w, int32_t only) {
+  if (only < 0) return w.pairs;
+  std::vector<TrianglePair> out;
+  for (const auto& p : w.pairs)
+    if (w.region_of[p.a] == only || w.region_of[p.b] == only) out.push_back(p);
+  return out;
+}
+
 void run_refill(Work& w, const RepairParams& params, double max_dev, const fit::SurfaceIndex& original,
-                RepairReport& report, ProgressSink* progress) {
-  std::vector<uint32_t> T = local_repair::triangles_of(w.pairs);
+                RepairReport& report, ProgressSink* progress, int32_t only = -1, bool fair = true) {
+  std::vector<uint32_t> T = local_repair::triangles_of(pairs_of_region(w, only));
   local_repair::RefillParams rp;
   rp.area_ratio = params.refill_area_ratio;
   rp.max_deviation = max_dev;
-  rp.fair = params.fair;
+  rp.fair = params.fair && fair;
   rp.float_coordinates = params.float_coordinates;
   for (int j = 0; j < params.refill_iterations && !w.pairs.empty(); ++j) {
     check_cancel(progress);
@@ -368,12 +377,21 @@ void run_refill(Work& w, const RepairParams& params, double max_dev, const fit::
     auto regions = local_repair::group_regions(w.tris, T, {});
     // Only regions that still hold an intersecting triangle are refilled.
     std::unordered_set<uint32_t> intersecting;
-    for (const auto& p : w.pairs) intersecting.insert(p.a), intersecting.insert(p.b);
+    for (const auto& p : pairs_of_region(w, only)) intersecting.insert(p.a), intersecting.insert(p.b);
     regions.erase(std::remove_if(regions.begin(), regions.end(),
                                  [&](const std::vector<uint32_t>& r) {
                                    return std::none_of(r.begin(), r.end(), [&](uint32_t t) { return intersecting.count(t) > 0; });
                                  }),
                   regions.end());
+    // Where a region's border pinches (refined meshes: vertices of high valence), its contour
+    // is no simple loop: the region takes the triangles around the pinch.
+    for (auto& r : regions) r = local_repair::close_pinches(w.tris, faces, std::move(r));
+    // The regions' vertices: a refill may delete a piece beyond its region only where no other
+    // region is (the other's patch would border on nothing); grown regions that now overlap
+    // are refused below.
+    std::unordered_map<uint32_t, size_t> owner;
+    for (size_t i = 0; i < regions.size(); ++i)
+      for (uint32_t v : local_repair::vertices_of(w.tris, regions[i])) owner.emplace(v, i);
     std::vector<local_repair::Refill> fills(regions.size());
     tbb::parallel_for(size_t(0), regions.size(), [&](size_t i) {
       fills[i] = local_repair::refill_region(w.points, w.tris, faces, regions[i], rp, &original);
@@ -385,12 +403,28 @@ void run_refill(Work& w, const RepairParams& params, double max_dev, const fit::
     std::vector<size_t> who;
     std::vector<std::vector<Tri>> removed;
     for (size_t i = 0; i < regions.size(); ++i) {
+      if (fills[i].ok) {
+        std::vector<uint32_t> reach = regions[i];
+        reach.insert(reach.end(), fills[i].also_removed.begin(), fills[i].also_removed.end());
+        for (uint32_t t : reach) {
+          for (uint32_t v : w.tris[t]) {
+            auto [it, added] = owner.emplace(v, i);
+            if (!added && it->second != i) fills[i].ok = false;
+          }
+          if (!fills[i].ok) {
+            fills[i].why = "would reach a region another refill changes";
+            break;
+          }
+        }
+      }
       if (!fills[i].ok) {
         ++report.refill_failures;
         ++report.refusals["refill: " + fills[i].why];
         continue;
       }
       const local_repair::Refill& f = fills[i];
+      std::vector<uint32_t> gone = regions[i];
+      gone.insert(gone.end(), f.also_removed.begin(), f.also_removed.end());
       // The new triangles belong to the input region most of the removed ones came from.
       int32_t tag = -1;
       {
@@ -403,7 +437,7 @@ void run_refill(Work& w, const RepairParams& params, double max_dev, const fit::
       }
       Trial trial;
       trial.refill = true;
-      std::unordered_set<uint32_t> region_set(regions[i].begin(), regions[i].end());
+      std::unordered_set<uint32_t> region_set(gone.begin(), gone.end());
       for (const auto& p : w.pairs) {
         bool a_in = region_set.count(p.a) > 0, b_in = region_set.count(p.b) > 0;
         if (a_in != b_in) trial.partners_allowed.insert(a_in ? p.b : p.a);
@@ -412,7 +446,7 @@ void run_refill(Work& w, const RepairParams& params, double max_dev, const fit::
       w.points.insert(w.points.end(), f.new_points.begin(), f.new_points.end());
       w.origin.insert(w.origin.end(), f.new_points.begin(), f.new_points.end());
       removed.emplace_back();
-      for (uint32_t t : regions[i]) {
+      for (uint32_t t : gone) {
         removed.back().push_back(w.tris[t]);
         w.tris[t] = local_repair::dead_triangle();
       }
@@ -427,8 +461,8 @@ void run_refill(Work& w, const RepairParams& params, double max_dev, const fit::
         w.touched.push_back(1);
         trial.changed.push_back(id);
       }
-      trial.gone = regions[i];
-      trial.watched = regions[i];
+      trial.gone = gone;
+      trial.watched = gone;
       trial.watched.insert(trial.watched.end(), trial.changed.begin(), trial.changed.end());
       trials.push_back(std::move(trial));
       who.push_back(i);
@@ -437,12 +471,12 @@ void run_refill(Work& w, const RepairParams& params, double max_dev, const fit::
     auto found = judge(w, trials, {}, [&](size_t k) {
       // Put the region back; its new triangles die (their points stay unused until compaction).
       for (uint32_t t : trials[k].changed) w.tris[t] = local_repair::dead_triangle();
-      const auto& region = regions[who[k]];
-      for (size_t q = 0; q < region.size(); ++q) w.tris[region[q]] = removed[k][q];
+      const auto& gone = trials[k].gone;
+      for (size_t q = 0; q < gone.size(); ++q) w.tris[gone[q]] = removed[k][q];
     });
     std::unordered_set<uint32_t> changed;
     for (size_t k = 0; k < trials.size(); ++k) {
-      const auto& region = regions[who[k]];
+      const auto& region = trials[k].gone;
       if (trials[k].accepted) {
         ++report.refills;
         changed.insert(region.begin(), region.end());
@@ -453,6 +487,153 @@ void run_refill(Work& w, const RepairParams& params, double max_dev, const fit::
       }
     }
     w.update_pairs(changed, found);
+  }
+}
+
+// ---------------------------------------------------------------------------------------
+// Refinement before a second refill: on CAD tessellations a triangle spans a whole face, so
+// the band a refill removes (the intersecting triangles and a ring) reaches far beyond the
+// bound. Bisecting the long edges near the intersections (the surface stays the same) makes
+// that band narrow: a pin pushed into a plate then comes out as a band cut from both bodies,
+// each loop of its contour filled on its own.
+
+// Splits edge (u, v) at new point m in every live triangle on it: each keeps its slot as the
+// half at u and appends the half at v (same orientation, part and region). `vf` follows.
+void split_edge(Work& w, std::vector<std::vector<uint32_t>>& vf, uint32_t u, uint32_t v, uint32_t m,
+                std::vector<uint32_t>& changed) {
+  std::vector<uint32_t> on;
+  for (uint32_t f : vf[u]) {
+    const Tri& t = w.tris[f];
+    if (t[0] == v || t[1] == v || t[2] == v) on.push_back(f);
+  }
+  vf.resize(std::max<size_t>(vf.size(), m + 1));
+  for (uint32_t f : on) {
+    Tri t = w.tris[f];
+    int k = 0;
+    while (!((t[k] == u && t[(k + 1) % 3] == v) || (t[k] == v && t[(k + 1) % 3] == u))) ++k;
+    const uint32_t a = t[k], b = t[(k + 1) % 3], c = t[(k + 2) % 3];
+    const uint32_t keep_end = a == u ? b : a;  // the corner (u or v) that leaves slot f
+    w.tris[f] = a == u ? Tri{a, m, c} : Tri{m, b, c};
+    const Tri other = a == u ? Tri{m, b, c} : Tri{a, m, c};
+    const uint32_t id = uint32_t(w.tris.size());
+    w.tris.push_back(other);
+    w.part.push_back(w.part[f]);
+    w.region_of.push_back(w.region_of[f]);
+    w.touched.push_back(1);
+    w.touched[f] = 1;
+    auto& row = vf[keep_end];
+    row.erase(std::find(row.begin(), row.end(), f));
+    vf[m].push_back(f);
+    for (uint32_t x : other) vf[x].push_back(id);
+    changed.push_back(f);
+    changed.push_back(id);
+  }
+}
+
+// Bisects the longest edge of every triangle within a ring of input region `r`'s
+// intersecting triangles while it is longer than `h`, at most `budget` new triangles.
+// Returns false when it gave up: the intersecting triangles multiplied as if the crossing were
+// an area, not a curve (coplanar overlaps, a triangle soup), which no narrow band fixes.
+bool refine_around(Work& w, int32_t r, double h, size_t budget, bool float_coordinates, size_t& added) {
+  std::vector<std::vector<uint32_t>> vf(w.points.size());
+  for (uint32_t t = 0; t < w.tris.size(); ++t)
+    if (!local_repair::is_dead(w.tris[t]))
+      for (uint32_t v : w.tris[t]) vf[v].push_back(t);
+  const size_t start = w.tris.size();
+  size_t first = 0;
+  auto longest = [&](const Tri& t, uint32_t& u, uint32_t& v) {
+    double best = -1;
+    for (int k = 0; k < 3; ++k) {
+      double len = norm(w.points[t[(k + 1) % 3]] - w.points[t[k]]);
+      if (len > best) best = len, u = t[k], v = t[(k + 1) % 3];
+    }
+    return best;
+  };
+  for (int round = 0; round < 64 && w.tris.size() - start < budget; ++round) {
+    // The intersecting triangles first: while they are long, their ring is far-reaching (a
+    // fan's hub) and needs no cutting; then the ring around them.
+    std::vector<std::pair<double, uint32_t>> todo;
+    const std::vector<uint32_t> cut = local_repair::triangles_of(pairs_of_region(w, r));
+    if (round == 0) first = cut.size();
+    if (cut.size() > 32 * first) {
+      added = w.tris.size() - start;
+      return false;
+    }
+    for (int pass = 0; pass < 2 && todo.empty(); ++pass) {
+      std::set<uint32_t> ring(cut.begin(), cut.end());
+      if (pass == 1)
+        for (uint32_t t : cut)
+          for (uint32_t v : w.tris[t]) ring.insert(vf[v].begin(), vf[v].end());
+      for (uint32_t t : ring) {
+        uint32_t u = 0, v = 0;
+        double len = longest(w.tris[t], u, v);
+        if (len > h) todo.push_back({-len, t});
+      }
+    }
+    if (todo.empty()) break;
+    std::sort(todo.begin(), todo.end());  // longest first
+    std::vector<uint32_t> changed;
+    std::unordered_set<uint32_t> split;
+    for (const auto& [neg, t] : todo) {
+      if (split.count(t)) continue;  // already cut this round
+      uint32_t u = 0, v = 0;
+      if (longest(w.tris[t], u, v) <= h) continue;
+      Vec3 mid = (w.points[u] + w.points[v]) * 0.5;
+      if (float_coordinates) mid = round_to_float(mid);
+      if (mid == w.points[u] || mid == w.points[v]) continue;
+      const uint32_t m = uint32_t(w.points.size());
+      w.points.push_back(mid);
+      w.origin.push_back(mid);
+      const size_t before = changed.size();
+      split_edge(w, vf, u, v, m, changed);
+      split.insert(changed.begin() + long(before), changed.end());
+      if (w.tris.size() - start >= budget) break;
+    }
+    std::sort(changed.begin(), changed.end());
+    changed.erase(std::unique(changed.begin(), changed.end()), changed.end());
+    auto found = check::find_intersecting_pairs_with(w.points, w.tris, changed);
+    w.update_pairs(std::unordered_set<uint32_t>(changed.begin(), changed.end()), found);
+  }
+  added = w.tris.size() - start;
+  return added < budget;
+}
+
+// Part 2 again, region by region, for the regions the plain refill left: refine around the
+// region, refill it (smooth fill first, then flat); kept only when the region comes out free
+// of intersections, else the mesh goes back as it was (no refinement left behind).
+void run_refine_and_refill(Work& w, const RepairParams& params, double max_dev, const fit::SurfaceIndex& original,
+                           size_t regions_found, RepairReport& report, ProgressSink* progress) {
+  auto has_pairs = [&](int32_t r) { return !pairs_of_region(w, r).empty(); };
+  const size_t budget = std::max<size_t>(20000, 2 * w.tris.size());
+  for (int32_t r = 0; r < int32_t(regions_found); ++r) {
+    if (!has_pairs(r)) continue;
+    check_cancel(progress);
+    Work unrefined = w;
+    size_t added = 0;
+    if (!refine_around(w, r, max_dev / 3, budget, params.float_coordinates, added)) {
+      w = std::move(unrefined);
+      ++report.refusals["refine and refill: intersections cover an area, not a curve (not refined)"];
+      continue;
+    }
+    bool fixed = false;
+    const Work refined = w;
+    for (bool fair : {true, false}) {
+      if (fair && !params.fair) continue;
+      const auto refills = report.refills;
+      run_refill(w, params, max_dev, original, report, progress, r, fair);
+      if (!has_pairs(r)) {
+        fixed = true;
+        ++report.regions_refined;
+        report.refined_triangles_added += added;
+        break;
+      }
+      w = refined;
+      report.refills = refills;
+    }
+    if (!fixed) {
+      w = std::move(unrefined);
+      ++report.refusals["refine and refill: region still intersecting (refinement undone)"];
+    }
   }
 }
 
@@ -605,13 +786,19 @@ RepairResult run_repair(const Mesh& input, const RepairParams& params, ProgressS
   }
   const auto clean_after_local = clean_regions();
   if (!w.pairs.empty() && params.refill_iterations > 0) {
-    StageTimer timer("remove and refill", report.stages);
     Mesh original{w.origin, {}, {}, {}};
     for (const Tri& t : w.tris)
       if (!local_repair::is_dead(t)) original.triangles.push_back(t);
     // The input surface as it came (vertices at their starting places).
     fit::SurfaceIndex index(w.origin, original.triangles);
-    run_refill(w, params, report.max_deviation, index, report, progress);
+    {
+      StageTimer timer("remove and refill", report.stages);
+      run_refill(w, params, report.max_deviation, index, report, progress);
+    }
+    if (!w.pairs.empty()) {
+      StageTimer timer("refine, remove and refill", report.stages);
+      run_refine_and_refill(w, params, report.max_deviation, index, report.regions_found, report, progress);
+    }
   }
   if (params.remove_small_pieces) {
     StageTimer timer("remove small pieces", report.stages);

@@ -185,6 +185,18 @@ inline Mesh folded_icosphere() {
   return m;
 }
 
+// Two open square sheets (two triangles each, parts 0 and 1) crossing at right angles through
+// each other's middle, edge to edge: the crossing runs into both sheets' borders, so the
+// intersection repair has nothing to cap and leaves it (exit 4).
+inline Mesh crossing_sheets() {
+  Mesh m;
+  m.points = {{-1, -1, 0}, {1, -1, 0}, {1, 1, 0}, {-1, 1, 0}, {-1, 0, -1}, {1, 0, -1}, {1, 0, 1}, {-1, 0, 1}};
+  m.triangles = {{0, 1, 2}, {0, 2, 3}, {4, 5, 6}, {4, 6, 7}};
+  m.triangle_part = {0, 0, 1, 1};
+  m.part_names = {"part0", "part1"};
+  return m;
+}
+
 // Closed cylinder tessellated like a CAD export: caps are fans of long thin wedges around a
 // hub, the side one ring of long thin quads (two triangles each).
 inline void add_cylinder(Mesh& m, const Vec3& base, double r, double h, int segments, int32_t part = 0) {

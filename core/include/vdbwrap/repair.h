@@ -67,6 +67,9 @@ struct RepairReport {
 
   size_t local_iterations_run = 0, vertex_shifts = 0, triangle_shifts = 0;
   size_t refill_iterations_run = 0, refills = 0, refill_failures = 0;
+  // Regions refilled after their triangles near the intersections were bisected (edges down to
+  // a third of --max-deviation; geometry unchanged), and the triangles that added.
+  size_t regions_refined = 0, refined_triangles_added = 0;
   size_t pieces_removed = 0, piece_triangles_removed = 0;
   // Why operations and refills were refused (reason -> how often): what stood in the way.
   std::map<std::string, size_t> refusals;
