@@ -131,12 +131,15 @@ class Remesher {
           for (uint32_t g : vf_[v])
             if (!in.count(g) && is_bad(g) && !taken[g] && core.size() < prm_.max_region_triangles && norm(centroid(g) - at) < reach)
               in.insert(g), core.push_back(g);
+      // Next to another region: a later round. Checked after each growth step (each one only
+      // adds triangles), so a clash costs no more growth than it takes to find it.
+      auto clashes = [&](const std::vector<uint32_t>& set) {
+        return std::any_of(set.begin(), set.end(), [&](uint32_t f) { return taken[f] != 0; });
+      };
       std::vector<uint32_t> region = core;
-      for (int r = 0; r < rings; ++r) region = grow(region);
-      region = close_pockets(region);
       bool clash = false;
-      for (uint32_t f : region) clash |= taken[f] != 0;
-      if (clash) continue;  // next to another region: a later round
+      for (int r = 0; r < rings && !clash; ++r) clash = clashes(region = grow(region));
+      if (clash || clashes(region = close_pockets(region))) continue;
       tried_.insert(signature_of(seed, rings));
       const std::vector<uint32_t> around = grow(region);
       for (uint32_t f : around) taken[f] = 1;
