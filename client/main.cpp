@@ -64,6 +64,7 @@ void print_repair_report(const std::string& output, const RepairReport& r) {
               r.local_iterations_run, r.vertex_shifts, r.triangle_shifts, r.refill_iterations_run, r.refills,
               r.refill_failures);
   for (const auto& [why, count] : r.refusals) std::printf("  refused %zux: %s\n", count, why.c_str());
+  if (r.cracks_stitched > 0) std::printf("  cracks stitched (corners welded or inserted into edges): %zu\n", r.cracks_stitched);
   if (r.regions_refined > 0)
     std::printf("  refined before refilling: %zu regions (%zu triangles added)\n", r.regions_refined,
                 r.refined_triangles_added);

@@ -12,6 +12,7 @@
 #include "repair/local_operations.h"
 #include "repair/refill.h"
 #include "repair/regions.h"
+#include "repair/stitch.h"
 #include "test_meshes.h"
 #include "vdbwrap/repair.h"
 
@@ -545,6 +546,83 @@ TEST(Repair, CoplanarOverlapOfAPinOnAPlateIsRepairedAndPartsSurvive) {
   EXPECT_EQ(r.mesh.part_names, m.part_names);
   EXPECT_EQ(std::count(r.mesh.triangle_part.begin(), r.mesh.triangle_part.end(), 1),
             std::count(m.triangle_part.begin(), m.triangle_part.end(), 1));
+}
+
+// A crack as CAD exports make them (featuretype.STL): a floor (normal -z, x and y in [x0, x1] x
+// [0, 1]) and a wall standing on its y = 0 edge (normal -y) that share no vertex; the wall's
+// bottom edge has a vertex at x = 0.5 and lies `dip` below the floor, so the two cross.
+Mesh floor_and_wall(double x0, double x1, double dip) {
+  Mesh m;
+  m.points = {{x0, 0, 0}, {x0, 1, 0}, {x1, 1, 0}, {x1, 0, 0},                  // floor
+              {0, 0, -dip}, {0.5, 0, -dip}, {1, 0, -dip}, {0, 0, 1}, {1, 0, 1}};  // wall
+  m.triangles = {{0, 1, 2}, {0, 2, 3}, {4, 5, 7}, {5, 6, 8}, {5, 8, 7}};
+  return m;
+}
+
+TEST(RepairStitch, CrackIsWeldedAndItsTJunctionSplitWithoutMovingTheSurface) {
+  const Mesh m = floor_and_wall(0, 1, 1e-12);
+  ASSERT_TRUE(any_intersection(m));
+  RepairResult r = repair(m, RepairParams{});
+  print(r.report, "crack");
+  EXPECT_TRUE(r.report.all_fixed());
+  EXPECT_EQ(r.report.fixed_by_local, 1u);
+  EXPECT_GT(r.report.cracks_stitched, 0u);
+  EXPECT_FALSE(any_intersection(r.mesh));
+  // The seam is one edge chain now: fewer free edges, none non-manifold or misoriented.
+  EXPECT_LT(r.report.after.border_edges, r.report.before.border_edges);
+  EXPECT_EQ(r.report.after.nonmanifold_edges, 0u);
+  EXPECT_EQ(r.report.after.misoriented_edges, 0u);
+  EXPECT_EQ(r.report.after.degenerate_triangles, 0u);
+  // Only the 1e-12 dip closed: the surface stays where it was.
+  EXPECT_LT(r.report.deviation, 1e-9);
+  EXPECT_EQ(r.report.refills, 0u);
+  EXPECT_EQ(r.report.vertex_shifts + r.report.triangle_shifts, 0u);
+}
+
+TEST(RepairStitch, OnlyBorderEdgesAndCloseCornersAreStitched) {
+  {
+    // The floor's y = 0 edge is on the border: the wall's corners weld to the floor's first.
+    const Mesh m = floor_and_wall(0, 1, 1e-12);
+    const auto faces = vertex_faces(m.points.size(), m.triangles);
+    const auto st = find_stitches(m.points, m.triangles, faces, check::find_intersecting_pairs(m.points, m.triangles), 1e-9, {});
+    ASSERT_EQ(st.welds.size(), 2u);
+    EXPECT_EQ(st.welds[0], (std::pair<uint32_t, uint32_t>{4, 0}));
+    EXPECT_EQ(st.welds[1], (std::pair<uint32_t, uint32_t>{6, 3}));
+    EXPECT_TRUE(st.splits.empty());  // splits wait for the welded mesh
+  }
+  {
+    // A longer floor: no corner meets a corner; the wall's bottom corners lie inside the
+    // floor's border edge (3 -> 0): one split, in order along it.
+    const Mesh m = floor_and_wall(-1, 2, 1e-12);
+    const auto faces = vertex_faces(m.points.size(), m.triangles);
+    const auto st = find_stitches(m.points, m.triangles, faces, check::find_intersecting_pairs(m.points, m.triangles), 1e-9, {});
+    EXPECT_TRUE(st.welds.empty());
+    ASSERT_EQ(st.splits.size(), 1u);
+    EXPECT_EQ(st.splits[0].u, 3u);
+    EXPECT_EQ(st.splits[0].w, 0u);
+    EXPECT_EQ(st.splits[0].at, (std::vector<uint32_t>{6, 5, 4}));
+  }
+  {
+    // A dip beyond the tolerance is a real crossing, not a crack: nothing to stitch.
+    const Mesh m = floor_and_wall(-1, 2, 1e-3);
+    const auto faces = vertex_faces(m.points.size(), m.triangles);
+    const auto st = find_stitches(m.points, m.triangles, faces, check::find_intersecting_pairs(m.points, m.triangles), 1e-9, {});
+    EXPECT_TRUE(st.welds.empty());
+    EXPECT_TRUE(st.splits.empty());
+  }
+  {
+    // The floor goes on past the wall (y in [-1, 1], the wall's edge is inside it): a corner
+    // resting on a face is no crack.
+    Mesh m = floor_and_wall(-1, 2, 1e-12);
+    m.points.push_back({-1, -1, 0});
+    m.points.push_back({2, -1, 0});
+    m.triangles.push_back({0, 3, 10});
+    m.triangles.push_back({0, 10, 9});
+    const auto faces = vertex_faces(m.points.size(), m.triangles);
+    const auto st = find_stitches(m.points, m.triangles, faces, check::find_intersecting_pairs(m.points, m.triangles), 1e-9, {});
+    EXPECT_TRUE(st.welds.empty());
+    EXPECT_TRUE(st.splits.empty());
+  }
 }
 
 TEST(Repair, TessellatedMeshWithSeveralLocalDefectsMeetsTheTargets) {

@@ -48,6 +48,7 @@ std::string to_json(const RepairReport& r, int indent) {
            {"local_operations",
             {{"iterations", r.local_iterations_run}, {"vertex_shifts", r.vertex_shifts}, {"triangle_shifts", r.triangle_shifts}}},
            {"refill", {{"iterations", r.refill_iterations_run}, {"refills", r.refills}, {"failures", r.refill_failures}}},
+           {"cracks_stitched", r.cracks_stitched},
            {"refined", {{"regions", r.regions_refined}, {"triangles_added", r.refined_triangles_added}}},
            {"refusals", r.refusals},
            {"small_pieces_removed", {{"pieces", r.pieces_removed}, {"triangles", r.piece_triangles_removed}}},

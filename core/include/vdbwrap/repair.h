@@ -60,7 +60,7 @@ struct RepairReport {
   double diagonal = 0;       // of the input's bounding box
 
   size_t regions_found = 0;    // regions of the input
-  size_t fixed_by_local = 0;   // of those, free of intersections after part 1
+  size_t fixed_by_local = 0;   // of those, free of intersections after part 1 (and stitching)
   size_t fixed_by_refill = 0;  // ... after part 2 (or when tiny leftovers were removed)
   size_t left_unfixed = 0;
   std::vector<RepairRegion> unfixed;  // the regions of intersecting triangles left in the output
@@ -70,6 +70,9 @@ struct RepairReport {
   // Regions refilled after their triangles near the intersections were bisected (edges down to
   // a third of --max-deviation; geometry unchanged), and the triangles that added.
   size_t regions_refined = 0, refined_triangles_added = 0;
+  // Crack stitches before part 1: corners welded to the corner they touched, and corners
+  // inserted into the border edge they lay on (nothing moves by more than 1e-6 of the diagonal).
+  size_t cracks_stitched = 0;
   size_t pieces_removed = 0, piece_triangles_removed = 0;
   // Why operations and refills were refused (reason -> how often): what stood in the way.
   std::map<std::string, size_t> refusals;
