@@ -60,13 +60,26 @@ struct Plane2 {
 using V2 = std::array<double, 2>;
 constexpr double kMargin = 1e-9;
 double cross2(const V2& p, const V2& q) { return p[0] * q[1] - p[1] * q[0]; }
-double len2(const V2& p) { return std::hypot(p[0], p[1]); }
+double len2(const V2& p) { return std::sqrt(p[0] * p[0] + p[1] * p[1]); }
 // The side of p relative to the line along `dir` through the origin: +1 / -1 when clearly off
 // it, 0 when too close to tell.
 int side(const V2& dir, const V2& p, double err) {
   const double ld = len2(dir), lp = len2(p);
   const double c = cross2(dir, p), m = kMargin * ld * lp + err * (ld + lp + err);
   return c > m ? 1 : c < -m ? -1 : 0;
+}
+
+// Is q nearly in the plane of (o, a, b)? (Doubles, generous: it only picks which test runs
+// first.) The proofs in the plane pay off for nearly coplanar pairs; for the others CGAL's
+// filtered predicates decide at once, and the plane tests would be wasted work.
+bool nearly_coplanar(const P3& o, const P3& a, const P3& b, const P3& q) {
+  const double u[3] = {a.x() - o.x(), a.y() - o.y(), a.z() - o.z()};
+  const double v[3] = {b.x() - o.x(), b.y() - o.y(), b.z() - o.z()};
+  const double w[3] = {q.x() - o.x(), q.y() - o.y(), q.z() - o.z()};
+  const double n[3] = {u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]};
+  const double d = n[0] * w[0] + n[1] * w[1] + n[2] * w[2];
+  const double nn = n[0] * n[0] + n[1] * n[1] + n[2] * n[2], ww = w[0] * w[0] + w[1] * w[1] + w[2] * w[2];
+  return d * d <= 1e-12 * nn * ww;
 }
 
 // Triangles (c, a, b) and (c, d, e), sharing only vertex c, meet only there: the two angular
@@ -117,13 +130,15 @@ bool apart_2d(const std::array<P3, 3>& x, const std::array<P3, 3>& y) {
 // (false: no proof, run the exact tests). Fans of triangles around one vertex (cylinder caps,
 // cone tips) make such pairs by the hundred million, nearly all far apart.
 bool apart_at_shared_vertex(const P3& c, const P3& a, const P3& b, const P3& d, const P3& e) {
-  if (apart_at_shared_vertex_2d(c, a, b, d, e)) return true;
+  const bool flat = nearly_coplanar(c, a, b, d) && nearly_coplanar(c, a, b, e);
+  if (flat && apart_at_shared_vertex_2d(c, a, b, d, e)) return true;
   // d and e strictly on one side of plane (c, a, b): the second triangle meets that plane at c
   // only (and the same the other way round). Filtered predicates: fast when not coplanar.
   const CGAL::Orientation od = CGAL::orientation(c, a, b, d);
   if (od != CGAL::COPLANAR && od == CGAL::orientation(c, a, b, e)) return true;
   const CGAL::Orientation oa = CGAL::orientation(c, d, e, a);
-  return oa != CGAL::COPLANAR && oa == CGAL::orientation(c, d, e, b);
+  if (oa != CGAL::COPLANAR && oa == CGAL::orientation(c, d, e, b)) return true;
+  return !flat && apart_at_shared_vertex_2d(c, a, b, d, e);
 }
 
 // Triangles intersect when they share points other than their common vertices/edge.
@@ -138,7 +153,9 @@ bool triangles_intersect(const std::vector<P3>& p, const Tri& x, const Tri& y, b
         ++shared;
       }
   if (shared == 0) {
-    if (use_proofs_2d && apart_2d({p[x[0]], p[x[1]], p[x[2]]}, {p[y[0]], p[y[1]], p[y[2]]})) return false;
+    const bool flat = nearly_coplanar(p[x[0]], p[x[1]], p[x[2]], p[y[0]]) && nearly_coplanar(p[x[0]], p[x[1]], p[x[2]], p[y[1]]) &&
+                      nearly_coplanar(p[x[0]], p[x[1]], p[x[2]], p[y[2]]);
+    if (use_proofs_2d && flat && apart_2d({p[x[0]], p[x[1]], p[x[2]]}, {p[y[0]], p[y[1]], p[y[2]]})) return false;
     return CGAL::do_intersect(T3(p[x[0]], p[x[1]], p[x[2]]), T3(p[y[0]], p[y[1]], p[y[2]]));
   }
   if (shared == 3) return true;  // the same triangle twice
@@ -157,7 +174,7 @@ bool triangles_intersect(const std::vector<P3>& p, const Tri& x, const Tri& y, b
   const P3& t = p[x[xi[1]]];
   const P3& a = p[x[3 - xi[0] - xi[1]]];
   const P3& b = p[y[3 - yi[0] - yi[1]]];
-  if (use_proofs_2d && apart_at_shared_edge_2d(s, t, a, b)) return false;
+  if (use_proofs_2d && nearly_coplanar(s, t, a, b) && apart_at_shared_edge_2d(s, t, a, b)) return false;
   if (!CGAL::coplanar(s, t, a, b)) return false;
   return CGAL::coplanar_orientation(s, t, a, b) == CGAL::POSITIVE;
 }
