@@ -703,6 +703,43 @@ TEST(Repair, PinPushedIntoAPlateIsRepairedAsABandCutFromBoth) {
   EXPECT_DOUBLE_EQ(z_top, 0.315);  // the pin's top is untouched
 }
 
+TEST(Repair, SameInputGivesTheSameOutputWhateverTheThreads) {
+  // A service gives the same answer for the same input: several regions repaired in parallel
+  // (local operations, refills judged together, a pin refined and refilled) come out
+  // bit-identical run after run and with 1 or 2 worker threads.
+  Mesh m = plate_with_defects(true, false);
+  vdbwrap::testing::add_cylinder(m, {3, 0, 0}, 1.0, 0.02, 128, 1);
+  vdbwrap::testing::add_cylinder(m, {3.3, 0.2, 0.015}, 0.1, 0.3, 32, 2);  // pushed into the second plate
+  vdbwrap::testing::add_cylinder(m, {3, 3, 0}, 1.0, 0.02, 128, 3);
+  {
+    const uint32_t rim0 = uint32_t(m.points.size() - 128);
+    const double a = 2 * M_PI * 1.3 / 128;
+    m.points[rim0] = {3 + std::cos(a), 3 + std::sin(a), 0.02};  // a fold on the third plate's rim
+  }
+  for (bool floats : {false, true}) {
+    std::vector<RepairResult> runs;
+    for (int threads : {2, 2, 1}) {
+      RepairParams p;
+      p.threads = threads;
+      p.float_coordinates = floats;
+      runs.push_back(repair(m, p));
+    }
+    ASSERT_GE(runs[0].report.regions_found, 3u);
+    ASSERT_GT(runs[0].report.fixed_by_refill, 0u);
+    for (size_t i = 1; i < runs.size(); ++i) {
+      SCOPED_TRACE("run " + std::to_string(i) + (floats ? ", float coordinates" : ""));
+      EXPECT_EQ(runs[i].mesh.points, runs[0].mesh.points);
+      EXPECT_EQ(runs[i].mesh.triangles, runs[0].mesh.triangles);
+      EXPECT_EQ(runs[i].mesh.triangle_part, runs[0].mesh.triangle_part);
+      EXPECT_EQ(runs[i].report.after.intersecting_pairs, runs[0].report.after.intersecting_pairs);
+      EXPECT_EQ(runs[i].report.fixed_by_local, runs[0].report.fixed_by_local);
+      EXPECT_EQ(runs[i].report.fixed_by_refill, runs[0].report.fixed_by_refill);
+      EXPECT_EQ(runs[i].report.refusals, runs[0].report.refusals);
+      EXPECT_NEAR(runs[i].report.deviation, runs[0].report.deviation, 1e-12);  // sampled in parallel: last-digit noise
+    }
+  }
+}
+
 TEST(Repair, SheetsCrossingEdgeToEdgeAreLeftAsTheyWere) {
   // Nothing to cap: the crossing runs into both sheets' borders. The refinement tried for the
   // second refill is undone, so the mesh keeps its triangles, with the region reported.

@@ -7,6 +7,8 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cstdio>
+#include <cstdlib>
 #include <cmath>
 #include <map>
 #include <numeric>
@@ -52,6 +54,11 @@ void validate(const RepairParams& p) {
   if (!(p.small_piece_area >= 0 && p.small_piece_area <= 1)) bad("small piece area must be in [0, 1]");
 }
 
+
+bool debug_enabled() {
+  static const bool on = std::getenv("VDBWRAP_REPAIR_DEBUG") != nullptr;
+  return on;
+}
 
 bool touches(const TrianglePair& p, const std::unordered_set<uint32_t>& set) { return set.count(p.a) || set.count(p.b); }
 
@@ -419,6 +426,8 @@ void run_refill(Work& w, const RepairParams& params, double max_dev, const fit::
         }
       }
       if (!fills[i].ok) {
+        if (debug_enabled())
+          std::fprintf(stderr, "[repair] region %d refill of %zu triangles refused: %s\n", only, regions[i].size(), fills[i].why.c_str());
         ++report.refill_failures;
         ++report.refusals["refill: " + fills[i].why];
         continue;
@@ -483,6 +492,7 @@ void run_refill(Work& w, const RepairParams& params, double max_dev, const fit::
         changed.insert(region.begin(), region.end());
         changed.insert(trials[k].changed.begin(), trials[k].changed.end());
       } else {
+        if (debug_enabled()) std::fprintf(stderr, "[repair] region %d refill judged: intersections not fewer, or new ones\n", only);
         ++report.refill_failures;
         ++report.refusals["refill: intersections not fewer, or new ones"];
       }
@@ -705,7 +715,9 @@ void run_refine_and_refill(Work& w, const RepairParams& params, double max_dev, 
     check_cancel(progress);
     Work unrefined = w;
     size_t added = 0;
+    if (debug_enabled()) std::fprintf(stderr, "[repair] region %d: refine and refill, %zu pairs\n", r, pairs_of_region(w, r).size());
     if (!refine_around(w, r, max_dev / 3, budget, params.float_coordinates, added)) {
+      if (debug_enabled()) std::fprintf(stderr, "[repair] region %d: area crossing, not refined (%zu added)\n", r, added);
       w = std::move(unrefined);
       ++report.refusals["refine and refill: intersections cover an area, not a curve (not refined)"];
       continue;
@@ -716,6 +728,8 @@ void run_refine_and_refill(Work& w, const RepairParams& params, double max_dev, 
       if (fair && !params.fair) continue;
       const auto refills = report.refills;
       run_refill(w, params, max_dev, original, report, progress, r, fair);
+      if (debug_enabled())
+        std::fprintf(stderr, "[repair] region %d: after refill (fair %d): %zu pairs left\n", r, int(fair), pairs_of_region(w, r).size());
       if (!has_pairs(r)) {
         fixed = true;
         ++report.regions_refined;
