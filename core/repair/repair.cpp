@@ -762,18 +762,29 @@ void run_refine_and_refill(Work& w, const RepairParams& params, double max_dev, 
 void run_unite(Work& w, const RepairParams& params, double max_dev, const fit::SurfaceIndex& original,
                std::vector<std::unique_ptr<local_repair::SolidTest>>& solids, RepairReport& report,
                const std::set<int32_t>* regions = nullptr) {
-  // Components of the live triangles (through shared vertices).
-  std::vector<uint32_t> parent(w.points.size());
+  // Bodies: the live triangles connected through shared edges (two bodies touching at a
+  // corner, welded there, stay two; a vertex shared that way is copied into each).
+  std::vector<uint32_t> parent(w.tris.size());
   std::iota(parent.begin(), parent.end(), 0);
-  auto find = [&](uint32_t x) {
+  std::function<uint32_t(uint32_t)> find = [&](uint32_t x) {
     while (parent[x] != x) x = parent[x] = parent[parent[x]];
     return x;
   };
-  for (const Tri& t : w.tris)
-    if (!local_repair::is_dead(t)) parent[find(t[0])] = find(t[1]), parent[find(t[1])] = find(t[2]);
+  {
+    std::unordered_map<uint64_t, uint32_t> first_on_edge;
+    for (uint32_t t = 0; t < w.tris.size(); ++t) {
+      const Tri& tri = w.tris[t];
+      if (local_repair::is_dead(tri)) continue;
+      for (int k = 0; k < 3; ++k) {
+        const uint32_t u = tri[k], v = tri[(k + 1) % 3];
+        auto [it, added] = first_on_edge.emplace(u < v ? (uint64_t(u) << 32 | v) : (uint64_t(v) << 32 | u), t);
+        if (!added) parent[find(t)] = find(it->second);
+      }
+    }
+  }
   std::map<uint32_t, std::vector<uint32_t>> members;  // root -> triangles, by root (deterministic)
   for (uint32_t t = 0; t < w.tris.size(); ++t)
-    if (!local_repair::is_dead(w.tris[t])) members[find(w.tris[t][0])].push_back(t);
+    if (!local_repair::is_dead(w.tris[t])) members[find(t)].push_back(t);
   // Groups of components linked by intersecting pairs; a component that cuts itself spoils its group.
   std::map<uint32_t, uint32_t> group;  // component root -> group root
   std::function<uint32_t(uint32_t)> gfind = [&](uint32_t c) {
@@ -782,7 +793,7 @@ void run_unite(Work& w, const RepairParams& params, double max_dev, const fit::S
   };
   std::set<uint32_t> spoiled, wanted;  // wanted: components holding a triangle of `regions`
   for (const auto& p : w.pairs) {
-    const uint32_t a = find(w.tris[p.a][0]), b = find(w.tris[p.b][0]);
+    const uint32_t a = find(p.a), b = find(p.b);
     if (a == b) spoiled.insert(a);
     else group[gfind(a)] = gfind(b);
   }
@@ -796,6 +807,7 @@ void run_unite(Work& w, const RepairParams& params, double max_dev, const fit::S
   std::map<uint32_t, std::vector<uint32_t>> groups;  // group root -> component roots
   for (const auto& [c, g] : group) groups[gfind(c)].push_back(c);
   for (auto& [g, comps] : groups) {
+    if (debug_enabled()) std::fprintf(stderr, "[repair] unite: group of %zu bodies\n", comps.size());
     if (comps.size() < 2) continue;
     if (regions && std::none_of(comps.begin(), comps.end(), [&](uint32_t c) { return wanted.count(c) > 0; })) continue;
     if (std::any_of(comps.begin(), comps.end(), [&](uint32_t c) { return spoiled.count(c) > 0; })) {
@@ -822,13 +834,19 @@ void run_unite(Work& w, const RepairParams& params, double max_dev, const fit::S
     }
     auto solid = std::make_unique<local_repair::SolidTest>(u.points, u.triangles);
     fit::SurfaceIndex united(u.points, u.triangles);
-    // Every body keeps some of its surface: one whose every triangle is buried is a part lost.
+    // Every body keeps some of its surface: a triangle outside every other body (not on one).
+    // A body inside the others, even one resting on their faces, is a part the union would lose.
+    std::vector<std::unique_ptr<local_repair::SolidTest>> each;
+    for (const auto& body : bodies) each.push_back(std::make_unique<local_repair::SolidTest>(w.points, body));
     bool whole = true;
-    for (const auto& body : bodies) {
+    for (size_t i = 0; i < bodies.size() && whole; ++i) {
       bool shows = false;
-      for (const Tri& t : body) {
+      for (const Tri& t : bodies[i]) {
         const Vec3 c = (w.points[t[0]] + w.points[t[1]] + w.points[t[2]]) * (1.0 / 3);
-        if (!solid->inside(c)) {
+        bool out = true;
+        for (size_t j = 0; j < bodies.size() && out; ++j)
+          if (j != i) out = each[j]->outside(c);
+        if (out) {
           shows = true;
           break;
         }
@@ -1095,14 +1113,16 @@ RepairResult run_repair(const Mesh& input, const RepairParams& params, ProgressS
   const Work stitched = w;
   const RepairReport report_stitched = report;
   parts({});
-  if (!w.pairs.empty() && params.unite_bodies) {
-    // Second pass for the regions left: their closed bodies (an assembly's walls overlapping
-    // face to face, crossing over areas) united first, before parts 1 and 2 have cut into
-    // them, then the rest as before. Kept only when it leaves fewer regions unfixed.
+  const bool united_late = std::any_of(by_union.begin(), by_union.end(), [](uint8_t u) { return u != 0; });
+  if ((!w.pairs.empty() || united_late) && params.unite_bodies) {
+    // Second pass for the regions left (or united only after parts 1 and 2 had moved and cut
+    // them): their closed bodies (an assembly's walls overlapping face to face, crossing over
+    // areas) united first, from the input as it came, then the rest as before. Kept when it
+    // leaves fewer regions unfixed, or as few when the first pass needed the union too.
     const auto clean = clean_regions();
     std::set<int32_t> left;
     for (size_t r = 0; r < report.regions_found; ++r)
-      if (!clean[r]) left.insert(int32_t(r));
+      if (!clean[r] || by_union[r]) left.insert(int32_t(r));
     Work first_w = std::move(w);
     RepairReport first_report = std::move(report);
     auto first_solids = std::move(solids);
@@ -1113,7 +1133,8 @@ RepairResult run_repair(const Mesh& input, const RepairParams& params, ProgressS
     solids.clear();
     parts(left);
     const auto clean2 = clean_regions();
-    if (std::count(clean2.begin(), clean2.end(), 0) >= std::count(clean.begin(), clean.end(), 0)) {
+    const auto left1 = std::count(clean.begin(), clean.end(), 0), left2 = std::count(clean2.begin(), clean2.end(), 0);
+    if (left2 > left1 || (left2 == left1 && !united_late)) {
       const auto stages = std::move(report.stages);
       w = std::move(first_w);
       report = std::move(first_report);

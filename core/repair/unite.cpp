@@ -122,4 +122,8 @@ bool SolidTest::inside(const Vec3& q) const {
   return impl_->side && (*impl_->side)(IK::Point_3(q[0], q[1], q[2])) == CGAL::ON_BOUNDED_SIDE;
 }
 
+bool SolidTest::outside(const Vec3& q) const {
+  return !impl_->side || (*impl_->side)(IK::Point_3(q[0], q[1], q[2])) == CGAL::ON_UNBOUNDED_SIDE;
+}
+
 }  // namespace vdbwrap::local_repair

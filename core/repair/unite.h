@@ -33,6 +33,7 @@ class SolidTest {
   SolidTest(const SolidTest&) = delete;
   SolidTest& operator=(const SolidTest&) = delete;
   bool inside(const Vec3& q) const;
+  bool outside(const Vec3& q) const;  // strictly outside (not on it)
 
  private:
   struct Impl;
