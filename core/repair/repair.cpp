@@ -759,9 +759,11 @@ void run_refine_and_refill(Work& w, const RepairParams& params, double max_dev, 
 // input point it drops is within --max-deviation of it or inside it, and the united surface
 // meets nothing and has no degenerate triangle.
 
-void run_unite(Work& w, const RepairParams& params, double max_dev, const fit::SurfaceIndex& original,
-               std::vector<std::unique_ptr<local_repair::SolidTest>>& solids, RepairReport& report,
-               const std::set<int32_t>* regions = nullptr) {
+// Returns how many groups of closed bodies it tried to unite.
+size_t run_unite(Work& w, const RepairParams& params, double max_dev, const fit::SurfaceIndex& original,
+                 std::vector<std::unique_ptr<local_repair::SolidTest>>& solids, RepairReport& report,
+                 const std::set<int32_t>* regions = nullptr) {
+  size_t tried = 0;
   // Bodies: the live triangles connected through shared edges (two bodies touching at a
   // corner, welded there, stay two; a vertex shared that way is copied into each).
   std::vector<uint32_t> parent(w.tris.size());
@@ -821,6 +823,20 @@ void run_unite(Work& w, const RepairParams& params, double max_dev, const fit::S
       for (uint32_t t : members[c]) bodies.back().push_back(w.tris[t]), gone.push_back(t);
     }
     std::sort(gone.begin(), gone.end());
+    // Closed: every edge of a body on two of its triangles, running opposite ways.
+    bool closed = true;
+    for (const auto& body : bodies) {
+      std::map<std::pair<uint32_t, uint32_t>, int> directed;
+      for (const Tri& t : body)
+        for (int k = 0; k < 3; ++k) ++directed[{t[k], t[(k + 1) % 3]}];
+      for (const auto& [e, n] : directed) closed &= n == 1 && directed.count({e.second, e.first}) && directed[{e.second, e.first}] == 1;
+      if (!closed) break;
+    }
+    if (!closed) {
+      ++report.refusals["unite: a body is not closed"];
+      continue;
+    }
+    ++tried;
     local_repair::Union u = local_repair::unite_bodies(w.points, bodies, params.float_coordinates);
     if (!u.ok) {
       ++report.refusals["unite: " + u.why];
@@ -911,6 +927,7 @@ void run_unite(Work& w, const RepairParams& params, double max_dev, const fit::S
     report.bodies_united += comps.size();
     solids.push_back(std::move(solid));
   }
+  return tried;
 }
 
 // ---------------------------------------------------------------------------------------
@@ -1066,11 +1083,12 @@ RepairResult run_repair(const Mesh& input, const RepairParams& params, ProgressS
   // Parts 1 and 2 (and the union of closed bodies still crossing after them). `first`: input
   // regions whose crossing bodies are united before part 1, the second pass below.
   std::vector<uint8_t> by_union, clean_after_local;  // regions the union fixed; regions clean after part 1
+  size_t unite_tried = 0;                            // groups of closed crossing bodies the union was tried on
   auto unite = [&](const fit::SurfaceIndex& input, const std::set<int32_t>* regions) {
     StageTimer timer("unite crossing bodies", report.stages);
     check_cancel(progress);
     const auto clean_before = clean_regions();
-    run_unite(w, params, report.max_deviation, input, solids, report, regions);
+    unite_tried += run_unite(w, params, report.max_deviation, input, solids, report, regions);
     const auto clean_after = clean_regions();
     for (size_t r = 0; r < report.regions_found; ++r) by_union[r] |= !clean_before[r] && clean_after[r];
   };
@@ -1114,7 +1132,7 @@ RepairResult run_repair(const Mesh& input, const RepairParams& params, ProgressS
   const RepairReport report_stitched = report;
   parts({});
   const bool united_late = std::any_of(by_union.begin(), by_union.end(), [](uint8_t u) { return u != 0; });
-  if ((!w.pairs.empty() || united_late) && params.unite_bodies) {
+  if (((!w.pairs.empty() && unite_tried > 0) || united_late) && params.unite_bodies) {
     // Second pass for the regions left (or united only after parts 1 and 2 had moved and cut
     // them): their closed bodies (an assembly's walls overlapping face to face, crossing over
     // areas) united first, from the input as it came, then the rest as before. Kept when it
