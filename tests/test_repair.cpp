@@ -716,6 +716,9 @@ TEST(Repair, SameInputGivesTheSameOutputWhateverTheThreads) {
     const double a = 2 * M_PI * 1.3 / 128;
     m.points[rim0] = {3 + std::cos(a), 3 + std::sin(a), 0.02};  // a fold on the third plate's rim
   }
+  // Two walls face to face (united: CGAL's output order is made canonical).
+  vdbwrap::testing::add_box(m, {6, 0.05, 0}, {7, 0.15, 1}, 4);
+  vdbwrap::testing::add_box(m, {6.9, 0, 0}, {7, 1, 1}, 5);
   for (bool floats : {false, true}) {
     std::vector<RepairResult> runs;
     for (int threads : {2, 2, 1}) {
@@ -726,6 +729,7 @@ TEST(Repair, SameInputGivesTheSameOutputWhateverTheThreads) {
     }
     ASSERT_GE(runs[0].report.regions_found, 3u);
     ASSERT_GT(runs[0].report.fixed_by_refill, 0u);
+    ASSERT_GT(runs[0].report.fixed_by_union, 0u);
     for (size_t i = 1; i < runs.size(); ++i) {
       SCOPED_TRACE("run " + std::to_string(i) + (floats ? ", float coordinates" : ""));
       EXPECT_EQ(runs[i].mesh.points, runs[0].mesh.points);
@@ -734,6 +738,7 @@ TEST(Repair, SameInputGivesTheSameOutputWhateverTheThreads) {
       EXPECT_EQ(runs[i].report.after.intersecting_pairs, runs[0].report.after.intersecting_pairs);
       EXPECT_EQ(runs[i].report.fixed_by_local, runs[0].report.fixed_by_local);
       EXPECT_EQ(runs[i].report.fixed_by_refill, runs[0].report.fixed_by_refill);
+      EXPECT_EQ(runs[i].report.fixed_by_union, runs[0].report.fixed_by_union);
       EXPECT_EQ(runs[i].report.refusals, runs[0].report.refusals);
       EXPECT_NEAR(runs[i].report.deviation, runs[0].report.deviation, 1e-12);  // sampled in parallel: last-digit noise
     }

@@ -76,6 +76,11 @@ double SurfaceIndex::squared_distance_unhinted(const Vec3& q) const {
   return CGAL::squared_distance(query, impl_->tree.closest_point(query));
 }
 
+uint32_t SurfaceIndex::closest_triangle_unhinted(const Vec3& q) const {
+  const auto hit = impl_->tree.closest_point_and_primitive(K::Point_3(q[0], q[1], q[2]));
+  return uint32_t(hit.second - impl_->triangles.cbegin());
+}
+
 bool SurfaceIndex::within(const Vec3& q, double radius) const {
   return impl_->tree.do_intersect(K::Sphere_3(K::Point_3(q[0], q[1], q[2]), radius * radius));
 }

@@ -908,7 +908,7 @@ size_t run_unite(Work& w, const RepairParams& params, double max_dev, const fit:
     std::vector<uint32_t> changed;
     for (const Tri& t : u.triangles) {
       const Vec3 c = (u.points[t[0]] + u.points[t[1]] + u.points[t[2]]) * (1.0 / 3);
-      const uint32_t from = old_of[old_index.closest(c).triangle];
+      const uint32_t from = old_of[old_index.closest_triangle_unhinted(c)];  // ties: the same on every run
       changed.push_back(uint32_t(w.tris.size()));
       w.tris.push_back({base + t[0], base + t[1], base + t[2]});
       w.part.push_back(w.part[from]);
@@ -980,7 +980,7 @@ void remove_small_pieces(Work& w, const RepairParams& params, double max_dev, Re
     if (!(small && p.touched)) continue;
     bool near = true;
     for (uint32_t t : p.tris)
-      for (uint32_t v : w.tris[t]) near &= std::sqrt(rest.squared_distance(w.points[v])) <= max_dev;
+      for (uint32_t v : w.tris[t]) near &= std::sqrt(rest.squared_distance_unhinted(w.points[v])) <= max_dev;
     if (!near) continue;
     ++report.pieces_removed;
     report.piece_triangles_removed += p.tris.size();

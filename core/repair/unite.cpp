@@ -12,6 +12,7 @@
 
 #include <cstdio>
 #include <cstdlib>
+#include <algorithm>
 #include <map>
 
 #include "common/float_round.h"
@@ -95,6 +96,21 @@ Union unite_bodies(const std::vector<Vec3>& points, const std::vector<std::vecto
     if (k != 3) return fail("the union has a face that is not a triangle");
     out.triangles.push_back(t);
   }
+  // CGAL's output order follows its internal containers, which can follow memory addresses:
+  // points sorted by coordinates, each triangle from its smallest index, triangles sorted, so
+  // the same bodies give the same union on every run and thread count.
+  std::vector<uint32_t> order(out.points.size());
+  for (uint32_t i = 0; i < order.size(); ++i) order[i] = i;
+  std::stable_sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) { return out.points[a] < out.points[b]; });
+  std::vector<uint32_t> rank(order.size());
+  std::vector<Vec3> sorted(order.size());
+  for (uint32_t i = 0; i < order.size(); ++i) rank[order[i]] = i, sorted[i] = out.points[order[i]];
+  out.points = std::move(sorted);
+  for (Tri& t : out.triangles) {
+    for (uint32_t& v : t) v = rank[v];
+    while (t[0] > t[1] || t[0] > t[2]) t = {t[1], t[2], t[0]};
+  }
+  std::sort(out.triangles.begin(), out.triangles.end());
   out.ok = true;
   return out;
 }
