@@ -1,6 +1,7 @@
 #!/usr/bin/env python3
 """Runs `vdbwrap repair` on every mesh of a folder that has intersecting triangles and prints
-a Markdown table from the reports: regions found / fixed by part 1 / by part 2 / left,
+a Markdown table from the reports: regions found / fixed by part 1 / by part 2 / by uniting
+crossing closed bodies / left,
 intersecting pairs before and after, free and non-manifold edges before and after, the
 largest deviation (fraction of the diagonal) and the time.
 Usage: bench/repair_table.py [--vdbwrap build/client/vdbwrap] [--data DIR] [extra repair args...]"""
@@ -28,11 +29,11 @@ with tempfile.TemporaryDirectory() as tmp:
         if b["intersecting_pairs"] == 0:
             continue
         rows.append(f"| {name} | {b['triangles']} | {g['found']} | {g['fixed_by_local_operations']} | {g['fixed_by_refill']} | "
-                    f"{g['left_unfixed']} | {b['intersecting_pairs']} -> {a['intersecting_pairs']} | "
+                    f"{g.get('fixed_by_union', 0)} | {g['left_unfixed']} | {b['intersecting_pairs']} -> {a['intersecting_pairs']} | "
                     f"{b['border_edges']} -> {a['border_edges']} | {b['nonmanifold_edges']} -> {a['nonmanifold_edges']} | "
                     f"{r['max_deviation_fraction_of_diagonal']:.4f} | {r['total_seconds']:.2f} | {run.returncode} |")
 print(f"`vdbwrap repair` with default options{(' ' + ' '.join(extra)) if extra else ''}; deviation: largest two-sided "
       "sampled distance, fraction of the input's diagonal.\n")
-print("| model | triangles | regions | fixed part 1 | fixed part 2 | left | intersecting pairs | free edges | non-manifold edges | max deviation | time (s) | exit |")
-print("|---|---|---|---|---|---|---|---|---|---|---|---|")
+print("| model | triangles | regions | fixed part 1 | fixed part 2 | fixed by union | left | intersecting pairs | free edges | non-manifold edges | max deviation | time (s) | exit |")
+print("|---|---|---|---|---|---|---|---|---|---|---|---|---|")
 print("\n".join(rows))

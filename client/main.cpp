@@ -57,14 +57,15 @@ void print_diagnostics(const std::string& name, const MeshDiagnostics& d) {
 void print_repair_report(const std::string& output, const RepairReport& r) {
   std::printf("repair of %zu triangles -> %s\n", r.before.triangles, output.c_str());
   std::printf("  regions of intersecting triangles: %zu found, %zu fixed by local operations, %zu fixed by refill, "
-              "%zu left unfixed\n",
-              r.regions_found, r.fixed_by_local, r.fixed_by_refill, r.left_unfixed);
+              "%zu fixed by uniting bodies, %zu left unfixed\n",
+              r.regions_found, r.fixed_by_local, r.fixed_by_refill, r.fixed_by_union, r.left_unfixed);
   std::printf("  local operations: %zu iterations, %zu vertex shifts, %zu triangle shifts; refill: %zu iterations, "
               "%zu refills, %zu refused\n",
               r.local_iterations_run, r.vertex_shifts, r.triangle_shifts, r.refill_iterations_run, r.refills,
               r.refill_failures);
   for (const auto& [why, count] : r.refusals) std::printf("  refused %zux: %s\n", count, why.c_str());
   if (r.cracks_stitched > 0) std::printf("  cracks stitched (corners welded or inserted into edges): %zu\n", r.cracks_stitched);
+  if (r.bodies_united > 0) std::printf("  crossing closed bodies united: %zu\n", r.bodies_united);
   if (r.regions_refined > 0)
     std::printf("  refined before refilling: %zu regions (%zu triangles added)\n", r.regions_refined,
                 r.refined_triangles_added);

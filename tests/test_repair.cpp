@@ -703,6 +703,133 @@ TEST(Repair, PinPushedIntoAPlateIsRepairedAsABandCutFromBoth) {
   EXPECT_DOUBLE_EQ(z_top, 0.315);  // the pin's top is untouched
 }
 
+TEST(Repair, SameInputGivesTheSameOutputWhateverTheThreads) {
+  // A service gives the same answer for the same input: several regions repaired in parallel
+  // (local operations, refills judged together, a pin refined and refilled) come out
+  // bit-identical run after run and with 1 or 2 worker threads.
+  Mesh m = plate_with_defects(true, false);
+  vdbwrap::testing::add_cylinder(m, {3, 0, 0}, 1.0, 0.02, 128, 1);
+  vdbwrap::testing::add_cylinder(m, {3.3, 0.2, 0.015}, 0.1, 0.3, 32, 2);  // pushed into the second plate
+  vdbwrap::testing::add_cylinder(m, {3, 3, 0}, 1.0, 0.02, 128, 3);
+  {
+    const uint32_t rim0 = uint32_t(m.points.size() - 128);
+    const double a = 2 * M_PI * 1.3 / 128;
+    m.points[rim0] = {3 + std::cos(a), 3 + std::sin(a), 0.02};  // a fold on the third plate's rim
+  }
+  // Two walls face to face (united: CGAL's output order is made canonical).
+  vdbwrap::testing::add_box(m, {6, 0.05, 0}, {7, 0.15, 1}, 4);
+  vdbwrap::testing::add_box(m, {6.9, 0, 0}, {7, 1, 1}, 5);
+  for (bool floats : {false, true}) {
+    std::vector<RepairResult> runs;
+    for (int threads : {2, 2, 1}) {
+      RepairParams p;
+      p.threads = threads;
+      p.float_coordinates = floats;
+      runs.push_back(repair(m, p));
+    }
+    ASSERT_GE(runs[0].report.regions_found, 3u);
+    ASSERT_GT(runs[0].report.fixed_by_refill, 0u);
+    ASSERT_GT(runs[0].report.fixed_by_union, 0u);
+    for (size_t i = 1; i < runs.size(); ++i) {
+      SCOPED_TRACE("run " + std::to_string(i) + (floats ? ", float coordinates" : ""));
+      EXPECT_EQ(runs[i].mesh.points, runs[0].mesh.points);
+      EXPECT_EQ(runs[i].mesh.triangles, runs[0].mesh.triangles);
+      EXPECT_EQ(runs[i].mesh.triangle_part, runs[0].mesh.triangle_part);
+      EXPECT_EQ(runs[i].report.after.intersecting_pairs, runs[0].report.after.intersecting_pairs);
+      EXPECT_EQ(runs[i].report.fixed_by_local, runs[0].report.fixed_by_local);
+      EXPECT_EQ(runs[i].report.fixed_by_refill, runs[0].report.fixed_by_refill);
+      EXPECT_EQ(runs[i].report.fixed_by_union, runs[0].report.fixed_by_union);
+      EXPECT_EQ(runs[i].report.refusals, runs[0].report.refusals);
+      EXPECT_NEAR(runs[i].report.deviation, runs[0].report.deviation, 1e-12);  // sampled in parallel: last-digit noise
+    }
+  }
+}
+
+double enclosed_volume(const Mesh& m) {
+  double v = 0;
+  for (const Tri& t : m.triangles) v += dot(m.points[t[0]], cross(m.points[t[1]], m.points[t[2]])) / 6;
+  return v;
+}
+
+TEST(Repair, WallsOverlappingFaceToFaceAreUnited) {
+  // Two walls of a box exported as one mesh (box.STL), sharing no vertex: the first runs into
+  // the second over its whole thickness, so they overlap in a 0.1 x 0.1 prism and lie face to
+  // face on three planes. No move within the bound and no band refill clears an area; the
+  // exact union does, and keeps every face where it is.
+  Mesh m;
+  vdbwrap::testing::add_box(m, {0, 0.05, 0}, {1, 0.15, 1}, 0);
+  vdbwrap::testing::add_box(m, {0.9, 0, 0}, {1, 1, 1}, 1);
+  MeshDiagnostics before = diagnose(m);
+  ASSERT_GT(before.intersecting_pairs, 0u);
+  RepairParams p;
+  RepairResult r = repair(m, p);
+  print(r.report, "walls face to face");
+  std::string why;
+  for (const auto& [reason, n] : r.report.refusals) why += reason + "; ";
+  EXPECT_TRUE(r.report.all_fixed()) << why;
+  EXPECT_EQ(r.report.fixed_by_union, r.report.regions_found);
+  EXPECT_EQ(r.report.bodies_united, 2u);
+  EXPECT_EQ(r.report.after.intersecting_pairs, 0u);
+  EXPECT_FALSE(any_intersection(r.mesh));
+  auto verdict = vdbwrap::testing::valid_closed_surface(r.mesh);
+  EXPECT_TRUE(verdict.ok) << verdict.why;
+  EXPECT_EQ(border_edges(r.mesh), 0u);
+  EXPECT_EQ(nonmanifold_edges(r.mesh), 0u);
+  EXPECT_EQ(r.report.after.components, 1u);
+  EXPECT_NEAR(enclosed_volume(r.mesh), 0.1 + 0.1 - 0.01, 1e-9);  // the union's volume
+  // Nothing moved: the output lies on the input (the buried prism's faces are not measured).
+  EXPECT_LE(r.report.deviation, 1e-9);
+  EXPECT_LE(r.report.output_to_input.max, 1e-9);
+  // Both parts survive.
+  ASSERT_EQ(r.mesh.triangle_part.size(), r.mesh.triangles.size());
+  EXPECT_GT(std::count(r.mesh.triangle_part.begin(), r.mesh.triangle_part.end(), 0), 0);
+  EXPECT_GT(std::count(r.mesh.triangle_part.begin(), r.mesh.triangle_part.end(), 1), 0);
+}
+
+TEST(Repair, BodyInsideAnotherIsNotUnitedAway) {
+  // A small box inside a big one, resting on its floor (face to face): the union would be the
+  // big box alone, the small part lost. Not united.
+  Mesh m;
+  vdbwrap::testing::add_box(m, {0, 0, 0}, {1, 1, 1}, 0);
+  vdbwrap::testing::add_box(m, {0.2, 0.2, 0}, {0.4, 0.4, 0.2}, 1);
+  MeshDiagnostics before = diagnose(m);
+  ASSERT_GT(before.intersecting_pairs, 0u);
+  RepairResult r = repair(m, RepairParams{});
+  print(r.report, "box in a box");
+  EXPECT_EQ(r.report.bodies_united, 0u);
+  EXPECT_EQ(r.report.fixed_by_union, 0u);
+  EXPECT_GT(std::count(r.mesh.triangle_part.begin(), r.mesh.triangle_part.end(), 1), 0);
+  EXPECT_LE(border_edges(r.mesh), before.border_edges);
+  EXPECT_LE(nonmanifold_edges(r.mesh), before.nonmanifold_edges);
+  // Without the local operations (which lift the small box's floor off the big one's) the
+  // union is what is left to try, and it is refused.
+  RepairParams p;
+  p.local_iterations = 0;
+  r = repair(m, p);
+  EXPECT_EQ(r.report.bodies_united, 0u);
+  EXPECT_GT(r.report.refusals["unite: would delete a body buried in another"], 0u);
+  EXPECT_EQ(std::count(r.mesh.triangle_part.begin(), r.mesh.triangle_part.end(), 1),
+            std::count(m.triangle_part.begin(), m.triangle_part.end(), 1));
+}
+
+TEST(Repair, BoxesCrossingAlongCurvesAreUnitedWhenRefillsFail) {
+  // A bar pushed through a box's wall: the crossing runs along curves over 12-triangle boxes
+  // (every triangle spans a whole face); whatever parts 1 and 2 leave, the union fixes.
+  Mesh m;
+  vdbwrap::testing::add_box(m, {0, 0, 0}, {1, 1, 1}, 0);
+  vdbwrap::testing::add_box(m, {0.5, 0.3, 0.3}, {1.5, 0.7, 0.7}, 1);
+  RepairResult r = repair(m, RepairParams{});
+  print(r.report, "bar through a box");
+  EXPECT_TRUE(r.report.all_fixed());
+  EXPECT_FALSE(any_intersection(r.mesh));
+  auto verdict = vdbwrap::testing::valid_closed_surface(r.mesh);
+  EXPECT_TRUE(verdict.ok) << verdict.why;
+  EXPECT_GT(r.report.fixed_by_union, 0u);
+  EXPECT_NEAR(enclosed_volume(r.mesh), 1 + 0.16 - 0.08, 1e-9);
+  EXPECT_LE(r.report.deviation, 1e-9);  // the bar's buried end is inside the union: not measured
+  EXPECT_GT(std::count(r.mesh.triangle_part.begin(), r.mesh.triangle_part.end(), 1), 0);
+}
+
 TEST(Repair, SheetsCrossingEdgeToEdgeAreLeftAsTheyWere) {
   // Nothing to cap: the crossing runs into both sheets' borders. The refinement tried for the
   // second refill is undone, so the mesh keeps its triangles, with the region reported.

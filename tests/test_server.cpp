@@ -1222,15 +1222,14 @@ TEST_F(Service, CliSubmitRepairRunsTheRepairOnTheServer) {
   EXPECT_NE(read_file(report).find("\"all_fixed\": true"), std::string::npos);
   EXPECT_NE(read_file(report).find("\"alpha\": 0.3"), std::string::npos) << "the options reach the server";
   // Intersections left: the result and the report are written, exit code 4 (as `vdbwrap repair`).
-  vdbwrap::Mesh boxes = vdbwrap::testing::box_mesh({0, 0, 0}, {1, 1, 1});
-  vdbwrap::testing::add_box(boxes, {0.5, 0.3, 0.3}, {1.5, 0.7, 0.7}, 1);
-  const fs::path crossing = dir_ / "boxes.obj";
-  vdbwrap::io::write_mesh(boxes, crossing.string());
+  // (Two open sheets crossing edge to edge: nothing to cap, no bodies to unite.)
+  const fs::path crossing = dir_ / "sheets.obj";
+  vdbwrap::io::write_mesh(vdbwrap::testing::crossing_sheets(), crossing.string());
   fs::create_directories(dir_ / "outs");
   r = cli("submit --repair --server " + s.address() + " " + crossing.string() + " --out-dir " + (dir_ / "outs").string() + " -q");
   EXPECT_EQ(r.code, 4) << r.err;
-  EXPECT_TRUE(fs::exists(dir_ / "outs" / "boxes_repaired.obj"));
-  EXPECT_TRUE(fs::exists(dir_ / "outs" / "boxes_repaired.json"));
+  EXPECT_TRUE(fs::exists(dir_ / "outs" / "sheets_repaired.obj"));
+  EXPECT_TRUE(fs::exists(dir_ / "outs" / "sheets_repaired.json"));
   EXPECT_NE(r.err.find("intersecting pairs left"), std::string::npos) << r.err;
   // One kind's options with the other kind: refused before anything is sent.
   r = cli("submit --repair --server " + s.address() + " " + folded.string() + " -o " + out.string() + " --base-size 1%");

@@ -13,6 +13,11 @@
 namespace vdbwrap {
 
 DistanceStats sampled_distance(const Mesh& from, const Mesh& to, double samples_per_diagonal) {
+  return check::sampled_distance_skipping(from, to, samples_per_diagonal, {});
+}
+
+DistanceStats check::sampled_distance_skipping(const Mesh& from, const Mesh& to, double samples_per_diagonal,
+                                               const std::function<bool(const Vec3&)>& skip) {
   DistanceStats s;
   Box3 box;
   for (const auto& p : to.points) box.add(p);
@@ -41,6 +46,7 @@ DistanceStats sampled_distance(const Mesh& from, const Mesh& to, double samples_
       samples.push_back(a + (b - a) * u + (c - a) * v);
     }
   }
+  if (skip) samples.erase(std::remove_if(samples.begin(), samples.end(), skip), samples.end());
   return check::distances_to(samples, to, s.diagonal);
 }
 

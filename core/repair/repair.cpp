@@ -7,6 +7,10 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <functional>
+#include <memory>
 #include <cmath>
 #include <map>
 #include <numeric>
@@ -14,6 +18,7 @@
 #include <unordered_map>
 #include <unordered_set>
 
+#include "check/distance_stats.h"
 #include "check/intersections.h"
 #include "common/float_round.h"
 #include "common/stage_timer.h"
@@ -23,6 +28,7 @@
 #include "repair/refill.h"
 #include "repair/regions.h"
 #include "repair/stitch.h"
+#include "repair/unite.h"
 #include "vdbwrap/repair.h"
 
 namespace vdbwrap {
@@ -52,6 +58,11 @@ void validate(const RepairParams& p) {
   if (!(p.small_piece_area >= 0 && p.small_piece_area <= 1)) bad("small piece area must be in [0, 1]");
 }
 
+
+bool debug_enabled() {
+  static const bool on = std::getenv("VDBWRAP_REPAIR_DEBUG") != nullptr;
+  return on;
+}
 
 bool touches(const TrianglePair& p, const std::unordered_set<uint32_t>& set) { return set.count(p.a) || set.count(p.b); }
 
@@ -419,6 +430,8 @@ void run_refill(Work& w, const RepairParams& params, double max_dev, const fit::
         }
       }
       if (!fills[i].ok) {
+        if (debug_enabled())
+          std::fprintf(stderr, "[repair] region %d refill of %zu triangles refused: %s\n", only, regions[i].size(), fills[i].why.c_str());
         ++report.refill_failures;
         ++report.refusals["refill: " + fills[i].why];
         continue;
@@ -483,6 +496,7 @@ void run_refill(Work& w, const RepairParams& params, double max_dev, const fit::
         changed.insert(region.begin(), region.end());
         changed.insert(trials[k].changed.begin(), trials[k].changed.end());
       } else {
+        if (debug_enabled()) std::fprintf(stderr, "[repair] region %d refill judged: intersections not fewer, or new ones\n", only);
         ++report.refill_failures;
         ++report.refusals["refill: intersections not fewer, or new ones"];
       }
@@ -705,7 +719,9 @@ void run_refine_and_refill(Work& w, const RepairParams& params, double max_dev, 
     check_cancel(progress);
     Work unrefined = w;
     size_t added = 0;
+    if (debug_enabled()) std::fprintf(stderr, "[repair] region %d: refine and refill, %zu pairs\n", r, pairs_of_region(w, r).size());
     if (!refine_around(w, r, max_dev / 3, budget, params.float_coordinates, added)) {
+      if (debug_enabled()) std::fprintf(stderr, "[repair] region %d: area crossing, not refined (%zu added)\n", r, added);
       w = std::move(unrefined);
       ++report.refusals["refine and refill: intersections cover an area, not a curve (not refined)"];
       continue;
@@ -716,6 +732,8 @@ void run_refine_and_refill(Work& w, const RepairParams& params, double max_dev, 
       if (fair && !params.fair) continue;
       const auto refills = report.refills;
       run_refill(w, params, max_dev, original, report, progress, r, fair);
+      if (debug_enabled())
+        std::fprintf(stderr, "[repair] region %d: after refill (fair %d): %zu pairs left\n", r, int(fair), pairs_of_region(w, r).size());
       if (!has_pairs(r)) {
         fixed = true;
         ++report.regions_refined;
@@ -730,6 +748,186 @@ void run_refine_and_refill(Work& w, const RepairParams& params, double max_dev, 
       ++report.refusals["refine and refill: region still intersecting (refinement undone)"];
     }
   }
+}
+
+// ---------------------------------------------------------------------------------------
+// Last: closed bodies still crossing each other are united. An assembly exported as one mesh
+// (walls of a box overlapping at every edge, faces lying flat on each other) crosses over
+// areas no band refill can cut; the exact union keeps every face where it is and drops only
+// what is buried inside another body or lies on another body's face. Kept only when every
+// body keeps some of its surface (no part buried whole), the union lies on the input, every
+// input point it drops is within --max-deviation of it or inside it, and the united surface
+// meets nothing and has no degenerate triangle.
+
+// Returns how many groups of closed bodies it tried to unite.
+size_t run_unite(Work& w, const RepairParams& params, double max_dev, const fit::SurfaceIndex& original,
+                 std::vector<std::unique_ptr<local_repair::SolidTest>>& solids, RepairReport& report,
+                 const std::set<int32_t>* regions = nullptr) {
+  size_t tried = 0;
+  // Bodies: the live triangles connected through shared edges (two bodies touching at a
+  // corner, welded there, stay two; a vertex shared that way is copied into each).
+  std::vector<uint32_t> parent(w.tris.size());
+  std::iota(parent.begin(), parent.end(), 0);
+  std::function<uint32_t(uint32_t)> find = [&](uint32_t x) {
+    while (parent[x] != x) x = parent[x] = parent[parent[x]];
+    return x;
+  };
+  {
+    std::unordered_map<uint64_t, uint32_t> first_on_edge;
+    for (uint32_t t = 0; t < w.tris.size(); ++t) {
+      const Tri& tri = w.tris[t];
+      if (local_repair::is_dead(tri)) continue;
+      for (int k = 0; k < 3; ++k) {
+        const uint32_t u = tri[k], v = tri[(k + 1) % 3];
+        auto [it, added] = first_on_edge.emplace(u < v ? (uint64_t(u) << 32 | v) : (uint64_t(v) << 32 | u), t);
+        if (!added) parent[find(t)] = find(it->second);
+      }
+    }
+  }
+  std::map<uint32_t, std::vector<uint32_t>> members;  // root -> triangles, by root (deterministic)
+  for (uint32_t t = 0; t < w.tris.size(); ++t)
+    if (!local_repair::is_dead(w.tris[t])) members[find(t)].push_back(t);
+  // Groups of components linked by intersecting pairs; a component that cuts itself spoils its group.
+  std::map<uint32_t, uint32_t> group;  // component root -> group root
+  std::function<uint32_t(uint32_t)> gfind = [&](uint32_t c) {
+    auto it = group.emplace(c, c).first;
+    return it->second == c ? c : (it->second = gfind(it->second));
+  };
+  std::set<uint32_t> spoiled, wanted;  // wanted: components holding a triangle of `regions`
+  for (const auto& p : w.pairs) {
+    const uint32_t a = find(p.a), b = find(p.b);
+    if (a == b) spoiled.insert(a);
+    else group[gfind(a)] = gfind(b);
+  }
+  if (regions)
+    for (const auto& [c, tris] : members)
+      for (uint32_t t : tris)
+        if (regions->count(w.region_of[t])) {
+          wanted.insert(c);
+          break;
+        }
+  std::map<uint32_t, std::vector<uint32_t>> groups;  // group root -> component roots
+  for (const auto& [c, g] : group) groups[gfind(c)].push_back(c);
+  for (auto& [g, comps] : groups) {
+    if (debug_enabled()) std::fprintf(stderr, "[repair] unite: group of %zu bodies\n", comps.size());
+    if (comps.size() < 2) continue;
+    if (regions && std::none_of(comps.begin(), comps.end(), [&](uint32_t c) { return wanted.count(c) > 0; })) continue;
+    if (std::any_of(comps.begin(), comps.end(), [&](uint32_t c) { return spoiled.count(c) > 0; })) {
+      ++report.refusals["unite: a body cuts itself"];
+      continue;
+    }
+    std::vector<std::vector<Tri>> bodies;
+    std::vector<uint32_t> gone;
+    for (uint32_t c : comps) {
+      bodies.emplace_back();
+      for (uint32_t t : members[c]) bodies.back().push_back(w.tris[t]), gone.push_back(t);
+    }
+    std::sort(gone.begin(), gone.end());
+    // Closed: every edge of a body on two of its triangles, running opposite ways.
+    bool closed = true;
+    for (const auto& body : bodies) {
+      std::map<std::pair<uint32_t, uint32_t>, int> directed;
+      for (const Tri& t : body)
+        for (int k = 0; k < 3; ++k) ++directed[{t[k], t[(k + 1) % 3]}];
+      for (const auto& [e, n] : directed) closed &= n == 1 && directed.count({e.second, e.first}) && directed[{e.second, e.first}] == 1;
+      if (!closed) break;
+    }
+    if (!closed) {
+      ++report.refusals["unite: a body is not closed"];
+      continue;
+    }
+    ++tried;
+    local_repair::Union u = local_repair::unite_bodies(w.points, bodies, params.float_coordinates);
+    if (!u.ok) {
+      ++report.refusals["unite: " + u.why];
+      continue;
+    }
+    for (const Tri& t : u.triangles)
+      if (check::triangle_is_degenerate(u.points, t)) u.ok = false;
+    if (!u.ok) {
+      ++report.refusals["unite: the union has a degenerate triangle"];
+      continue;
+    }
+    auto solid = std::make_unique<local_repair::SolidTest>(u.points, u.triangles);
+    fit::SurfaceIndex united(u.points, u.triangles);
+    // Every body keeps some of its surface: a triangle outside every other body (not on one).
+    // A body inside the others, even one resting on their faces, is a part the union would lose.
+    std::vector<std::unique_ptr<local_repair::SolidTest>> each;
+    for (const auto& body : bodies) each.push_back(std::make_unique<local_repair::SolidTest>(w.points, body));
+    bool whole = true;
+    for (size_t i = 0; i < bodies.size() && whole; ++i) {
+      bool shows = false;
+      for (const Tri& t : bodies[i]) {
+        const Vec3 c = (w.points[t[0]] + w.points[t[1]] + w.points[t[2]]) * (1.0 / 3);
+        bool out = true;
+        for (size_t j = 0; j < bodies.size() && out; ++j)
+          if (j != i) out = each[j]->outside(c);
+        if (out) {
+          shows = true;
+          break;
+        }
+      }
+      whole &= shows;
+    }
+    if (!whole) {
+      ++report.refusals["unite: would delete a body buried in another"];
+      continue;
+    }
+    // The union lies on the input; what it drops is near it or buried inside it.
+    bool near = true;
+    for (const Tri& t : u.triangles) {
+      const Vec3 c = (u.points[t[0]] + u.points[t[1]] + u.points[t[2]]) * (1.0 / 3);
+      for (const Vec3& q : {u.points[t[0]], u.points[t[1]], u.points[t[2]], c})
+        near &= original.squared_distance_unhinted(q) <= max_dev * max_dev;
+      if (!near) break;
+    }
+    if (!near) {
+      ++report.refusals["unite: the union leaves the input surface"];
+      continue;
+    }
+    for (uint32_t t : gone) {
+      const Tri& x = w.tris[t];
+      const Vec3 c = (w.origin[x[0]] + w.origin[x[1]] + w.origin[x[2]]) * (1.0 / 3);
+      for (const Vec3& q : {w.origin[x[0]], w.origin[x[1]], w.origin[x[2]], c})
+        if (!solid->inside(q) && united.squared_distance_unhinted(q) > max_dev * max_dev) near = false;
+      if (!near) break;
+    }
+    if (!near) {
+      ++report.refusals["unite: would drop surface that is neither buried nor near the union"];
+      continue;
+    }
+    // Apply: the bodies die, the union comes in (parts and regions from the nearest old triangle).
+    std::vector<Tri> old_tris;
+    std::vector<uint32_t> old_of;
+    for (uint32_t t : gone) old_tris.push_back(w.tris[t]), old_of.push_back(t);
+    fit::SurfaceIndex old_index(w.points, old_tris);
+    const Work saved = w;
+    const uint32_t base = uint32_t(w.points.size());
+    w.points.insert(w.points.end(), u.points.begin(), u.points.end());
+    w.origin.insert(w.origin.end(), u.points.begin(), u.points.end());
+    std::vector<uint32_t> changed;
+    for (const Tri& t : u.triangles) {
+      const Vec3 c = (u.points[t[0]] + u.points[t[1]] + u.points[t[2]]) * (1.0 / 3);
+      const uint32_t from = old_of[old_index.closest_triangle_unhinted(c)];  // ties: the same on every run
+      changed.push_back(uint32_t(w.tris.size()));
+      w.tris.push_back({base + t[0], base + t[1], base + t[2]});
+      w.part.push_back(w.part[from]);
+      w.region_of.push_back(w.region_of[from]);
+      w.touched.push_back(1);
+    }
+    for (uint32_t t : gone) w.tris[t] = local_repair::dead_triangle();
+    auto found = check::find_intersecting_pairs_with(w.points, w.tris, changed);
+    if (!found.empty()) {
+      w = saved;
+      ++report.refusals["unite: the union meets other triangles (after rounding)"];
+      continue;
+    }
+    std::unordered_set<uint32_t> changed_set(gone.begin(), gone.end());
+    w.update_pairs(changed_set, found);
+    report.bodies_united += comps.size();
+    solids.push_back(std::move(solid));
+  }
+  return tried;
 }
 
 // ---------------------------------------------------------------------------------------
@@ -782,7 +980,7 @@ void remove_small_pieces(Work& w, const RepairParams& params, double max_dev, Re
     if (!(small && p.touched)) continue;
     bool near = true;
     for (uint32_t t : p.tris)
-      for (uint32_t v : w.tris[t]) near &= std::sqrt(rest.squared_distance(w.points[v])) <= max_dev;
+      for (uint32_t v : w.tris[t]) near &= std::sqrt(rest.squared_distance_unhinted(w.points[v])) <= max_dev;
     if (!near) continue;
     ++report.pieces_removed;
     report.piece_triangles_removed += p.tris.size();
@@ -875,39 +1073,100 @@ RepairResult run_repair(const Mesh& input, const RepairParams& params, ProgressS
         if (w.region_of[t] >= 0) clean[size_t(w.region_of[t])] = 0;
     return clean;
   };
+  std::vector<std::unique_ptr<local_repair::SolidTest>> solids;  // bodies united: their insides
   if (!w.pairs.empty()) {
     StageTimer timer("stitch cracks", report.stages);
     // Cracks of CAD exports are float noise wide (1e-16 of the model here); 1e-6 of the
     // diagonal stays far below any deviation bound.
     run_stitch(w, std::min(1e-6 * report.diagonal, report.max_deviation), report);
   }
-  {
-    StageTimer timer("local operations", report.stages);
-    run_local(w, params, lp, report.max_deviation, report, progress);
-  }
-  const auto clean_after_local = clean_regions();
-  if (!w.pairs.empty() && params.refill_iterations > 0) {
-    Mesh original{w.origin, {}, {}, {}};
-    for (const Tri& t : w.tris)
-      if (!local_repair::is_dead(t)) original.triangles.push_back(t);
-    // The input surface as it came (vertices at their starting places).
-    fit::SurfaceIndex index(w.origin, original.triangles);
+  // Parts 1 and 2 (and the union of closed bodies still crossing after them). `first`: input
+  // regions whose crossing bodies are united before part 1, the second pass below.
+  std::vector<uint8_t> by_union, clean_after_local;  // regions the union fixed; regions clean after part 1
+  size_t unite_tried = 0;                            // groups of closed crossing bodies the union was tried on
+  auto unite = [&](const fit::SurfaceIndex& input, const std::set<int32_t>* regions) {
+    StageTimer timer("unite crossing bodies", report.stages);
+    check_cancel(progress);
+    const auto clean_before = clean_regions();
+    unite_tried += run_unite(w, params, report.max_deviation, input, solids, report, regions);
+    const auto clean_after = clean_regions();
+    for (size_t r = 0; r < report.regions_found; ++r) by_union[r] |= !clean_before[r] && clean_after[r];
+  };
+  auto parts = [&](const std::set<int32_t>& first) {
+    by_union.assign(report.regions_found, 0);
+    solids.clear();
+    if (!first.empty()) {
+      std::vector<Tri> live;
+      for (const Tri& t : w.tris)
+        if (!local_repair::is_dead(t)) live.push_back(t);
+      fit::SurfaceIndex input(w.origin, live);
+      unite(input, &first);
+    }
     {
-      StageTimer timer("remove and refill", report.stages);
-      run_refill(w, params, report.max_deviation, index, report, progress);
+      StageTimer timer("local operations", report.stages);
+      run_local(w, params, lp, report.max_deviation, report, progress);
     }
-    if (!w.pairs.empty()) {
-      StageTimer timer("refine, remove and refill", report.stages);
-      run_refine_and_refill(w, params, report.max_deviation, index, report.regions_found, report, progress);
+    clean_after_local = clean_regions();
+    if (!w.pairs.empty() && params.refill_iterations > 0) {
+      Mesh original{w.origin, {}, {}, {}};
+      for (const Tri& t : w.tris)
+        if (!local_repair::is_dead(t)) original.triangles.push_back(t);
+      // The input surface as it came (vertices at their starting places).
+      fit::SurfaceIndex index(w.origin, original.triangles);
+      {
+        StageTimer timer("remove and refill", report.stages);
+        run_refill(w, params, report.max_deviation, index, report, progress);
+      }
+      if (!w.pairs.empty()) {
+        StageTimer timer("refine, remove and refill", report.stages);
+        run_refine_and_refill(w, params, report.max_deviation, index, report.regions_found, report, progress);
+      }
+      if (!w.pairs.empty() && params.unite_bodies) unite(index, nullptr);
     }
-  }
-  if (params.remove_small_pieces) {
-    StageTimer timer("remove small pieces", report.stages);
-    remove_small_pieces(w, params, report.max_deviation, report);
+    if (params.remove_small_pieces) {
+      StageTimer timer("remove small pieces", report.stages);
+      remove_small_pieces(w, params, report.max_deviation, report);
+    }
+  };
+  const Work stitched = w;
+  const RepairReport report_stitched = report;
+  parts({});
+  const bool united_late = std::any_of(by_union.begin(), by_union.end(), [](uint8_t u) { return u != 0; });
+  if (((!w.pairs.empty() && unite_tried > 0) || united_late) && params.unite_bodies) {
+    // Second pass for the regions left (or united only after parts 1 and 2 had moved and cut
+    // them): their closed bodies (an assembly's walls overlapping face to face, crossing over
+    // areas) united first, from the input as it came, then the rest as before. Kept when it
+    // leaves fewer regions unfixed, or as few when the first pass needed the union too.
+    const auto clean = clean_regions();
+    std::set<int32_t> left;
+    for (size_t r = 0; r < report.regions_found; ++r)
+      if (!clean[r] || by_union[r]) left.insert(int32_t(r));
+    Work first_w = std::move(w);
+    RepairReport first_report = std::move(report);
+    auto first_solids = std::move(solids);
+    const auto first_by_union = by_union, first_clean_after_local = clean_after_local;
+    w = stitched;
+    report = report_stitched;
+    report.stages = first_report.stages;
+    solids.clear();
+    parts(left);
+    const auto clean2 = clean_regions();
+    const auto left1 = std::count(clean.begin(), clean.end(), 0), left2 = std::count(clean2.begin(), clean2.end(), 0);
+    if (left2 > left1 || (left2 == left1 && !united_late)) {
+      const auto stages = std::move(report.stages);
+      w = std::move(first_w);
+      report = std::move(first_report);
+      report.stages = stages;
+      solids = std::move(first_solids);
+      by_union = first_by_union;
+      clean_after_local = first_clean_after_local;
+      ++report.refusals["unite: uniting the bodies first left no fewer regions (second pass dropped)"];
+    }
   }
   const auto clean_at_end = clean_regions();
   for (size_t r = 0; r < report.regions_found; ++r) {
-    if (clean_after_local[r]) ++report.fixed_by_local;
+    if (by_union[r]) ++report.fixed_by_union;
+    else if (clean_after_local[r]) ++report.fixed_by_local;
     else if (clean_at_end[r]) ++report.fixed_by_refill;
     else ++report.left_unfixed;
   }
@@ -934,7 +1193,12 @@ RepairResult run_repair(const Mesh& input, const RepairParams& params, ProgressS
     // Every vertex is a sample (the largest moves are at vertices), area samples every 1/400
     // of the diagonal in between.
     report.output_to_input = sampled_distance(changed_after, before, 400);
-    report.input_to_output = sampled_distance(changed_before, after, 400);
+    // Input surface buried inside a united solid is gone with nothing to be near: not measured.
+    report.input_to_output = check::sampled_distance_skipping(changed_before, after, 400, [&](const Vec3& q) {
+      for (const auto& s : solids)
+        if (s->inside(q)) return true;
+      return false;
+    });
     report.output_to_input.diagonal = report.input_to_output.diagonal = report.diagonal;
     if (report.diagonal > 0)
       report.deviation = std::max(report.output_to_input.max, report.input_to_output.max) / report.diagonal;

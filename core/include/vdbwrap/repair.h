@@ -36,6 +36,7 @@ struct RepairParams {
   // Afterwards, delete pieces that the repair left disconnected or still intersecting when
   // they have at most this many triangles and at most this fraction of the total area.
   bool remove_small_pieces = true;
+  bool unite_bodies = true;        // last stage: closed bodies still crossing are united (exact union)
   int small_piece_triangles = 16;
   double small_piece_area = 1e-3;
 
@@ -62,6 +63,7 @@ struct RepairReport {
   size_t regions_found = 0;    // regions of the input
   size_t fixed_by_local = 0;   // of those, free of intersections after part 1 (and stitching)
   size_t fixed_by_refill = 0;  // ... after part 2 (or when tiny leftovers were removed)
+  size_t fixed_by_union = 0;   // ... by uniting the closed bodies that cross there (bodies_united)
   size_t left_unfixed = 0;
   std::vector<RepairRegion> unfixed;  // the regions of intersecting triangles left in the output
 
@@ -73,6 +75,9 @@ struct RepairReport {
   // Crack stitches before part 1: corners welded to the corner they touched, and corners
   // inserted into the border edge they lay on (nothing moves by more than 1e-6 of the diagonal).
   size_t cracks_stitched = 0;
+  // Closed bodies still crossing after part 2, united (exact union: buried surface and faces
+  // lying on another body's face dropped, nothing else moved).
+  size_t bodies_united = 0;
   size_t pieces_removed = 0, piece_triangles_removed = 0;
   // Why operations and refills were refused (reason -> how often): what stood in the way.
   std::map<std::string, size_t> refusals;
