@@ -7,7 +7,6 @@
 #include <CGAL/Simple_cartesian.h>
 
 #include <algorithm>
-#include <atomic>
 #include <cmath>
 
 namespace vdbwrap::fit {
@@ -20,16 +19,9 @@ using Primitive = CGAL::AABB_triangle_primitive<K, Iterator>;
 using Tree = CGAL::AABB_tree<CGAL::AABB_traits<K, Primitive>>;
 }  // namespace
 
-// A serial per index, so the hint of an index freed and another made at the same address
-// is not taken for the new one's.
-namespace {
-std::atomic<uint64_t> next_serial{1};
-}  // namespace
-
 struct SurfaceIndex::Impl {
   std::vector<Triangle> triangles;
   Tree tree;
-  uint64_t serial = next_serial.fetch_add(1);
 };
 
 SurfaceIndex::SurfaceIndex(const std::vector<Vec3>& points, const std::vector<Tri>& triangles) : impl_(new Impl) {
@@ -47,20 +39,11 @@ SurfaceIndex::~SurfaceIndex() = default;
 
 SurfaceIndex::Hit SurfaceIndex::closest(const Vec3& q) const {
   K::Point_3 query(q[0], q[1], q[2]);
-  // The search prunes by the best distance so far, so a close first guess saves most of it.
-  // Queries come in runs of neighbours (the nodes or triangles of one block of a parallel
-  // loop), so the triangle this thread found last is usually nearest again, or nearly so.
-  thread_local uint64_t last_index = 0;
-  thread_local size_t last_triangle = 0;
-  Tree::Point_and_primitive_id hint = impl_->tree.best_hint(query);
-  if (last_index == impl_->serial && last_triangle < impl_->triangles.size()) {
-    const auto it = impl_->triangles.cbegin() + long(last_triangle);
-    const K::Point_3 on = K::Construct_projected_point_3()(*it, query);
-    if (CGAL::squared_distance(query, on) < CGAL::squared_distance(query, hint.first)) hint = {on, it};
-  }
-  auto [point, it] = impl_->tree.closest_point_and_primitive(query, hint);
-  last_index = impl_->serial;
-  last_triangle = size_t(it - impl_->triangles.cbegin());
+  // CGAL's own start (its kd-tree hint) only: the answer is a function of the query, so that
+  // where two triangles are equally near the same one wins on every run and thread count.
+  // (Starting from the triangle this thread found last saved 6 % on a large assembly, but
+  // ties then went either way.)
+  auto [point, it] = impl_->tree.closest_point_and_primitive(query);
   Hit hit;
   hit.point = {point.x(), point.y(), point.z()};
   hit.triangle = uint32_t(it - impl_->triangles.cbegin());
@@ -69,16 +52,6 @@ SurfaceIndex::Hit SurfaceIndex::closest(const Vec3& q) const {
   double len = std::sqrt(n.squared_length());
   hit.normal = len > 0 ? Vec3{n.x() / len, n.y() / len, n.z() / len} : Vec3{0, 0, 0};
   return hit;
-}
-
-double SurfaceIndex::squared_distance_unhinted(const Vec3& q) const {
-  const K::Point_3 query(q[0], q[1], q[2]);
-  return CGAL::squared_distance(query, impl_->tree.closest_point(query));
-}
-
-uint32_t SurfaceIndex::closest_triangle_unhinted(const Vec3& q) const {
-  const auto hit = impl_->tree.closest_point_and_primitive(K::Point_3(q[0], q[1], q[2]));
-  return uint32_t(hit.second - impl_->triangles.cbegin());
 }
 
 bool SurfaceIndex::within(const Vec3& q, double radius) const {

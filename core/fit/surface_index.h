@@ -1,4 +1,5 @@
-// Nearest-point queries on a triangle set (CGAL AABB tree). Thread-safe queries once built.
+// Nearest-point queries on a triangle set (CGAL AABB tree). Thread-safe queries once built;
+// every answer is a function of the query alone (the same on any thread, in any order).
 #pragma once
 #include <cstdint>
 #include <memory>
@@ -23,12 +24,6 @@ class SurfaceIndex {
   };
   Hit closest(const Vec3& query) const;
   double squared_distance(const Vec3& query) const { return closest(query).squared_distance; }
-  // The same distance without the per-thread hint closest() starts from: a function of the
-  // query and the triangles alone, so that callers in parallel loops whose work is shared out
-  // between threads differently from run to run (the repair) get bit-identical answers where
-  // two triangles are equally near.
-  double squared_distance_unhinted(const Vec3& query) const;
-  uint32_t closest_triangle_unhinted(const Vec3& query) const;
   // Is the input within `radius` of the query? (Much cheaper than closest() for small radii.)
   bool within(const Vec3& query, double radius) const;
   // Does triangle abc touch or cross the input? (Floating point: a near miss may count.)

@@ -389,16 +389,16 @@ Refill refill_region(const std::vector<Vec3>& points, const std::vector<Tri>& tr
       std::vector<Vec3> from_patch = samples_on(patch_points, patch);
       if (original) {
         for (const Vec3& s : from_patch)
-          if (original->squared_distance_unhinted(s) > bound2) return fail("refill too far from the input");
+          if (original->squared_distance(s) > bound2) return fail("refill too far from the input");
       } else {
         fit::SurfaceIndex removed_index(points, removed);
         for (const Vec3& s : from_patch)
-          if (removed_index.squared_distance_unhinted(s) > bound2) return fail("refill too far from the removed surface");
+          if (removed_index.squared_distance(s) > bound2) return fail("refill too far from the removed surface");
       }
       // Removed surface -> refill.
       fit::SurfaceIndex patch_index(patch_points, patch);
       for (const Vec3& s : samples_on(points, removed))
-        if (patch_index.squared_distance_unhinted(s) > bound2) return fail("removed surface too far from the refill");
+        if (patch_index.squared_distance(s) > bound2) return fail("removed surface too far from the refill");
     }
 
     // Each new triangle replaces the nearest region triangle along its own loop (its part

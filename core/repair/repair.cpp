@@ -878,7 +878,7 @@ size_t run_unite(Work& w, const RepairParams& params, double max_dev, const fit:
     for (const Tri& t : u.triangles) {
       const Vec3 c = (u.points[t[0]] + u.points[t[1]] + u.points[t[2]]) * (1.0 / 3);
       for (const Vec3& q : {u.points[t[0]], u.points[t[1]], u.points[t[2]], c})
-        near &= original.squared_distance_unhinted(q) <= max_dev * max_dev;
+        near &= original.squared_distance(q) <= max_dev * max_dev;
       if (!near) break;
     }
     if (!near) {
@@ -889,7 +889,7 @@ size_t run_unite(Work& w, const RepairParams& params, double max_dev, const fit:
       const Tri& x = w.tris[t];
       const Vec3 c = (w.origin[x[0]] + w.origin[x[1]] + w.origin[x[2]]) * (1.0 / 3);
       for (const Vec3& q : {w.origin[x[0]], w.origin[x[1]], w.origin[x[2]], c})
-        if (!solid->inside(q) && united.squared_distance_unhinted(q) > max_dev * max_dev) near = false;
+        if (!solid->inside(q) && united.squared_distance(q) > max_dev * max_dev) near = false;
       if (!near) break;
     }
     if (!near) {
@@ -908,7 +908,7 @@ size_t run_unite(Work& w, const RepairParams& params, double max_dev, const fit:
     std::vector<uint32_t> changed;
     for (const Tri& t : u.triangles) {
       const Vec3 c = (u.points[t[0]] + u.points[t[1]] + u.points[t[2]]) * (1.0 / 3);
-      const uint32_t from = old_of[old_index.closest_triangle_unhinted(c)];  // ties: the same on every run
+      const uint32_t from = old_of[old_index.closest(c).triangle];  // ties: the same on every run
       changed.push_back(uint32_t(w.tris.size()));
       w.tris.push_back({base + t[0], base + t[1], base + t[2]});
       w.part.push_back(w.part[from]);
@@ -980,7 +980,7 @@ void remove_small_pieces(Work& w, const RepairParams& params, double max_dev, Re
     if (!(small && p.touched)) continue;
     bool near = true;
     for (uint32_t t : p.tris)
-      for (uint32_t v : w.tris[t]) near &= std::sqrt(rest.squared_distance_unhinted(w.points[v])) <= max_dev;
+      for (uint32_t v : w.tris[t]) near &= std::sqrt(rest.squared_distance(w.points[v])) <= max_dev;
     if (!near) continue;
     ++report.pieces_removed;
     report.piece_triangles_removed += p.tris.size();
