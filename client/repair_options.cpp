@@ -30,6 +30,8 @@ void RepairOptions::add_to(CLI::App* cmd, bool with_threads) {
       ->capture_default_str();
   add(cmd->add_flag("--no-fair", no_fair_, "Refine refills but do not fair them"));
   add(cmd->add_flag("--keep-small-pieces", keep_pieces_, "Do not delete small pieces the repair leaves behind"));
+  add(cmd->add_flag("--no-unite", no_unite_,
+                    "Never unite closed bodies that still cross (each body stays a separate solid; their crossings may be left)"));
   add(cmd->add_option("--small-piece-triangles", p_.small_piece_triangles,
                       "A leftover piece is small with at most this many triangles ..."))
       ->capture_default_str();
@@ -48,6 +50,7 @@ RepairParams RepairOptions::resolve() const {
   }
   p.fair = !no_fair_;
   p.remove_small_pieces = !keep_pieces_;
+  p.unite_bodies = !no_unite_;
   return p;
 }
 

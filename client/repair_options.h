@@ -22,7 +22,7 @@ class RepairOptions {
  private:
   RepairParams p_;
   std::string max_deviation_ = "0.5%";
-  bool no_fair_ = false, keep_pieces_ = false;
+  bool no_fair_ = false, keep_pieces_ = false, no_unite_ = false;
   std::vector<CLI::Option*> options_;
 };
 

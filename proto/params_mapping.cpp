@@ -269,6 +269,7 @@ RepairParams to_repair_params(const pb::RepairParameters& in) {
     p.threads = in.threads();
   }
   if (in.has_compute_distances()) p.compute_distances = in.compute_distances();
+  if (in.has_unite_bodies()) p.unite_bodies = in.unite_bodies();
   return p;
 }
 
@@ -290,6 +291,7 @@ pb::RepairParameters to_proto(const RepairParams& in) {
   out.set_small_piece_area(in.small_piece_area);
   out.set_threads(in.threads);
   out.set_compute_distances(in.compute_distances);
+  out.set_unite_bodies(in.unite_bodies);
   return out;
 }
 

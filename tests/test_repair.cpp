@@ -784,6 +784,17 @@ TEST(Repair, WallsOverlappingFaceToFaceAreUnited) {
   ASSERT_EQ(r.mesh.triangle_part.size(), r.mesh.triangles.size());
   EXPECT_GT(std::count(r.mesh.triangle_part.begin(), r.mesh.triangle_part.end(), 0), 0);
   EXPECT_GT(std::count(r.mesh.triangle_part.begin(), r.mesh.triangle_part.end(), 1), 0);
+
+  // With the union off (--no-unite), the two walls stay two bodies and their crossings are
+  // reported as left, not hidden.
+  p.unite_bodies = false;
+  RepairResult apart = repair(m, p);
+  EXPECT_EQ(apart.report.bodies_united, 0u);
+  EXPECT_EQ(apart.report.fixed_by_union, 0u);
+  EXPECT_FALSE(apart.report.all_fixed());
+  EXPECT_GT(apart.report.after.intersecting_pairs, 0u);
+  EXPECT_EQ(apart.report.after.components, 2u);
+  EXPECT_EQ(nonmanifold_edges(apart.mesh), 0u);
 }
 
 TEST(Repair, BodyInsideAnotherIsNotUnitedAway) {

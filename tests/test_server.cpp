@@ -502,6 +502,7 @@ TEST(ParamsMapping, RepairParametersRoundTripRefuseOutOfRangeAndMatchTheJobKind)
   p.small_piece_area = 0.01;
   p.threads = 2;
   p.compute_distances = false;
+  p.unite_bodies = false;
   const vdbwrap::RepairParams q = vdbwrap::api::to_repair_params(vdbwrap::api::to_proto(p));
   EXPECT_EQ(q.local_iterations, 7);
   EXPECT_EQ(q.alpha, 0.3);
@@ -519,11 +520,13 @@ TEST(ParamsMapping, RepairParametersRoundTripRefuseOutOfRangeAndMatchTheJobKind)
   EXPECT_EQ(q.small_piece_area, 0.01);
   EXPECT_EQ(q.threads, 2);
   EXPECT_FALSE(q.compute_distances);
+  EXPECT_FALSE(q.unite_bodies);
   // Unset: `vdbwrap repair`'s defaults.
   const vdbwrap::RepairParams d = vdbwrap::api::to_repair_params(pb::RepairParameters());
   EXPECT_EQ(d.alpha, vdbwrap::RepairParams().alpha);
   EXPECT_EQ(d.max_deviation.to_string(), vdbwrap::RepairParams().max_deviation.to_string());
   EXPECT_TRUE(d.fair);
+  EXPECT_TRUE(d.unite_bodies);
   auto refused = [](auto set) {
     return refused_by<pb::RepairParameters>([](const auto& r) { vdbwrap::api::to_repair_params(r); }, set);
   };
