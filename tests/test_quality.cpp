@@ -451,7 +451,7 @@ TEST(Remesh, FallsBackToEarClippingWithoutAnInputUnderTheRegion) {
 TEST(RepairWrap, RepairsAFoldAndKeepsThePerPointData) {
   PostSurface s = post_surface(folded_icosphere(), 0.1);
   s.locked[0] = 1;
-  ASSERT_GT(intersecting_triangles(s.points, s.triangles).size(), 0u);
+  ASSERT_GT(check::intersecting_triangles(s.points, s.triangles).size(), 0u);
   const WrapRepairOutcome r = repair_intersections(s, 0.2, false, nullptr);
   EXPECT_TRUE(r.ran);
   EXPECT_GT(r.intersecting_before, 0u);

@@ -297,10 +297,10 @@ TEST(RepairRefill, RefilledRegionClosesTheHoleWithoutIntersections) {
   EXPECT_TRUE(verdict.ok) << verdict.why;
 }
 
-TEST(RepairRefill, RegionOnTheMeshBorderKeepsTheBorder) {
-  // A flat grid (open surface) with a vertex folded over its neighbour next to the border.
+// An open n x n grid of unit squares in the plane z = 0, two triangles each; the point at
+// (i, j) has index j * (n + 1) + i.
+static Mesh flat_grid(int n) {
   Mesh m;
-  const int n = 8;
   for (int j = 0; j <= n; ++j)
     for (int i = 0; i <= n; ++i) m.points.push_back({double(i), double(j), 0.0});
   auto at = [&](int i, int j) { return uint32_t(j * (n + 1) + i); };
@@ -309,6 +309,14 @@ TEST(RepairRefill, RegionOnTheMeshBorderKeepsTheBorder) {
       m.triangles.push_back({at(i, j), at(i + 1, j), at(i + 1, j + 1)});
       m.triangles.push_back({at(i, j), at(i + 1, j + 1), at(i, j + 1)});
     }
+  return m;
+}
+
+TEST(RepairRefill, RegionOnTheMeshBorderKeepsTheBorder) {
+  // A flat grid (open surface) with a vertex folded over its neighbour next to the border.
+  const int n = 8;
+  Mesh m = flat_grid(n);
+  auto at = [&](int i, int j) { return uint32_t(j * (n + 1) + i); };
   const size_t border_before = diagnose(m, false).border_edges;
   m.points[at(4, 1)] = {5.4, 1.3, 0.0};  // past its right-hand neighbour, in the plane
   Found f = find(m);
@@ -357,16 +365,9 @@ TEST(RepairRefill, ContourSplitsIntoSimpleLoops) {
 TEST(RepairRegions, PinchedBorderIsClosedByTheTrianglesAroundThePinch) {
   // Two triangles of a flat grid touching at one vertex only: their border passes through
   // that vertex twice. Taking the triangles around it leaves one simple loop.
-  Mesh m;
   const int n = 4;
-  for (int j = 0; j <= n; ++j)
-    for (int i = 0; i <= n; ++i) m.points.push_back({double(i), double(j), 0.0});
+  Mesh m = flat_grid(n);
   auto at = [&](int i, int j) { return uint32_t(j * (n + 1) + i); };
-  for (int j = 0; j < n; ++j)
-    for (int i = 0; i < n; ++i) {
-      m.triangles.push_back({at(i, j), at(i + 1, j), at(i + 1, j + 1)});
-      m.triangles.push_back({at(i, j), at(i + 1, j + 1), at(i, j + 1)});
-    }
   const uint32_t below = 2 * (1 * n + 1), above = 2 * (2 * n + 2) + 1;  // meet at (2, 2) only
   auto border = [&](const std::vector<uint32_t>& set) {
     std::map<std::pair<uint32_t, uint32_t>, int> count;

@@ -229,6 +229,16 @@ std::vector<TrianglePair> find_intersecting_pairs(const std::vector<Vec3>& point
   return out;
 }
 
+std::vector<uint32_t> intersecting_triangles(const std::vector<Vec3>& points, const std::vector<Tri>& triangles) {
+  std::vector<uint32_t> out;
+  for (const TrianglePair& p : find_intersecting_pairs(points, triangles)) out.push_back(p.a), out.push_back(p.b);
+  for (uint32_t f = 0; f < triangles.size(); ++f)
+    if (triangle_is_degenerate(points, triangles[f])) out.push_back(f);
+  std::sort(out.begin(), out.end());
+  out.erase(std::unique(out.begin(), out.end()), out.end());
+  return out;
+}
+
 std::vector<TrianglePair> find_intersecting_pairs_with(const std::vector<Vec3>& points, const std::vector<Tri>& triangles,
                                                        const std::vector<uint32_t>& subset) {
   std::vector<TrianglePair> out;

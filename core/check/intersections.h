@@ -22,6 +22,9 @@ std::vector<TrianglePair> find_intersecting_pairs(const std::vector<Vec3>& point
 std::vector<TrianglePair> find_intersecting_pairs_with(const std::vector<Vec3>& points, const std::vector<Tri>& triangles,
                                                        const std::vector<uint32_t>& subset);
 
+// Triangles that intersect another or are degenerate, sorted, each once.
+std::vector<uint32_t> intersecting_triangles(const std::vector<Vec3>& points, const std::vector<Tri>& triangles);
+
 // The exact tests behind the functions above, for one pair / one triangle. use_proofs_2d =
 // false skips the fast proofs in doubles that settle most pairs first (for tests: the answer
 // must be the same).

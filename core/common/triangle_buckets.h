@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdint>
 #include <unordered_map>
+#include <utility>
 #include <vector>
 
 #include "common/grid_key.h"
@@ -33,24 +34,11 @@ class TriangleBuckets {
   // Triangles whose (bucketed) bounding box overlaps b.
   template <typename F>
   void for_each_in_box(const Box3& b, F&& fn) {
-    ++stamp_;
-    for_cells(b, [&](const Key& k) {
-      auto it = cells_.find(k);
-      if (it == cells_.end()) return;
-      for (uint32_t g : it->second) {
-        if (seen_[g] == stamp_) continue;
-        seen_[g] = stamp_;
-        const Box3& o = boxes_[g];
-        if (o.lo[0] > b.hi[0] || o.hi[0] < b.lo[0] || o.lo[1] > b.hi[1] || o.hi[1] < b.lo[1] || o.lo[2] > b.hi[2] ||
-            o.hi[2] < b.lo[2])
-          continue;
-        fn(g);
-      }
-    });
+    for_each_in_box(b, seen_, stamp_, std::forward<F>(fn));
   }
 
-  // The same as for_each_in_box, but const, so that several threads may query at once while
-  // nothing is updated; each thread brings its own marks (`seen` and `stamp`, both start at 0).
+  // The same, const, with the caller's marks, so that several threads may query at once while
+  // nothing is updated; each thread brings its own (`seen` and `stamp`, both start at 0).
   template <typename F>
   void for_each_in_box(const Box3& b, std::vector<uint32_t>& seen, uint32_t& stamp, F&& fn) const {
     if (seen.size() < boxes_.size()) seen.resize(boxes_.size(), 0);

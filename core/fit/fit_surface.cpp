@@ -27,13 +27,7 @@ std::vector<uint32_t> invalid_triangles(const std::vector<Vec3>& points, const s
   // Box intersection and exact predicates, with the fast proofs in doubles first: on a
   // lattice surface most candidate pairs are exactly coplanar neighbours, slow for the exact
   // predicates alone. (The final validation still asks CGAL's own self-intersection test.)
-  for (const check::TrianglePair& pair : check::find_intersecting_pairs(points, triangles)) {
-    bad.push_back(pair.a);
-    bad.push_back(pair.b);
-  }
-  std::sort(bad.begin(), bad.end());
-  bad.erase(std::unique(bad.begin(), bad.end()), bad.end());
-  return bad;
+  return check::intersecting_triangles(points, triangles);
 }
 
 namespace {

@@ -58,7 +58,7 @@ class Coarsener {
   // the checks read has changed.
   size_t run(ProgressSink* progress) {
     size_t total = 0;
-    for (int pass = 0; pass < 4; ++pass) {
+    for (uint32_t pass = 0; pass < 4; ++pass) {
       if (pass > 0)
         for (uint32_t f = 0; f < t_.size(); ++f)
           if (alive_[f])
@@ -272,7 +272,7 @@ class Coarsener {
       buckets_.update(pl.moved[i]);
     }
     for (uint32_t f : vf_[pl.v])
-      for (uint32_t w : t_[f]) changed_in_[w] = uint32_t(pass_);
+      for (uint32_t w : t_[f]) changed_in_[w] = pass_;
     vf_[pl.u].clear();
     vertex_alive_[pl.u] = 0;
     // Only v's edges changed length; the others are re-checked whenever they come up.
@@ -335,7 +335,7 @@ class Coarsener {
     uint32_t stamp = 0;
   };
   mutable tbb::enumerable_thread_specific<Marks> marks_;
-  int pass_ = 0;
+  uint32_t pass_ = 0;
   std::vector<std::vector<uint32_t>> vf_;
   std::priority_queue<Entry> queue_;
   double cos_turn_ = 0, cos_min_angle_ = 0, dev2_ = 0;

@@ -91,11 +91,7 @@ QualityCounts analyse_quality(const std::vector<Vec3>& p, const std::vector<Tri>
   if (intersecting) {
     crossing = *intersecting;
   } else {
-    for (const auto& pair : check::find_intersecting_pairs(p, tris)) crossing.push_back(pair.a), crossing.push_back(pair.b);
-    for (uint32_t f = 0; f < tris.size(); ++f)
-      if (check::triangle_is_degenerate(p, tris[f])) crossing.push_back(f);
-    std::sort(crossing.begin(), crossing.end());
-    crossing.erase(std::unique(crossing.begin(), crossing.end()), crossing.end());
+    crossing = check::intersecting_triangles(p, tris);
   }
   for (uint32_t f : crossing)
     if (f < flags.size()) flags[f] |= kSelfIntersecting;

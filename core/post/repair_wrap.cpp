@@ -9,19 +9,9 @@
 
 namespace vdbwrap::post {
 
-std::vector<uint32_t> intersecting_triangles(const std::vector<Vec3>& points, const std::vector<Tri>& triangles) {
-  std::vector<uint32_t> out;
-  for (const auto& p : check::find_intersecting_pairs(points, triangles)) out.push_back(p.a), out.push_back(p.b);
-  for (uint32_t f = 0; f < triangles.size(); ++f)
-    if (check::triangle_is_degenerate(points, triangles[f])) out.push_back(f);
-  std::sort(out.begin(), out.end());
-  out.erase(std::unique(out.begin(), out.end()), out.end());
-  return out;
-}
-
 WrapRepairOutcome repair_intersections(PostSurface& s, double max_deviation, bool float_coordinates, ProgressSink* progress) {
   WrapRepairOutcome out;
-  out.intersecting_before = intersecting_triangles(s.points, s.triangles).size();
+  out.intersecting_before = check::intersecting_triangles(s.points, s.triangles).size();
   if (out.intersecting_before == 0) return out;
   out.ran = true;
   if (progress)
@@ -65,7 +55,7 @@ WrapRepairOutcome repair_intersections(PostSurface& s, double max_deviation, boo
   s = std::move(next);
 
   const RepairReport& r = result.report;
-  out.intersecting_after = intersecting_triangles(s.points, s.triangles).size();
+  out.intersecting_after = check::intersecting_triangles(s.points, s.triangles).size();
   char text[256];
   std::snprintf(text, sizeof text, "%zu regions: %zu fixed by local operations, %zu by refill, %zu left", r.regions_found,
                 r.fixed_by_local, r.fixed_by_refill, r.left_unfixed);

@@ -16,9 +16,6 @@ struct WrapRepairOutcome {
   std::string summary;  // regions found and fixed, or where the unfixed ones are
 };
 
-// Triangles of the surface that intersect another or are degenerate (exact predicates).
-std::vector<uint32_t> intersecting_triangles(const std::vector<Vec3>& points, const std::vector<Tri>& triangles);
-
 // Repairs the intersections of `surface` when it has any (moves within max_deviation, model
 // units; no piece is deleted: a wrap loses no body). Per-point data follow their points; new
 // points take the smallest cell size of their neighbours and are not locked.

@@ -32,16 +32,6 @@ Refill fail(const std::string& why) {
   return r;
 }
 
-// Live triangles on edge (u, v).
-size_t edge_use(const std::vector<Tri>& triangles, const VertexFaces& faces, uint32_t u, uint32_t v) {
-  size_t n = 0;
-  for (const uint32_t* f = faces.begin(u); f != faces.end(u); ++f) {
-    const Tri& t = triangles[*f];
-    n += (t[0] == v || t[1] == v || t[2] == v) ? 1 : 0;
-  }
-  return n;
-}
-
 // Points spread over a triangle set: a barycentric grid of 15 per triangle (corners, edges
 // in quarters, inside).
 std::vector<Vec3> samples_on(const std::vector<Vec3>& p, const std::vector<Tri>& tris) {

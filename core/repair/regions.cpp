@@ -147,4 +147,14 @@ std::vector<uint32_t> close_pinches(const std::vector<Tri>& all, const VertexFac
   return set;
 }
 
+// Live triangles on edge (u, v).
+size_t edge_use(const std::vector<Tri>& triangles, const VertexFaces& faces, uint32_t u, uint32_t v) {
+  size_t n = 0;
+  for (const uint32_t* f = faces.begin(u); f != faces.end(u); ++f) {
+    const Tri& t = triangles[*f];
+    n += (t[0] == v || t[1] == v || t[2] == v) ? 1 : 0;
+  }
+  return n;
+}
+
 }  // namespace vdbwrap::local_repair

@@ -22,6 +22,9 @@ struct VertexFaces {
 };
 VertexFaces vertex_faces(size_t point_count, const std::vector<Tri>& triangles);
 
+// Live triangles on edge (u, v).
+size_t edge_use(const std::vector<Tri>& triangles, const VertexFaces& faces, uint32_t u, uint32_t v);
+
 // Splits `triangles` into regions that share no vertex: two triangles are in one region when
 // they share a vertex or form one of `pairs`. Regions and their triangles are sorted.
 std::vector<std::vector<uint32_t>> group_regions(const std::vector<Tri>& all, const std::vector<uint32_t>& triangles,

@@ -10,16 +10,6 @@
 namespace vdbwrap::local_repair {
 namespace {
 
-// Live triangles on edge (u, v).
-size_t edge_use(const std::vector<Tri>& all, const VertexFaces& faces, uint32_t u, uint32_t v) {
-  size_t n = 0;
-  for (const uint32_t* f = faces.begin(u); f != faces.end(u); ++f) {
-    const Tri& t = all[*f];
-    n += (t[0] == v || t[1] == v || t[2] == v) ? 1 : 0;
-  }
-  return n;
-}
-
 bool on_border(const std::vector<Tri>& all, const VertexFaces& faces, uint32_t v) {
   for (const uint32_t* f = faces.begin(v); f != faces.end(v); ++f)
     for (uint32_t x : all[*f])
@@ -38,7 +28,7 @@ Stitches find_stitches(const std::vector<Vec3>& points, const std::vector<Tri>& 
   std::unordered_map<uint32_t, bool> border;
   auto is_border = [&](uint32_t v) {
     auto it = border.find(v);
-    return it != border.end() ? it->second : border[v] = on_border(triangles, faces, v);
+    return it != border.end() ? it->second : (border[v] = on_border(triangles, faces, v));
   };
   for (const auto& p : pairs) {
     if (p.a == p.b) continue;
