@@ -265,6 +265,10 @@ TEST(PartSizes, RefineOnlyTheNamedPart) {
   WrapResult after = wrap(m, sized);
   expect_valid(after.surface);
   const Vec3 llo{-1, -1, -1}, lhi{1.5, 2, 2}, rlo{1.5, -1, -1}, rhi{4, 2, 2};
-  EXPECT_EQ(triangles_with_centroid_in(after.surface, llo, lhi), triangles_with_centroid_in(before.surface, llo, lhi));
+  // The left box keeps its cells. Its triangle count may move by a few: coarsening and
+  // remeshing take nodes in an order that interleaves both boxes' nodes, and the right box's
+  // finer lattice renumbers them. Refinement of the left box would multiply it by 16.
+  const double left_before = double(triangles_with_centroid_in(before.surface, llo, lhi));
+  EXPECT_NEAR(double(triangles_with_centroid_in(after.surface, llo, lhi)), left_before, 0.02 * left_before);
   EXPECT_GT(triangles_with_centroid_in(after.surface, rlo, rhi), 8 * triangles_with_centroid_in(before.surface, rlo, rhi));
 }

@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "check/intersections.h"
+#include "common/closest_point.h"
 #include "common/vec.h"
 #include "extract/extract_surface.h"
 #include "fit/fit_surface.h"
@@ -97,4 +98,75 @@ TEST(Projection, ValidityLoopHoldsNodesBackInsteadOfFolding) {
   EXPECT_TRUE(check::mesh_self_intersecting_faces(f.surface.points, f.surface.triangles).empty());
   for (const Tri& t : f.surface.triangles)
     EXPECT_FALSE(check::triangle_is_degenerate(f.surface.points, t));
+}
+
+namespace {
+// A CAD-like surface of slivers: a fan cap of 200 spokes and a cylinder side of full-length
+// triangles, tilted so that no box is thin.
+Mesh sliver_mesh() {
+  Mesh m;
+  const int n = 200;
+  const double r = 1.0, h = 3.0;
+  m.points.push_back({0, 0, 0});
+  for (int i = 0; i < n; ++i) {
+    const double a = 2 * M_PI * i / n;
+    m.points.push_back({r * std::cos(a), r * std::sin(a), 0});
+  }
+  for (int i = 0; i < n; ++i) m.points.push_back({r * std::cos(2 * M_PI * i / n), r * std::sin(2 * M_PI * i / n), h});
+  for (uint32_t i = 0; i < uint32_t(n); ++i) {
+    const uint32_t a = 1 + i, b = 1 + (i + 1) % n;
+    m.triangles.push_back({0, b, a});
+    m.triangles.push_back({a, b, b + n});
+    m.triangles.push_back({a, b + n, a + n});
+  }
+  // A finely tessellated plate beside it: the typical triangle is small, so the slivers are
+  // split into many pieces.
+  const uint32_t base = uint32_t(m.points.size()), g = 40;
+  for (uint32_t i = 0; i <= g; ++i)
+    for (uint32_t j = 0; j <= g; ++j) m.points.push_back({1.5 + 0.02 * i, -0.4 + 0.02 * j, 0.3 * std::sin(0.2 * i)});
+  for (uint32_t i = 0; i < g; ++i)
+    for (uint32_t j = 0; j < g; ++j) {
+      const uint32_t a = base + i * (g + 1) + j;
+      m.triangles.push_back({a, a + g + 1, a + 1});
+      m.triangles.push_back({a + 1, a + g + 1, a + g + 2});
+    }
+  for (auto& p : m.points) {  // tilt about x and y
+    const double y = p[1] * std::cos(0.5) - p[2] * std::sin(0.5), z = p[1] * std::sin(0.5) + p[2] * std::cos(0.5);
+    const double x = p[0] * std::cos(0.3) + z * std::sin(0.3), z2 = -p[0] * std::sin(0.3) + z * std::cos(0.3);
+    p = {x, y, z2};
+  }
+  return m;
+}
+}  // namespace
+
+// The index splits long thin triangles into pieces for its tree; every answer must still be the
+// nearest point of the whole triangle set.
+TEST(SurfaceIndex, NearestPointsAreExactOnSliversAndFans) {
+  const Mesh m = sliver_mesh();
+  fit::SurfaceIndex index(m.points, m.triangles);
+  uint64_t state = 12345;
+  auto uniform = [&](double lo, double hi) {
+    state = state * 6364136223846793005ull + 1442695040888963407ull;
+    return lo + (hi - lo) * double(state >> 11) / double(1ull << 53);
+  };
+  for (int k = 0; k < 3000; ++k) {
+    const Vec3 q{uniform(-2, 3), uniform(-2, 3), uniform(-2, 4)};
+    double best = INFINITY;
+    for (const Tri& t : m.triangles) best = std::min(best, norm2(closest_on_triangle(q, m.points[t[0]], m.points[t[1]], m.points[t[2]]) - q));
+    const auto hit = index.closest(q);
+    ASSERT_NEAR(hit.squared_distance, best, 1e-12 * (1 + best)) << "query " << k;
+    ASSERT_NEAR(norm2(hit.point - q), best, 1e-9 * (1 + best));
+    const Tri& t = m.triangles[hit.triangle];
+    EXPECT_NEAR(norm2(closest_on_triangle(q, m.points[t[0]], m.points[t[1]], m.points[t[2]]) - q), best, 1e-12 * (1 + best));
+    const double d = std::sqrt(best);
+    EXPECT_TRUE(index.within(q, d * 1.001 + 1e-12));
+    if (d > 1e-6) EXPECT_FALSE(index.within(q, d * 0.999));
+  }
+}
+
+TEST(SurfaceIndex, EmptyInputAnswersWithoutCrashing) {
+  fit::SurfaceIndex index({}, {});
+  EXPECT_FALSE(index.within({0, 0, 0}, 1.0));
+  EXPECT_EQ(index.closest({0, 0, 0}).triangle, UINT32_MAX);
+  EXPECT_FALSE(index.touches({0, 0, 0}, {1, 0, 0}, {0, 1, 0}));
 }
