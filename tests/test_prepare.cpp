@@ -4,6 +4,7 @@
 #include <random>
 
 #include "check/intersections.h"
+#include "common/vec.h"
 #include "prep/prepare.h"
 #include "test_meshes.h"
 
@@ -116,6 +117,45 @@ TEST(Intersections, FansMeetOnlyAtTheirCentreUnlessTheyOverlapOrFold) {
   // The same pair with the second triangle lifted off the plane on one side: apart.
   p[3] = {0.2, 0.2, 0.1};
   EXPECT_FALSE(check::triangle_pair_intersects(p, {0, 1, 2}, {0, 3, 4}));
+}
+
+// The pair search buckets triangles on a grid sized by the typical triangle and sends the
+// ones spanning many cells to CGAL's box intersection. Against every pair tested directly, on
+// a soup of small triangles, long slivers, large triangles and a flat fan (many in one cell),
+// with shared vertices and exact touches on cell boundaries: the same pairs, each once.
+TEST(Intersections, PairSearchFindsEveryPairOnce) {
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  Mesh m;
+  auto add = [&](const Vec3& a, const Vec3& b, const Vec3& c) {
+    const uint32_t n = uint32_t(m.points.size());
+    m.points.insert(m.points.end(), {a, b, c});
+    m.triangles.push_back({n, n + 1, n + 2});
+  };
+  for (int k = 0; k < 1500; ++k) {  // small ones, on a lattice of 0.01 so boxes meet on cell faces
+    const Vec3 o{std::round(u(rng) * 100) / 100, std::round(u(rng) * 100) / 100, std::round(u(rng) * 100) / 100};
+    add(o, o + Vec3{0.02, 0, 0}, o + Vec3{0, 0.01 * std::round(u(rng) * 2 + 1), 0.01 * std::round(u(rng) * 2)});
+  }
+  for (int k = 0; k < 30; ++k) {  // slivers and large ones
+    const Vec3 a{u(rng), u(rng), u(rng)}, b{u(rng), u(rng), u(rng)};
+    add(a, b, a + Vec3{0.003, 0.002 * u(rng), 0.001});
+    add(a, b, Vec3{u(rng), u(rng), u(rng)});
+  }
+  const uint32_t centre = uint32_t(m.points.size());  // a flat fan: its spokes all meet at the centre
+  m.points.push_back({0.5, 0.5, 0.505});
+  for (int j = 0; j < 40; ++j) m.points.push_back({0.5 + 0.03 * std::cos(2 * M_PI * j / 40), 0.5 + 0.03 * std::sin(2 * M_PI * j / 40), 0.505});
+  for (uint32_t j = 0; j < 40; ++j) m.triangles.push_back({centre, centre + 1 + j, centre + 1 + (j + 1) % 40});
+  std::vector<std::pair<uint32_t, uint32_t>> expected;
+  for (uint32_t a = 0; a < m.triangles.size(); ++a) {
+    if (check::triangle_is_degenerate(m.points, m.triangles[a])) continue;
+    for (uint32_t b = a + 1; b < m.triangles.size(); ++b)
+      if (!check::triangle_is_degenerate(m.points, m.triangles[b]) && check::triangle_pair_intersects(m.points, m.triangles[a], m.triangles[b]))
+        expected.push_back({a, b});
+  }
+  ASSERT_GT(expected.size(), 100u);
+  std::vector<std::pair<uint32_t, uint32_t>> found;
+  for (const auto& p : check::find_intersecting_pairs(m.points, m.triangles)) found.push_back({p.a, p.b});
+  EXPECT_EQ(found, expected);
 }
 
 TEST(Intersections, TheFastProofsInDoublesNeverChangeTheExactAnswer) {

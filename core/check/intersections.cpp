@@ -205,6 +205,98 @@ bool triangle_is_degenerate(const std::vector<Vec3>& points, const Tri& t) {
          CGAL::collinear(to_point(points[t[0]]), to_point(points[t[1]]), to_point(points[t[2]]));
 }
 
+namespace {
+
+// Candidate pairs by a uniform grid. Most triangle sets checked here are wraps: triangles of a
+// few sizes, spread over a surface. With cells about twice the typical triangle, a cell holds a
+// handful of triangles, and sorting (cell, triangle) entries is cheaper than CGAL's box
+// intersection, which sorts and scans all boxes along each axis at each level of its segment
+// tree (measured: 1.7 s against 0.3 s for 260k wrap triangles). A pair is tested only in the
+// cell holding the low corner of the two boxes' overlap, so once. Triangles spanning many cells
+// go to CGAL's box intersection instead.
+struct GridEntry {
+  uint64_t cell;
+  uint32_t triangle;
+};
+
+bool boxes_overlap(const CGAL::Bbox_3& a, const CGAL::Bbox_3& b) {
+  return a.xmin() <= b.xmax() && b.xmin() <= a.xmax() && a.ymin() <= b.ymax() && b.ymin() <= a.ymax() && a.zmin() <= b.zmax() &&
+         b.zmin() <= a.zmax();
+}
+
+template <typename Test>
+void grid_candidate_pairs(std::vector<Box>& boxes, Test&& test) {
+  if (boxes.size() < 2) return;
+  std::vector<double> extents;
+  extents.reserve(boxes.size());
+  CGAL::Bbox_3 all;
+  for (const Box& b : boxes) {
+    extents.push_back(std::max({b.max_coord(0) - b.min_coord(0), b.max_coord(1) - b.min_coord(1), b.max_coord(2) - b.min_coord(2)}));
+    all += b.bbox();
+  }
+  std::nth_element(extents.begin(), extents.begin() + extents.size() / 2, extents.end());
+  double cell = 2 * extents[extents.size() / 2];
+  const double span = std::max({all.xmax() - all.xmin(), all.ymax() - all.ymin(), all.zmax() - all.zmin()});
+  cell = std::max(cell, span / double(1 << 20));  // 21 bits per axis in a cell key
+  if (!(cell > 0) || !std::isfinite(cell)) {
+    CGAL::box_self_intersection_d<CGAL::Parallel_if_available_tag>(boxes.begin(), boxes.end(), [&](const Box& a, const Box& b) {
+      test(uint32_t(a.handle()), uint32_t(b.handle()));
+    });
+    return;
+  }
+  const double inv = 1.0 / cell;
+  auto index = [&](double x, int axis) { return int64_t(std::floor((x - all.min(axis)) * inv)); };
+  auto key = [](int64_t i, int64_t j, int64_t k) { return (uint64_t(i) << 42) | (uint64_t(j) << 21) | uint64_t(k); };
+  constexpr int64_t max_cells = 27;  // more, and the triangle goes to the box intersection
+  std::vector<GridEntry> entries;
+  entries.reserve(boxes.size() * 4);
+  std::vector<Box> large;
+  for (size_t n = 0; n < boxes.size(); ++n) {
+    const Box& b = boxes[n];
+    int64_t lo[3], hi[3];
+    for (int a = 0; a < 3; ++a) lo[a] = index(b.min_coord(a), a), hi[a] = index(b.max_coord(a), a);
+    if ((hi[0] - lo[0] + 1) * (hi[1] - lo[1] + 1) * (hi[2] - lo[2] + 1) > max_cells) {
+      large.push_back(b);
+      continue;
+    }
+    for (int64_t i = lo[0]; i <= hi[0]; ++i)
+      for (int64_t j = lo[1]; j <= hi[1]; ++j)
+        for (int64_t k = lo[2]; k <= hi[2]; ++k) entries.push_back({key(i, j, k), uint32_t(n)});
+  }
+  std::sort(entries.begin(), entries.end(), [](const GridEntry& x, const GridEntry& y) { return x.cell != y.cell ? x.cell < y.cell : x.triangle < y.triangle; });
+  std::vector<size_t> starts;
+  for (size_t e = 0; e < entries.size(); ++e)
+    if (e == 0 || entries[e].cell != entries[e - 1].cell) starts.push_back(e);
+  starts.push_back(entries.size());
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, starts.size() - 1, 64), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t c = r.begin(); c != r.end(); ++c) {
+      const uint64_t here = entries[starts[c]].cell;
+      for (size_t x = starts[c]; x < starts[c + 1]; ++x)
+        for (size_t y = x + 1; y < starts[c + 1]; ++y) {
+          const Box &a = boxes[entries[x].triangle], &b = boxes[entries[y].triangle];
+          if (!boxes_overlap(a.bbox(), b.bbox())) continue;
+          const double cx = std::max(a.min_coord(0), b.min_coord(0)), cy = std::max(a.min_coord(1), b.min_coord(1)),
+                       cz = std::max(a.min_coord(2), b.min_coord(2));
+          if (key(index(cx, 0), index(cy, 1), index(cz, 2)) != here) continue;  // tested in that cell
+          test(uint32_t(a.handle()), uint32_t(b.handle()));
+        }
+    }
+  });
+  if (large.empty()) return;
+  std::vector<Box> small;
+  small.reserve(boxes.size() - large.size());
+  for (const Box& b : boxes) {
+    int64_t lo[3], hi[3];
+    for (int a = 0; a < 3; ++a) lo[a] = index(b.min_coord(a), a), hi[a] = index(b.max_coord(a), a);
+    if ((hi[0] - lo[0] + 1) * (hi[1] - lo[1] + 1) * (hi[2] - lo[2] + 1) <= max_cells) small.push_back(b);
+  }
+  auto report = [&](const Box& a, const Box& b) { test(uint32_t(a.handle()), uint32_t(b.handle())); };
+  CGAL::box_self_intersection_d<CGAL::Parallel_if_available_tag>(large.begin(), large.end(), report);
+  CGAL::box_intersection_d<CGAL::Parallel_if_available_tag>(large.begin(), large.end(), small.begin(), small.end(), report);
+}
+
+}  // namespace
+
 std::vector<TrianglePair> find_intersecting_pairs(const std::vector<Vec3>& points, const std::vector<Tri>& triangles) {
   std::vector<P3> p(points.size());
   for (size_t i = 0; i < points.size(); ++i) p[i] = to_point(points[i]);
@@ -216,11 +308,10 @@ std::vector<TrianglePair> find_intersecting_pairs(const std::vector<Vec3>& point
     auto bb = p[tri[0]].bbox() + p[tri[1]].bbox() + p[tri[2]].bbox();
     boxes.emplace_back(bb, t);
   }
-  // Exact tests inside the (parallel) box callback: fans and long thin CAD triangles give
+  // Exact tests inside the (parallel) candidate callback: fans and long thin CAD triangles give
   // hundreds of millions of overlapping boxes, too many to store as candidates first.
   tbb::enumerable_thread_specific<std::vector<TrianglePair>> found;
-  CGAL::box_self_intersection_d<CGAL::Parallel_if_available_tag>(boxes.begin(), boxes.end(), [&](const Box& a, const Box& b) {
-    const uint32_t x = uint32_t(a.handle()), y = uint32_t(b.handle());
+  grid_candidate_pairs(boxes, [&](uint32_t x, uint32_t y) {
     if (triangles_intersect(p, triangles[x], triangles[y])) found.local().push_back({std::min(x, y), std::max(x, y)});
   });
   std::vector<TrianglePair> out;
