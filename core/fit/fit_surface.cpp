@@ -236,12 +236,18 @@ FittedSurface fit_to_input(const extract::LatticeSurface& surf, const grid::Adap
   // A split that puts two traced sides into one triangle is avoided: their three nodes lie on
   // one curve, so the triangle would be flat.
   auto is_traced = [&](uint32_t a, uint32_t b) { return traced.count({std::min(a, b), std::max(a, b)}) > 0; };
-  for (const auto& q : quads) {
+  // The input's choice of diagonal for every quad, in parallel (two nearest-point queries each).
+  std::vector<uint8_t> input_prefers_02(quads.size());
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, quads.size(), 512), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t k = r.begin(); k != r.end(); ++k) input_prefers_02[k] = split_along_02(quads[k], target, input, min_area2);
+  });
+  for (size_t k = 0; k < quads.size(); ++k) {
+    const auto& q = quads[k];
     const bool side[4] = {is_traced(q[0], q[1]), is_traced(q[1], q[2]), is_traced(q[2], q[3]), is_traced(q[3], q[0])};
     bool along02 = is_traced(q[0], q[2]) || (side[0] && side[3]) || (side[1] && side[2]);
     bool along13 = is_traced(q[1], q[3]) || (side[0] && side[1]) || (side[2] && side[3]);
     if (along02 == along13) along02 = along13 = false;  // both or neither: the input decides
-    if (along02 || (!along13 && split_along_02(q, target, input, min_area2))) {
+    if (along02 || (!along13 && input_prefers_02[k])) {
       out.triangles.push_back({q[0], q[1], q[2]});
       out.triangles.push_back({q[0], q[2], q[3]});
     } else {
