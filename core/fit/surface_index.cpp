@@ -27,7 +27,6 @@ using Triangle = K::Triangle_3;
 struct Piece {
   uint32_t triangle;
   CGAL::Bbox_3 box;
-  K::Point_3 reference;  // the part's centroid, for the tree's splits
 };
 
 class PiecePrimitive {
@@ -36,13 +35,16 @@ class PiecePrimitive {
   using Datum = Triangle;
   using Datum_reference = const Triangle&;
   using Point = K::Point_3;
-  using Point_reference = const K::Point_3&;
+  using Point_reference = K::Point_3;  // the centre of the part's box, for the tree's splits
   PiecePrimitive() = default;
   PiecePrimitive(std::vector<Piece>::const_iterator it, const std::vector<Triangle>* triangles)
       : piece_(&*it), triangles_(triangles) {}
   Id id() const { return piece_; }
   Datum_reference datum() const { return (*triangles_)[piece_->triangle]; }
-  Point_reference reference_point() const { return piece_->reference; }
+  Point_reference reference_point() const {
+    const CGAL::Bbox_3& b = piece_->box;
+    return {0.5 * (b.xmin() + b.xmax()), 0.5 * (b.ymin() + b.ymax()), 0.5 * (b.zmin() + b.zmax())};
+  }
 
  private:
   const Piece* piece_ = nullptr;
@@ -73,7 +75,7 @@ double diagonal(const CGAL::Bbox_3& b) {
 void add_pieces(uint32_t triangle, const Vec3& a, const Vec3& b, const Vec3& c, double size, int depth, std::vector<Piece>& out) {
   const CGAL::Bbox_3 box = box_of(a, b, c);
   if (depth == 0 || diagonal(box) <= size) {
-    out.push_back({triangle, box, point((a + b + c) * (1.0 / 3.0))});
+    out.push_back({triangle, box});
     return;
   }
   const double ab = norm2(b - a), bc = norm2(c - b), ca = norm2(a - c);
@@ -168,13 +170,14 @@ SurfaceIndex::SurfaceIndex(const std::vector<Vec3>& points, const std::vector<Tr
   }
   if (triangles.empty()) return;
   // Parts no larger than twice the typical triangle: the typical one stays whole, and a sliver
-  // becomes a chain of parts of about that size (at most 64).
+  // becomes a chain of parts of about that size, at most 16 (measured on a CAD assembly: 16
+  // parts as fast as 64, with 30 MB less; 8 slower).
   std::nth_element(sizes.begin(), sizes.begin() + sizes.size() / 2, sizes.end());
   const double size = 2 * sizes[sizes.size() / 2];
   impl_->pieces.reserve(triangles.size() + triangles.size() / 4);
   for (uint32_t f = 0; f < triangles.size(); ++f) {
     const Tri& t = triangles[f];
-    add_pieces(f, points[t[0]], points[t[1]], points[t[2]], size, 6, impl_->pieces);
+    add_pieces(f, points[t[0]], points[t[1]], points[t[2]], size, 4, impl_->pieces);
   }
   impl_->tree.insert(impl_->pieces.cbegin(), impl_->pieces.cend(), &impl_->triangles);
   impl_->tree.build();
