@@ -233,6 +233,27 @@ TEST(FeatureInsertion, BuriedIntersectionLinesDoNotPullTheWrapIn) {
   EXPECT_GT(f.nodes_snapped, 0u);
 }
 
+// The visits' probes are made in parallel and made again where an accepted change came
+// within reach: the nodes placed, and the whole wrap, must not depend on the thread count.
+// octagonal_pocket has concave creases the traced chains miss, so nodes are inserted, moved
+// and refused.
+TEST(FeatureInsertion, OneThreadAndTwoPlaceTheSameNodes) {
+  const Mesh input = io::read_mesh(data_path("octagonal_pocket.stl"));
+  WrapParams one, two;
+  one.threads = 1;
+  two.threads = 2;
+  one.compute_distances = two.compute_distances = false;
+  const WrapResult a = wrap(input, one), b = wrap(input, two);
+  const auto &fa = a.report.features, &fb = b.report.features;
+  ASSERT_GT(fa.nodes_inserted, 10u);
+  EXPECT_GT(fa.inserts_refused, 0u);
+  EXPECT_EQ(fa.nodes_inserted, fb.nodes_inserted);
+  EXPECT_EQ(fa.nodes_moved, fb.nodes_moved);
+  EXPECT_EQ(fa.inserts_refused, fb.inserts_refused);
+  EXPECT_EQ(a.surface.triangles, b.surface.triangles);
+  EXPECT_EQ(a.surface.points, b.surface.points);
+}
+
 // The CAD-like corpus meshes of the issue: valid, edges far closer than without snapping.
 class CorpusFeatures : public ::testing::TestWithParam<const char*> {};
 
