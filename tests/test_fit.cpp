@@ -164,6 +164,43 @@ TEST(SurfaceIndex, NearestPointsAreExactOnSliversAndFans) {
   }
 }
 
+// Each query starts from the triangle the thread found last, so answers must not depend on
+// the order of queries: the nearest triangle, the lowest index among equally near ones. On a
+// grid of exactly coplanar triangles, many queries are equally near several triangles.
+TEST(SurfaceIndex, AnswersDoNotDependOnTheOrderOfQueries) {
+  Mesh m = sliver_mesh();
+  std::vector<Vec3> queries;
+  for (int i = 0; i <= 40; ++i)
+    for (int j = 0; j <= 40; ++j) {
+      queries.push_back({1.5 + 0.01 * i, -0.4 + 0.02 * j, 0.5});   // over vertices and edges of the plate
+      queries.push_back({0.05 * i - 1, 0.05 * j - 1, 4.0});        // far above the fan's side
+    }
+  fit::SurfaceIndex index(m.points, m.triangles);
+  std::vector<fit::SurfaceIndex::Hit> forward, backward(queries.size());
+  for (const Vec3& q : queries) forward.push_back(index.closest(q));
+  for (size_t k = queries.size(); k-- > 0;) backward[k] = index.closest(queries[k]);
+  size_t ties = 0;
+  for (size_t k = 0; k < queries.size(); ++k) {
+    ASSERT_EQ(forward[k].triangle, backward[k].triangle) << "query " << k;
+    ASSERT_EQ(forward[k].point, backward[k].point) << "query " << k;
+    ASSERT_EQ(forward[k].squared_distance, backward[k].squared_distance);
+    // The lowest index among the equally near triangles.
+    const Vec3& q = queries[k];
+    uint32_t lowest = UINT32_MAX;
+    size_t equal = 0;
+    for (uint32_t f = 0; f < m.triangles.size(); ++f) {
+      const Tri& t = m.triangles[f];
+      if (norm2(closest_on_triangle(q, m.points[t[0]], m.points[t[1]], m.points[t[2]]) - q) == forward[k].squared_distance) {
+        lowest = std::min(lowest, f);
+        ++equal;
+      }
+    }
+    EXPECT_EQ(forward[k].triangle, lowest) << "query " << k;
+    ties += equal > 1;
+  }
+  EXPECT_GT(ties, 100u) << "the test needs queries equally near several triangles";
+}
+
 TEST(SurfaceIndex, EmptyInputAnswersWithoutCrashing) {
   fit::SurfaceIndex index({}, {});
   EXPECT_FALSE(index.within({0, 0, 0}, 1.0));

@@ -107,25 +107,27 @@ double squared_distance_to(const Vec3& q, const Triangle& t, Vec3& nearest) {
 }
 
 // Nearest triangle to a point, for CGAL's traversal_with_priority: the nearer child box first,
-// a box only while it may hold something nearer, and Ericson's closest point on a triangle
-// (CGAL's Construct_projected_point_3 and its sphere-against-box tests cost more). A function of
-// the query alone: the traversal order and ties (the first found stays) do not depend on
-// earlier queries. A triangle met again through another of its pieces gives the same distance
-// and changes nothing.
+// a box only while it may hold something as near, and Ericson's closest point on a triangle
+// (CGAL's Construct_projected_point_3 and its sphere-against-box tests cost more).
+// The answer is canonical: the nearest triangle, and among equally near ones the lowest index.
+// It therefore depends on the query alone, not on the traversal order nor on the start (a
+// triangle near the last query's answer, see closest()), so it is the same on any thread.
 class NearestTraits {
  public:
   using Priority = double;
   explicit NearestTraits(const Vec3& q) : q_(q) {}
   bool go_further() const { return true; }
-  void intersection(const K::Point_3&, const PiecePrimitive& primitive) {
+  void consider(uint32_t triangle, const Triangle& t) {
     Vec3 nearest;
-    const double d2 = squared_distance_to(q_, primitive.datum(), nearest);
-    if (d2 < best_d2) best_d2 = d2, best_point = nearest, best = primitive.id()->triangle;
+    const double d2 = squared_distance_to(q_, t, nearest);
+    if (d2 < best_d2 || (d2 == best_d2 && triangle < best)) best_d2 = d2, best_point = nearest, best = triangle;
   }
-  bool do_intersect(const K::Point_3&, const Node& node) const { return squared_distance_to_box(q_, node.bbox()) < best_d2; }
+  void intersection(const K::Point_3&, const PiecePrimitive& primitive) { consider(primitive.id()->triangle, primitive.datum()); }
+  // A box as near as the best is still opened: it may hold an equally near, lower triangle.
+  bool do_intersect(const K::Point_3&, const Node& node) const { return squared_distance_to_box(q_, node.bbox()) <= best_d2; }
   std::pair<bool, Priority> do_intersect_with_priority(const K::Point_3&, const Node& node) const {
     const double d2 = squared_distance_to_box(q_, node.bbox());
-    return {d2 < best_d2, -d2};
+    return {d2 <= best_d2, -d2};
   }
   double best_d2 = std::numeric_limits<double>::infinity();
   Vec3 best_point{0, 0, 0};
@@ -186,11 +188,16 @@ SurfaceIndex::SurfaceIndex(const std::vector<Vec3>& points, const std::vector<Tr
 SurfaceIndex::~SurfaceIndex() = default;
 
 SurfaceIndex::Hit SurfaceIndex::closest(const Vec3& q) const {
-  // No start hint: the nearer-box-first order finds a near triangle at once, and the answer is
-  // a function of the query (where two triangles are equally near, the same one wins on every
-  // run and thread count).
+  // Start from the triangle this thread found last on this index: queries come in runs along
+  // a surface, so it is usually near, and a near start prunes most of the tree. The answer
+  // does not depend on it (see NearestTraits).
+  thread_local const Impl* last_index = nullptr;
+  thread_local uint32_t last_triangle = UINT32_MAX;
   NearestTraits traits(q);
+  if (last_index == impl_.get() && last_triangle < impl_->triangles.size())
+    traits.consider(last_triangle, impl_->triangles[last_triangle]);
   impl_->tree.traversal_with_priority(point(q), traits);
+  last_index = impl_.get(), last_triangle = traits.best;
   Hit hit;
   if (traits.best == UINT32_MAX) {  // no input triangles
     hit.point = q, hit.triangle = UINT32_MAX, hit.squared_distance = traits.best_d2, hit.normal = {0, 0, 0};
