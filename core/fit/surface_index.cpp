@@ -144,10 +144,11 @@ class WithinTraits {
   bool go_further() const { return !found; }
   void intersection(const K::Point_3&, const PiecePrimitive& primitive) {
     Vec3 nearest;
-    if (squared_distance_to(q_, primitive.datum(), nearest) <= r2_) found = true;
+    if (squared_distance_to(q_, primitive.datum(), nearest) <= r2_) found = true, triangle = primitive.id()->triangle;
   }
   bool do_intersect(const K::Point_3&, const Node& node) const { return squared_distance_to_box(q_, node.bbox()) <= r2_; }
   bool found = false;
+  uint32_t triangle = UINT32_MAX;
 
  private:
   Vec3 q_;
@@ -214,8 +215,17 @@ SurfaceIndex::Hit SurfaceIndex::closest(const Vec3& q) const {
 }
 
 bool SurfaceIndex::within(const Vec3& q, double radius) const {
+  // The triangle that answered this thread's last query on this index is tried first: queries
+  // come in runs along a surface. (A yes or no does not depend on which triangle says it.)
+  thread_local const Impl* last_index = nullptr;
+  thread_local uint32_t last_triangle = UINT32_MAX;
+  if (last_index == impl_.get() && last_triangle < impl_->triangles.size()) {
+    Vec3 nearest;
+    if (squared_distance_to(q, impl_->triangles[last_triangle], nearest) <= radius * radius) return true;
+  }
   WithinTraits traits(q, radius);
   impl_->tree.traversal(point(q), traits);
+  if (traits.found) last_index = impl_.get(), last_triangle = traits.triangle;
   return traits.found;
 }
 
