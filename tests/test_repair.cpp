@@ -746,12 +746,6 @@ TEST(Repair, SameInputGivesTheSameOutputWhateverTheThreads) {
   }
 }
 
-double enclosed_volume(const Mesh& m) {
-  double v = 0;
-  for (const Tri& t : m.triangles) v += dot(m.points[t[0]], cross(m.points[t[1]], m.points[t[2]])) / 6;
-  return v;
-}
-
 TEST(Repair, WallsOverlappingFaceToFaceAreUnited) {
   // Two walls of a box exported as one mesh (box.STL), sharing no vertex: the first runs into
   // the second over its whole thickness, so they overlap in a 0.1 x 0.1 prism and lie face to
@@ -777,7 +771,7 @@ TEST(Repair, WallsOverlappingFaceToFaceAreUnited) {
   EXPECT_EQ(border_edges(r.mesh), 0u);
   EXPECT_EQ(nonmanifold_edges(r.mesh), 0u);
   EXPECT_EQ(r.report.after.components, 1u);
-  EXPECT_NEAR(enclosed_volume(r.mesh), 0.1 + 0.1 - 0.01, 1e-9);  // the union's volume
+  EXPECT_NEAR(diagnose(r.mesh).volume, 0.1 + 0.1 - 0.01, 1e-9);  // the union's volume
   // Nothing moved: the output lies on the input (the buried prism's faces are not measured).
   EXPECT_LE(r.report.deviation, 1e-9);
   EXPECT_LE(r.report.output_to_input.max, 1e-9);
@@ -837,7 +831,7 @@ TEST(Repair, BoxesCrossingAlongCurvesAreUnitedWhenRefillsFail) {
   auto verdict = vdbwrap::testing::valid_closed_surface(r.mesh);
   EXPECT_TRUE(verdict.ok) << verdict.why;
   EXPECT_GT(r.report.fixed_by_union, 0u);
-  EXPECT_NEAR(enclosed_volume(r.mesh), 1 + 0.16 - 0.08, 1e-9);
+  EXPECT_NEAR(diagnose(r.mesh).volume, 1 + 0.16 - 0.08, 1e-9);
   EXPECT_LE(r.report.deviation, 1e-9);  // the bar's buried end is inside the union: not measured
   EXPECT_GT(std::count(r.mesh.triangle_part.begin(), r.mesh.triangle_part.end(), 1), 0);
 }

@@ -219,11 +219,6 @@ struct GridEntry {
   uint32_t triangle;
 };
 
-bool boxes_overlap(const CGAL::Bbox_3& a, const CGAL::Bbox_3& b) {
-  return a.xmin() <= b.xmax() && b.xmin() <= a.xmax() && a.ymin() <= b.ymax() && b.ymin() <= a.ymax() && a.zmin() <= b.zmax() &&
-         b.zmin() <= a.zmax();
-}
-
 template <typename Test>
 void grid_candidate_pairs(std::vector<Box>& boxes, Test&& test) {
   if (boxes.size() < 2) return;
@@ -251,12 +246,14 @@ void grid_candidate_pairs(std::vector<Box>& boxes, Test&& test) {
   std::vector<GridEntry> entries;
   entries.reserve(boxes.size() * 4);
   std::vector<Box> large;
+  std::vector<uint8_t> is_large(boxes.size(), 0);
   for (size_t n = 0; n < boxes.size(); ++n) {
     const Box& b = boxes[n];
     int64_t lo[3], hi[3];
     for (int a = 0; a < 3; ++a) lo[a] = index(b.min_coord(a), a), hi[a] = index(b.max_coord(a), a);
     if ((hi[0] - lo[0] + 1) * (hi[1] - lo[1] + 1) * (hi[2] - lo[2] + 1) > max_cells) {
       large.push_back(b);
+      is_large[n] = 1;
       continue;
     }
     for (int64_t i = lo[0]; i <= hi[0]; ++i)
@@ -274,7 +271,7 @@ void grid_candidate_pairs(std::vector<Box>& boxes, Test&& test) {
       for (size_t x = starts[c]; x < starts[c + 1]; ++x)
         for (size_t y = x + 1; y < starts[c + 1]; ++y) {
           const Box &a = boxes[entries[x].triangle], &b = boxes[entries[y].triangle];
-          if (!boxes_overlap(a.bbox(), b.bbox())) continue;
+          if (!CGAL::do_overlap(a.bbox(), b.bbox())) continue;
           const double cx = std::max(a.min_coord(0), b.min_coord(0)), cy = std::max(a.min_coord(1), b.min_coord(1)),
                        cz = std::max(a.min_coord(2), b.min_coord(2));
           if (key(index(cx, 0), index(cy, 1), index(cz, 2)) != here) continue;  // tested in that cell
@@ -285,11 +282,8 @@ void grid_candidate_pairs(std::vector<Box>& boxes, Test&& test) {
   if (large.empty()) return;
   std::vector<Box> small;
   small.reserve(boxes.size() - large.size());
-  for (const Box& b : boxes) {
-    int64_t lo[3], hi[3];
-    for (int a = 0; a < 3; ++a) lo[a] = index(b.min_coord(a), a), hi[a] = index(b.max_coord(a), a);
-    if ((hi[0] - lo[0] + 1) * (hi[1] - lo[1] + 1) * (hi[2] - lo[2] + 1) <= max_cells) small.push_back(b);
-  }
+  for (size_t n = 0; n < boxes.size(); ++n)
+    if (!is_large[n]) small.push_back(boxes[n]);
   auto report = [&](const Box& a, const Box& b) { test(uint32_t(a.handle()), uint32_t(b.handle())); };
   CGAL::box_self_intersection_d<CGAL::Parallel_if_available_tag>(large.begin(), large.end(), report);
   CGAL::box_intersection_d<CGAL::Parallel_if_available_tag>(large.begin(), large.end(), small.begin(), small.end(), report);

@@ -20,6 +20,7 @@
 
 #include "check/distance_stats.h"
 #include "check/intersections.h"
+#include "common/edge_key.h"
 #include "common/float_round.h"
 #include "common/stage_timer.h"
 #include "common/vec.h"
@@ -779,7 +780,7 @@ size_t run_unite(Work& w, const RepairParams& params, double max_dev, const fit:
       if (local_repair::is_dead(tri)) continue;
       for (int k = 0; k < 3; ++k) {
         const uint32_t u = tri[k], v = tri[(k + 1) % 3];
-        auto [it, added] = first_on_edge.emplace(u < v ? (uint64_t(u) << 32 | v) : (uint64_t(v) << 32 | u), t);
+        auto [it, added] = first_on_edge.emplace(edge_key(u, v), t);
         if (!added) parent[find(t)] = find(it->second);
       }
     }
@@ -997,6 +998,14 @@ void remove_small_pieces(Work& w, const RepairParams& params, double max_dev, Re
 
 // ---------------------------------------------------------------------------------------
 
+// The triangles still there (not dead).
+std::vector<Tri> live_triangles(const Work& w) {
+  std::vector<Tri> live;
+  for (const Tri& t : w.tris)
+    if (!local_repair::is_dead(t)) live.push_back(t);
+  return live;
+}
+
 // The live triangles and the points they use, points in their order (an untouched welded
 // mesh comes out as it went in).
 Mesh compact(const Work& w, const Mesh& input) {
@@ -1096,10 +1105,7 @@ RepairResult run_repair(const Mesh& input, const RepairParams& params, ProgressS
     by_union.assign(report.regions_found, 0);
     solids.clear();
     if (!first.empty()) {
-      std::vector<Tri> live;
-      for (const Tri& t : w.tris)
-        if (!local_repair::is_dead(t)) live.push_back(t);
-      fit::SurfaceIndex input(w.origin, live);
+      fit::SurfaceIndex input(w.origin, live_triangles(w));
       unite(input, &first);
     }
     {
@@ -1108,11 +1114,8 @@ RepairResult run_repair(const Mesh& input, const RepairParams& params, ProgressS
     }
     clean_after_local = clean_regions();
     if (!w.pairs.empty() && params.refill_iterations > 0) {
-      Mesh original{w.origin, {}, {}, {}};
-      for (const Tri& t : w.tris)
-        if (!local_repair::is_dead(t)) original.triangles.push_back(t);
       // The input surface as it came (vertices at their starting places).
-      fit::SurfaceIndex index(w.origin, original.triangles);
+      fit::SurfaceIndex index(w.origin, live_triangles(w));
       {
         StageTimer timer("remove and refill", report.stages);
         run_refill(w, params, report.max_deviation, index, report, progress);
