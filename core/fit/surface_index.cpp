@@ -10,6 +10,11 @@
 #include <limits>
 #include <utility>
 
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_sort.h>
+
+#include "common/box_overlap.h"
 #include "common/closest_point.h"
 #include "common/vec.h"
 
@@ -19,28 +24,41 @@ namespace {
 using K = CGAL::Simple_cartesian<double>;
 using Triangle = K::Triangle_3;
 
-// The tree holds pieces of triangles, not triangles. A long thin triangle (a CAD cylinder's side,
-// a fan cap's spoke) has a box far larger than itself, and every query near that box had to test
-// it: on a CAD assembly a nearest-point query tested 140 triangles. Each piece has the box of one
-// part of its triangle (the parts cover the triangle), while its datum stays the whole triangle,
-// so every answer is the same as with whole triangles.
+// The tree holds pieces, not triangles. A long thin triangle (a CAD cylinder's side, a fan
+// cap's spoke) has a box far larger than itself, and every query near that box had to test it.
+// Triangles no larger than about the typical one are a piece each. A longer one is cut by a
+// grid of cells of about the typical triangle's size: each cell it passes through is a piece
+// holding every long triangle that passes through it, with the cell's box clipped to theirs.
+// Pieces only bound where a triangle may be; a query always tests whole triangles, so every
+// answer is the same as with whole triangles.
+//
+// Why cells and not parts of each triangle: side by side slivers of width w are each split
+// into parts whose boxes overlap their neighbours' parts, so a query tested (part length / w)
+// triangles, and the part length is fixed by the triangle's length. Finer tessellation of the
+// same cylinder made w smaller, so the cost per query grew with the square of the
+// tessellation, and the tree held 16 parts per sliver (1.5 GB for a 2.4M-triangle assembly). A
+// cell holds (cell size / w) slivers and each sliver is in (length / cell size) cells.
 struct Piece {
-  uint32_t triangle;
+  uint32_t first, count;  // its triangles: Store::ids[first .. first + count)
   CGAL::Bbox_3 box;
+};
+
+struct Store {
+  std::vector<Triangle> triangles;
+  std::vector<uint32_t> ids;
 };
 
 class PiecePrimitive {
  public:
   using Id = const Piece*;
-  using Datum = Triangle;
+  using Datum = Triangle;  // the first triangle; the tree's own queries are not used
   using Datum_reference = const Triangle&;
   using Point = K::Point_3;
-  using Point_reference = K::Point_3;  // the centre of the part's box, for the tree's splits
+  using Point_reference = K::Point_3;  // the centre of the piece's box, for the tree's splits
   PiecePrimitive() = default;
-  PiecePrimitive(std::vector<Piece>::const_iterator it, const std::vector<Triangle>* triangles)
-      : piece_(&*it), triangles_(triangles) {}
+  PiecePrimitive(std::vector<Piece>::const_iterator it, const Store* store) : piece_(&*it), store_(store) {}
   Id id() const { return piece_; }
-  Datum_reference datum() const { return (*triangles_)[piece_->triangle]; }
+  Datum_reference datum() const { return store_->triangles[store_->ids[piece_->first]]; }
   Point_reference reference_point() const {
     const CGAL::Bbox_3& b = piece_->box;
     return {0.5 * (b.xmin() + b.xmax()), 0.5 * (b.ymin() + b.ymax()), 0.5 * (b.zmin() + b.zmax())};
@@ -48,7 +66,7 @@ class PiecePrimitive {
 
  private:
   const Piece* piece_ = nullptr;
-  const std::vector<Triangle>* triangles_ = nullptr;
+  const Store* store_ = nullptr;
 };
 
 struct PieceBox {
@@ -66,29 +84,90 @@ CGAL::Bbox_3 box_of(const Vec3& a, const Vec3& b, const Vec3& c) {
   return {std::min({a[0], b[0], c[0]}), std::min({a[1], b[1], c[1]}), std::min({a[2], b[2], c[2]}),
           std::max({a[0], b[0], c[0]}), std::max({a[1], b[1], c[1]}), std::max({a[2], b[2], c[2]})};
 }
+CGAL::Bbox_3 box_of(const Triangle& t) { return t.bbox(); }
 double diagonal(const CGAL::Bbox_3& b) {
   return std::sqrt(std::pow(b.xmax() - b.xmin(), 2) + std::pow(b.ymax() - b.ymin(), 2) + std::pow(b.zmax() - b.zmin(), 2));
 }
 
 // Parts of triangle abc by halving the longest edge, until a part's box is no longer than
-// `size` across (at most 2^depth parts).
-void add_pieces(uint32_t triangle, const Vec3& a, const Vec3& b, const Vec3& c, double size, int depth, std::vector<Piece>& out) {
+// `size` across (at most 2^depth parts). For a triangle too large for the cell grid.
+void add_parts(const Vec3& a, const Vec3& b, const Vec3& c, double size, int depth, std::vector<CGAL::Bbox_3>& out) {
   const CGAL::Bbox_3 box = box_of(a, b, c);
   if (depth == 0 || diagonal(box) <= size) {
-    out.push_back({triangle, box});
+    out.push_back(box);
     return;
   }
   const double ab = norm2(b - a), bc = norm2(c - b), ca = norm2(a - c);
   if (ab >= bc && ab >= ca) {
     const Vec3 m = (a + b) * 0.5;
-    add_pieces(triangle, a, m, c, size, depth - 1, out), add_pieces(triangle, m, b, c, size, depth - 1, out);
+    add_parts(a, m, c, size, depth - 1, out), add_parts(m, b, c, size, depth - 1, out);
   } else if (bc >= ca) {
     const Vec3 m = (b + c) * 0.5;
-    add_pieces(triangle, a, b, m, size, depth - 1, out), add_pieces(triangle, a, m, c, size, depth - 1, out);
+    add_parts(a, b, m, size, depth - 1, out), add_parts(a, m, c, size, depth - 1, out);
   } else {
     const Vec3 m = (c + a) * 0.5;
-    add_pieces(triangle, a, b, m, size, depth - 1, out), add_pieces(triangle, m, b, c, size, depth - 1, out);
+    add_parts(a, b, m, size, depth - 1, out), add_parts(m, b, c, size, depth - 1, out);
   }
+}
+
+// The cell grid that cuts long triangles: cubes of side `cell` from `origin`, keyed by 21 bits
+// per axis.
+struct CellGrid {
+  Vec3 origin;
+  double cell;
+  int64_t index(double x, int axis) const { return int64_t(std::floor((x - origin[axis]) / cell)); }
+  static uint64_t key(int64_t i, int64_t j, int64_t k) { return (uint64_t(i) << 42) | (uint64_t(j) << 21) | uint64_t(k); }
+  // The cell's box, enlarged far beyond the rounding of the overlap test and of the halving
+  // below: a cell a triangle touches must never be missed.
+  CGAL::Bbox_3 box(uint64_t key) const {
+    const double pad = 1e-6 * cell;
+    const int64_t i = int64_t(key >> 42), j = int64_t((key >> 21) & 0x1fffff), k = int64_t(key & 0x1fffff);
+    return {origin[0] + i * cell - pad, origin[1] + j * cell - pad, origin[2] + k * cell - pad,
+            origin[0] + (i + 1) * cell + pad, origin[1] + (j + 1) * cell + pad, origin[2] + (k + 1) * cell + pad};
+  }
+};
+
+// The cells triangle abc passes through (keys, with repeats). The triangle is halved along its
+// longest edge until a part spans at most four cells per axis (fewer made more halving than
+// testing: 2.3 s against 4.6 s on a 2.4M-triangle assembly); each of those cells is tested.
+void cells_of(const Vec3& a, const Vec3& b, const Vec3& c, const CellGrid& grid, std::vector<uint64_t>& out) {
+  int64_t lo[3], hi[3];
+  bool small = true;
+  for (int k = 0; k < 3; ++k) {
+    lo[k] = grid.index(std::min({a[k], b[k], c[k]}) - 1e-6 * grid.cell, k);
+    hi[k] = grid.index(std::max({a[k], b[k], c[k]}) + 1e-6 * grid.cell, k);
+    small = small && hi[k] - lo[k] <= 3;
+  }
+  if (!small) {
+    const double ab = norm2(b - a), bc = norm2(c - b), ca = norm2(a - c);
+    if (ab >= bc && ab >= ca) {
+      const Vec3 m = (a + b) * 0.5;
+      cells_of(a, m, c, grid, out), cells_of(m, b, c, grid, out);
+    } else if (bc >= ca) {
+      const Vec3 m = (b + c) * 0.5;
+      cells_of(a, b, m, grid, out), cells_of(a, m, c, grid, out);
+    } else {
+      const Vec3 m = (c + a) * 0.5;
+      cells_of(a, b, m, grid, out), cells_of(m, b, c, grid, out);
+    }
+    return;
+  }
+  if (lo[0] == hi[0] && lo[1] == hi[1] && lo[2] == hi[2]) {  // inside one cell
+    out.push_back(CellGrid::key(lo[0], lo[1], lo[2]));
+    return;
+  }
+  // The plane test first: most cells beside a thin part are off its plane, and it is cheap.
+  const double half = 0.5 * grid.cell * (1 + 2e-6);
+  const Vec3 n = cross(b - a, c - a);
+  const double reach = half * (std::fabs(n[0]) + std::fabs(n[1]) + std::fabs(n[2]));
+  for (int64_t i = lo[0]; i <= hi[0]; ++i)
+    for (int64_t j = lo[1]; j <= hi[1]; ++j)
+      for (int64_t k = lo[2]; k <= hi[2]; ++k) {
+        const Vec3 centre{grid.origin[0] + (i + 0.5) * grid.cell, grid.origin[1] + (j + 0.5) * grid.cell,
+                          grid.origin[2] + (k + 0.5) * grid.cell};
+        if (std::fabs(dot(n, centre - a)) > reach * (1 + 1e-9)) continue;
+        if (triangle_overlaps_box(a, b, c, centre, {half, half, half})) out.push_back(CellGrid::key(i, j, k));
+      }
 }
 
 double squared_distance_to_box(const Vec3& q, const CGAL::Bbox_3& b) {
@@ -106,6 +185,19 @@ double squared_distance_to(const Vec3& q, const Triangle& t, Vec3& nearest) {
   return norm2(nearest - q);
 }
 
+// Is the triangle's box farther than d2 from q? (A cheap test before the closest point: in a
+// cell of side by side slivers most are beside the query.)
+bool box_beyond(const Vec3& q, const Triangle& t, double d2) {
+  double s = 0;
+  for (int k = 0; k < 3; ++k) {
+    const double lo = std::min({t.vertex(0)[k], t.vertex(1)[k], t.vertex(2)[k]});
+    const double hi = std::max({t.vertex(0)[k], t.vertex(1)[k], t.vertex(2)[k]});
+    const double d = lo > q[k] ? lo - q[k] : (q[k] > hi ? q[k] - hi : 0.0);
+    s += d * d;
+  }
+  return s > d2;
+}
+
 // Nearest triangle to a point, for CGAL's traversal_with_priority: the nearer child box first,
 // a box only while it may hold something as near, and Ericson's closest point on a triangle
 // (CGAL's Construct_projected_point_3 and its sphere-against-box tests cost more).
@@ -115,14 +207,20 @@ double squared_distance_to(const Vec3& q, const Triangle& t, Vec3& nearest) {
 class NearestTraits {
  public:
   using Priority = double;
-  explicit NearestTraits(const Vec3& q) : q_(q) {}
+  NearestTraits(const Vec3& q, const Store& store) : q_(q), store_(store) {}
   bool go_further() const { return true; }
-  void consider(uint32_t triangle, const Triangle& t) {
+  void consider(uint32_t triangle) {
+    const Triangle& t = store_.triangles[triangle];
+    if (box_beyond(q_, t, best_d2)) return;
     Vec3 nearest;
     const double d2 = squared_distance_to(q_, t, nearest);
     if (d2 < best_d2 || (d2 == best_d2 && triangle < best)) best_d2 = d2, best_point = nearest, best = triangle;
   }
-  void intersection(const K::Point_3&, const PiecePrimitive& primitive) { consider(primitive.id()->triangle, primitive.datum()); }
+  void intersection(const K::Point_3&, const PiecePrimitive& primitive) {
+    const Piece& piece = *primitive.id();
+    if (squared_distance_to_box(q_, piece.box) > best_d2) return;
+    for (uint32_t k = piece.first; k < piece.first + piece.count; ++k) consider(store_.ids[k]);
+  }
   // A box as near as the best is still opened: it may hold an equally near, lower triangle.
   bool do_intersect(const K::Point_3&, const Node& node) const { return squared_distance_to_box(q_, node.bbox()) <= best_d2; }
   std::pair<bool, Priority> do_intersect_with_priority(const K::Point_3&, const Node& node) const {
@@ -135,16 +233,22 @@ class NearestTraits {
 
  private:
   Vec3 q_;
+  const Store& store_;
 };
 
 // Is any triangle within a radius of a point? Stops at the first one.
 class WithinTraits {
  public:
-  WithinTraits(const Vec3& q, double radius) : q_(q), r2_(radius * radius) {}
+  WithinTraits(const Vec3& q, double radius, const Store& store) : q_(q), r2_(radius * radius), store_(store) {}
   bool go_further() const { return !found; }
   void intersection(const K::Point_3&, const PiecePrimitive& primitive) {
-    Vec3 nearest;
-    if (squared_distance_to(q_, primitive.datum(), nearest) <= r2_) found = true, triangle = primitive.id()->triangle;
+    const Piece& piece = *primitive.id();
+    if (squared_distance_to_box(q_, piece.box) > r2_) return;
+    for (uint32_t k = piece.first; k < piece.first + piece.count && !found; ++k) {
+      const Triangle& t = store_.triangles[store_.ids[k]];
+      Vec3 nearest;
+      if (!box_beyond(q_, t, r2_) && squared_distance_to(q_, t, nearest) <= r2_) found = true, triangle = store_.ids[k];
+    }
   }
   bool do_intersect(const K::Point_3&, const Node& node) const { return squared_distance_to_box(q_, node.bbox()) <= r2_; }
   bool found = false;
@@ -153,36 +257,125 @@ class WithinTraits {
  private:
   Vec3 q_;
   double r2_;
+  const Store& store_;
+};
+
+// Does a query object (a triangle or a segment) meet any triangle? Stops at the first one.
+template <typename Query>
+class MeetsTraits {
+ public:
+  MeetsTraits(const Query& query, const Store& store) : box_(query.bbox()), store_(store) {}
+  bool go_further() const { return !found; }
+  void intersection(const Query& query, const PiecePrimitive& primitive) {
+    const Piece& piece = *primitive.id();
+    if (!CGAL::do_overlap(box_, piece.box)) return;
+    for (uint32_t k = piece.first; k < piece.first + piece.count && !found; ++k) {
+      const Triangle& t = store_.triangles[store_.ids[k]];
+      if (CGAL::do_overlap(box_, t.bbox()) && CGAL::do_intersect(query, t)) found = true;
+    }
+  }
+  bool do_intersect(const Query& query, const Node& node) const {
+    return CGAL::do_overlap(box_, node.bbox()) && CGAL::do_intersect(query, node.bbox());
+  }
+  bool found = false;
+
+ private:
+  CGAL::Bbox_3 box_;
+  const Store& store_;
 };
 }  // namespace
 
 struct SurfaceIndex::Impl {
-  std::vector<Triangle> triangles;
+  Store store;
   std::vector<Piece> pieces;
   Tree tree;
 };
 
 SurfaceIndex::SurfaceIndex(const std::vector<Vec3>& points, const std::vector<Tri>& triangles) : impl_(new Impl) {
-  impl_->triangles.reserve(triangles.size());
+  Store& store = impl_->store;
+  store.triangles.reserve(triangles.size());
   std::vector<double> sizes;
   sizes.reserve(triangles.size());
+  CGAL::Bbox_3 all;
   for (const Tri& t : triangles) {
     const Vec3 &a = points[t[0]], &b = points[t[1]], &c = points[t[2]];
-    impl_->triangles.emplace_back(point(a), point(b), point(c));
-    sizes.push_back(diagonal(box_of(a, b, c)));
+    store.triangles.emplace_back(point(a), point(b), point(c));
+    const CGAL::Bbox_3 box = box_of(a, b, c);
+    sizes.push_back(diagonal(box));
+    all += box;
   }
   if (triangles.empty()) return;
-  // Parts no larger than twice the typical triangle: the typical one stays whole, and a sliver
-  // becomes a chain of parts of about that size, at most 16 (measured on a CAD assembly: 16
-  // parts as fast as 64, with 30 MB less; 8 slower).
+  // Pieces about twice the typical triangle: the typical one stays whole.
   std::nth_element(sizes.begin(), sizes.begin() + sizes.size() / 2, sizes.end());
   const double size = 2 * sizes[sizes.size() / 2];
-  impl_->pieces.reserve(triangles.size() + triangles.size() / 4);
+  const double span = std::max({all.xmax() - all.xmin(), all.ymax() - all.ymin(), all.zmax() - all.zmin()});
+  CellGrid grid{{all.xmin(), all.ymin(), all.zmin()}, std::max(size, span / double(1 << 20))};
+  // A triangle over this many cells is cut into at most 16 parts instead (a huge flat triangle
+  // among tiny ones would otherwise fill the grid).
+  constexpr double max_cells = 4096;
+
+  // Long triangles: (cell, triangle) entries, found in parallel, then sorted (deterministic).
+  struct Entry {
+    uint64_t cell;
+    uint32_t triangle;
+  };
+  tbb::enumerable_thread_specific<std::vector<Entry>> entries;
+  tbb::enumerable_thread_specific<std::vector<std::pair<uint32_t, CGAL::Bbox_3>>> parts;
+  tbb::parallel_for(tbb::blocked_range<uint32_t>(0, uint32_t(triangles.size()), 1024), [&](const tbb::blocked_range<uint32_t>& r) {
+    std::vector<uint64_t> cells;
+    std::vector<CGAL::Bbox_3> boxes;
+    auto& my_entries = entries.local();
+    auto& my_parts = parts.local();
+    for (uint32_t f = r.begin(); f != r.end(); ++f) {
+      const Tri& t = triangles[f];
+      const Vec3 &a = points[t[0]], &b = points[t[1]], &c = points[t[2]];
+      if (diagonal(box_of(a, b, c)) <= size) continue;
+      const double cell = grid.cell;
+      const double estimate = norm(area_vector(a, b, c)) / (cell * cell) + (norm(b - a) + norm(c - b) + norm(a - c)) / cell;
+      if (estimate > max_cells) {
+        boxes.clear();
+        add_parts(a, b, c, size, 4, boxes);
+        for (const CGAL::Bbox_3& box : boxes) my_parts.push_back({f, box});
+        continue;
+      }
+      cells.clear();
+      cells_of(a, b, c, grid, cells);
+      std::sort(cells.begin(), cells.end());
+      cells.erase(std::unique(cells.begin(), cells.end()), cells.end());
+      for (uint64_t key : cells) my_entries.push_back({key, f});
+    }
+  });
+  std::vector<Entry> cut;
+  for (auto& local : entries) cut.insert(cut.end(), local.begin(), local.end()), std::vector<Entry>().swap(local);
+  tbb::parallel_sort(cut.begin(), cut.end(), [](const Entry& x, const Entry& y) { return x.cell != y.cell ? x.cell < y.cell : x.triangle < y.triangle; });
+  std::vector<std::pair<uint32_t, CGAL::Bbox_3>> large;
+  for (auto& local : parts) large.insert(large.end(), local.begin(), local.end());
+  std::sort(large.begin(), large.end(), [](const auto& x, const auto& y) { return x.first < y.first; });
+
+  // Pieces: each short triangle, each part of a huge one, and each cell with its long ones.
+  impl_->pieces.reserve(triangles.size());
+  store.ids.reserve(triangles.size() + cut.size());
   for (uint32_t f = 0; f < triangles.size(); ++f) {
-    const Tri& t = triangles[f];
-    add_pieces(f, points[t[0]], points[t[1]], points[t[2]], size, 4, impl_->pieces);
+    const CGAL::Bbox_3 box = store.triangles[f].bbox();
+    if (diagonal(box) > size) continue;
+    impl_->pieces.push_back({uint32_t(store.ids.size()), 1, box});
+    store.ids.push_back(f);
   }
-  impl_->tree.insert(impl_->pieces.cbegin(), impl_->pieces.cend(), &impl_->triangles);
+  for (const auto& [f, box] : large) {
+    impl_->pieces.push_back({uint32_t(store.ids.size()), 1, box});
+    store.ids.push_back(f);
+  }
+  for (size_t e = 0; e < cut.size();) {
+    size_t end = e;
+    CGAL::Bbox_3 box;
+    while (end < cut.size() && cut[end].cell == cut[e].cell) box += store.triangles[cut[end].triangle].bbox(), ++end;
+    const CGAL::Bbox_3 cell = grid.box(cut[e].cell);
+    box = {std::max(box.xmin(), cell.xmin()), std::max(box.ymin(), cell.ymin()), std::max(box.zmin(), cell.zmin()),
+           std::min(box.xmax(), cell.xmax()), std::min(box.ymax(), cell.ymax()), std::min(box.zmax(), cell.zmax())};
+    impl_->pieces.push_back({uint32_t(store.ids.size()), uint32_t(end - e), box});
+    for (; e < end; ++e) store.ids.push_back(cut[e].triangle);
+  }
+  impl_->tree.insert(impl_->pieces.cbegin(), impl_->pieces.cend(), &store);
   impl_->tree.build();
 }
 
@@ -194,9 +387,9 @@ SurfaceIndex::Hit SurfaceIndex::closest(const Vec3& q) const {
   // does not depend on it (see NearestTraits).
   thread_local const Impl* last_index = nullptr;
   thread_local uint32_t last_triangle = UINT32_MAX;
-  NearestTraits traits(q);
-  if (last_index == impl_.get() && last_triangle < impl_->triangles.size())
-    traits.consider(last_triangle, impl_->triangles[last_triangle]);
+  const Store& store = impl_->store;
+  NearestTraits traits(q, store);
+  if (last_index == impl_.get() && last_triangle < store.triangles.size()) traits.consider(last_triangle);
   impl_->tree.traversal_with_priority(point(q), traits);
   last_index = impl_.get(), last_triangle = traits.best;
   Hit hit;
@@ -207,7 +400,7 @@ SurfaceIndex::Hit SurfaceIndex::closest(const Vec3& q) const {
   hit.point = traits.best_point;
   hit.triangle = traits.best;
   hit.squared_distance = traits.best_d2;
-  const Triangle& t = impl_->triangles[traits.best];
+  const Triangle& t = store.triangles[traits.best];
   K::Vector_3 n = CGAL::cross_product(t.vertex(1) - t.vertex(0), t.vertex(2) - t.vertex(0));
   double len = std::sqrt(n.squared_length());
   hit.normal = len > 0 ? Vec3{n.x() / len, n.y() / len, n.z() / len} : Vec3{0, 0, 0};
@@ -219,11 +412,12 @@ bool SurfaceIndex::within(const Vec3& q, double radius) const {
   // come in runs along a surface. (A yes or no does not depend on which triangle says it.)
   thread_local const Impl* last_index = nullptr;
   thread_local uint32_t last_triangle = UINT32_MAX;
-  if (last_index == impl_.get() && last_triangle < impl_->triangles.size()) {
+  const Store& store = impl_->store;
+  if (last_index == impl_.get() && last_triangle < store.triangles.size()) {
     Vec3 nearest;
-    if (squared_distance_to(q, impl_->triangles[last_triangle], nearest) <= radius * radius) return true;
+    if (squared_distance_to(q, store.triangles[last_triangle], nearest) <= radius * radius) return true;
   }
-  WithinTraits traits(q, radius);
+  WithinTraits traits(q, radius, store);
   impl_->tree.traversal(point(q), traits);
   if (traits.found) last_index = impl_.get(), last_triangle = traits.triangle;
   return traits.found;
@@ -232,16 +426,22 @@ bool SurfaceIndex::within(const Vec3& q, double radius) const {
 bool SurfaceIndex::touches(const Vec3& a, const Vec3& b, const Vec3& c) const {
   const Triangle t(point(a), point(b), point(c));
   if (t.is_degenerate()) return true;
-  return impl_->tree.do_intersect(t);
+  if (impl_->pieces.empty()) return false;
+  MeetsTraits<Triangle> traits(t, impl_->store);
+  impl_->tree.traversal(t, traits);
+  return traits.found;
 }
 
 bool SurfaceIndex::in_view(const Vec3& from, const Vec3& on, double near) const {
   const double dx = from[0] - on[0], dy = from[1] - on[1], dz = from[2] - on[2];
   const double len = std::sqrt(dx * dx + dy * dy + dz * dz);
   if (len <= near) return true;
+  if (impl_->pieces.empty()) return true;
   const double k = 0.5 * near / len;  // stop short: the segment's end lies on the input
   const K::Segment_3 s(point(from), K::Point_3(on[0] + dx * k, on[1] + dy * k, on[2] + dz * k));
-  return !impl_->tree.do_intersect(s);
+  MeetsTraits<K::Segment_3> traits(s, impl_->store);
+  impl_->tree.traversal(s, traits);
+  return !traits.found;
 }
 
 }  // namespace vdbwrap::fit

@@ -3,6 +3,7 @@
 #pragma once
 #include <memory>
 
+#include "common/box_overlap.h"
 #include "grid/adaptive_grid.h"
 #include "grid/size_controls.h"
 #include "prep/prepare.h"
@@ -25,8 +26,8 @@ struct RefineResult {
 RefineResult build_refined_grid(const prep::PreparedInput& input, const WrapParams& params, double base_size,
                                 const SizeControls& controls, ProgressSink* progress, int padding = 2);
 
-// Exact-enough separating-axis test of a triangle against an axis-aligned box.
-bool triangle_overlaps_box(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& box_center, const Vec3& half);
-bool segment_overlaps_box(const Vec3& a, const Vec3& b, const Vec3& lo, const Vec3& hi);
+// Exact-enough separating-axis tests of a triangle or segment against an axis-aligned box.
+using vdbwrap::segment_overlaps_box;
+using vdbwrap::triangle_overlaps_box;
 
 }  // namespace vdbwrap::grid

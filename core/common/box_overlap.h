@@ -1,0 +1,56 @@
+// Separating-axis overlap tests of a triangle or segment against an axis-aligned box, shared
+// by the voxel stage (which cells a triangle passes through) and the nearest-point index
+// (which cells hold a part of a long triangle). Plain doubles: callers that need a
+// conservative answer enlarge the box by more than the rounding.
+#pragma once
+#include <algorithm>
+#include <cmath>
+#include <utility>
+
+#include "common/vec.h"
+
+namespace vdbwrap {
+
+inline bool triangle_overlaps_box(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& center, const Vec3& h) {
+  // Akenine-Moller's separating axis test: 3 box axes, the triangle normal, 9 edge crosses.
+  const Vec3 v0 = a - center, v1 = b - center, v2 = c - center;
+  for (int k = 0; k < 3; ++k) {
+    double lo = std::min({v0[k], v1[k], v2[k]}), hi = std::max({v0[k], v1[k], v2[k]});
+    if (lo > h[k] || hi < -h[k]) return false;
+  }
+  const Vec3 e[3] = {v1 - v0, v2 - v1, v0 - v2};
+  const Vec3 v[3] = {v0, v1, v2};
+  for (int i = 0; i < 3; ++i)
+    for (int k = 0; k < 3; ++k) {
+      Vec3 axis{0, 0, 0};
+      Vec3 unit{0, 0, 0};
+      unit[k] = 1;
+      axis = cross(unit, e[i]);
+      double p0 = dot(v[0], axis), p1 = dot(v[1], axis), p2 = dot(v[2], axis);
+      double r = h[0] * std::fabs(axis[0]) + h[1] * std::fabs(axis[1]) + h[2] * std::fabs(axis[2]);
+      if (std::min({p0, p1, p2}) > r || std::max({p0, p1, p2}) < -r) return false;
+    }
+  Vec3 n = cross(e[0], e[1]);
+  double d = dot(n, v0);
+  double r = h[0] * std::fabs(n[0]) + h[1] * std::fabs(n[1]) + h[2] * std::fabs(n[2]);
+  return std::fabs(d) <= r;
+}
+
+inline bool segment_overlaps_box(const Vec3& a, const Vec3& b, const Vec3& lo, const Vec3& hi) {
+  double t0 = 0, t1 = 1;
+  for (int k = 0; k < 3; ++k) {
+    double d = b[k] - a[k];
+    if (std::fabs(d) < 1e-300) {
+      if (a[k] < lo[k] || a[k] > hi[k]) return false;
+      continue;
+    }
+    double u = (lo[k] - a[k]) / d, w = (hi[k] - a[k]) / d;
+    if (u > w) std::swap(u, w);
+    t0 = std::max(t0, u);
+    t1 = std::min(t1, w);
+    if (t0 > t1) return false;
+  }
+  return true;
+}
+
+}  // namespace vdbwrap
