@@ -158,6 +158,56 @@ TEST(Intersections, PairSearchFindsEveryPairOnce) {
   EXPECT_EQ(found, expected);
 }
 
+// Flat unfolded fans (CAD caps) skip the exact tests of spoke pairs that share only the
+// centre. The search must still find every real intersection: a triangle through a cap, a
+// coplanar triangle over it, and fans that fold onto themselves (an open one turning one and a
+// half times, a closed one turning twice), where spokes sharing only the centre do overlap.
+TEST(Intersections, FlatFansSkipOnlyPairsProvedApart) {
+  Mesh m;
+  // Tilted plane frame: e1, e2 in the plane.
+  const Vec3 tilted1 = normalized(Vec3{1, 0.3, 0.2}), tilted2 = normalized(cross(Vec3{0.1, 0.2, 1}, tilted1));
+  auto fan = [&](const Vec3& centre, int spokes, double turns, bool closed, double lift, Vec3 e1 = {}, Vec3 e2 = {}) {
+    if (e1 == Vec3{}) e1 = tilted1, e2 = tilted2;
+    const uint32_t c = uint32_t(m.points.size());
+    m.points.push_back(centre);
+    const int ring = closed ? spokes : spokes + 1;
+    for (int j = 0; j < ring; ++j) {
+      const double a = 2 * M_PI * turns * j / spokes, r = 1.0 + 0.3 * j / ring;
+      m.points.push_back(centre + e1 * (r * std::cos(a)) + e2 * (r * std::sin(a)) + cross(e1, e2) * lift);
+    }
+    for (int j = 0; j < spokes; ++j)
+      m.triangles.push_back({c, c + 1 + uint32_t(j), c + 1 + uint32_t((j + 1) % ring)});
+  };
+  fan({0, 0, 0}, 64, 1.0, true, 0.0);     // a flat closed cap
+  fan({5, 0, 0}, 48, 0.75, false, 0.0);   // a flat open fan
+  fan({0, 5, 0}, 40, 1.0, true, 0.4);     // a cone tip: not flat, still unfolded
+  // The folding ones in the plane z = 0, so that overlapping spokes are exactly coplanar.
+  const uint32_t fold_start = uint32_t(m.triangles.size());
+  fan({5, 5, 0}, 96, 1.5, false, 0.0, {1, 0, 0}, {0, 1, 0});    // folds: turns one and a half times
+  fan({0, 10, 0}, 128, 2.0, true, 0.0, {1, 0, 0}, {0, 1, 0});   // closed, turning twice
+  const uint32_t spiral_end = uint32_t(m.triangles.size());
+  auto add = [&](const Vec3& a, const Vec3& b, const Vec3& c) {
+    const uint32_t n = uint32_t(m.points.size());
+    m.points.insert(m.points.end(), {a, b, c});
+    m.triangles.push_back({n, n + 1, n + 2});
+  };
+  const Vec3 &e1 = tilted1, &e2 = tilted2, up = cross(e1, e2);
+  add(up * 0.5 + e1 * 0.1, up * -0.5 + e1 * 0.1, e2 * 0.3 + e1 * 0.05);  // through the cap, near its centre
+  add(e1 * 0.2, e1 * 0.6 + e2 * 0.1, e1 * 0.3 + e2 * 0.5);                // in the cap's plane, over it
+  std::vector<std::pair<uint32_t, uint32_t>> expected;
+  size_t folded = 0;
+  for (uint32_t a = 0; a < m.triangles.size(); ++a)
+    for (uint32_t b = a + 1; b < m.triangles.size(); ++b)
+      if (check::triangle_pair_intersects(m.points, m.triangles[a], m.triangles[b])) {
+        expected.push_back({a, b});
+        folded += a >= fold_start && b < spiral_end;
+      }
+  ASSERT_GT(folded, 100u) << "the folded fans must overlap themselves";
+  std::vector<std::pair<uint32_t, uint32_t>> found;
+  for (const auto& p : check::find_intersecting_pairs(m.points, m.triangles)) found.push_back({p.a, p.b});
+  EXPECT_EQ(found, expected);
+}
+
 TEST(Intersections, TheFastProofsInDoublesNeverChangeTheExactAnswer) {
   // Pairs sharing 0, 1 or 2 vertices: exactly coplanar on lattice points (an axis plane and a
   // tilted one), nearly coplanar, general, and small triangles far from the origin. With
