@@ -201,6 +201,45 @@ TEST(SurfaceIndex, AnswersDoNotDependOnTheOrderOfQueries) {
   EXPECT_GT(ties, 100u) << "the test needs queries equally near several triangles";
 }
 
+// touches() and in_view() walk the same cells of long triangles: against every triangle tested
+// directly, small triangles thrown around the slivers must get the same answer, and segments
+// through the cap must be blocked.
+TEST(SurfaceIndex, TouchesAgreesWithEveryTriangleTestedDirectly) {
+  const Mesh m = sliver_mesh();
+  fit::SurfaceIndex index(m.points, m.triangles);
+  uint64_t state = 777;
+  auto uniform = [&](double lo, double hi) {
+    state = state * 6364136223846793005ull + 1442695040888963407ull;
+    return lo + (hi - lo) * double(state >> 11) / double(1ull << 53);
+  };
+  size_t touching = 0;
+  for (int k = 0; k < 3000; ++k) {
+    const Vec3 a{uniform(-1.5, 2.5), uniform(-1.5, 2.5), uniform(-1.5, 3.5)};
+    const double s = uniform(0.05, 0.4);
+    const Vec3 b = a + Vec3{uniform(-s, s), uniform(-s, s), uniform(-s, s)}, c = a + Vec3{uniform(-s, s), uniform(-s, s), uniform(-s, s)};
+    std::vector<Vec3> pts = m.points;
+    const uint32_t n = uint32_t(pts.size());
+    pts.insert(pts.end(), {a, b, c});
+    bool expected = false;
+    for (const Tri& t : m.triangles)
+      if (!expected && check::triangle_pair_intersects(pts, t, Tri{n, n + 1, n + 2})) expected = true;
+    ASSERT_EQ(index.touches(a, b, c), expected) << "triangle " << k;
+    touching += expected;
+  }
+  EXPECT_GT(touching, 100u);
+  EXPECT_GT(3000 - touching, 100u);
+  // The fan cap (tilted) separates its two sides: from below to above through it is blocked,
+  // beside it is clear.
+  const Mesh plain = sliver_mesh();
+  const Vec3 centre = plain.points[0], rim = plain.points[1];
+  const Vec3 up = normalized(cross(plain.points[1] - centre, plain.points[2] - centre));
+  for (double t = 0.05; t < 0.95; t += 0.1) {
+    const Vec3 on = centre + (rim - centre) * t;
+    EXPECT_FALSE(index.in_view(on - up * 0.5, on + up * 0.5, 0.01)) << t;
+    EXPECT_TRUE(index.in_view(on - up * 0.5, on - up * 0.01, 0.001)) << t;
+  }
+}
+
 TEST(SurfaceIndex, EmptyInputAnswersWithoutCrashing) {
   fit::SurfaceIndex index({}, {});
   EXPECT_FALSE(index.within({0, 0, 0}, 1.0));

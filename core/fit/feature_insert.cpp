@@ -6,10 +6,12 @@
 #include <initializer_list>
 #include <limits>
 #include <set>
+#include <unordered_map>
 
 #include "check/intersections.h"
 #include "common/closest_point.h"
 #include "common/float_round.h"
+#include "common/grid_key.h"
 #include "common/triangle_buckets.h"
 #include "common/vec.h"
 
@@ -21,7 +23,8 @@ class Inserter {
  public:
   Inserter(FittedSurface& s, const SurfaceIndex& input, const Vec3& origin, const FeatureInsertParams& prm)
       : s_(s), p_(s.points), t_(s.triangles), input_(input), origin_(origin), prm_(prm),
-        buckets_(s.points, s.triangles, std::max(prm.max_move, 1e-300)) {
+        buckets_(s.points, s.triangles, std::max(prm.max_move, 1e-300)),
+        inv_change_cell_(1.0 / std::max(prm.max_move, 1e-300)) {
     vf_.resize(p_.size());
     for (uint32_t f = 0; f < t_.size(); ++f)
       for (uint32_t v : t_[f]) vf_[v].push_back(f);
@@ -64,20 +67,33 @@ class Inserter {
   // Has any triangle within reach of q changed after time `since`? Reach: the farthest a
   // change can be from q and still alter the checks of a change at q (the move radius plus
   // two edges: the changed triangles and the ones they are tested against).
-  bool changed_near(const Vec3& q, uint64_t since) {
+  // Change times are kept per cell of the reach's size (for every cell a changed triangle's box
+  // covers): a handful of look-ups, where scanning the triangles in reach was most of the stage
+  // on large inputs. A cell may report a change a little beyond the reach: a wasted retry, never
+  // a missed one.
+  bool changed_near(const Vec3& q, uint64_t since) const {
     const double r = 1.5 * prm_.max_move;
-    Box3 box;
-    box.add(q - Vec3{r, r, r});
-    box.add(q + Vec3{r, r, r});
     bool changed = false;
-    buckets_.for_each_in_box(box, [&](uint32_t f) { changed = changed || (f < changed_at_.size() && changed_at_[f] > since); });
+    for_change_cells(q - Vec3{r, r, r}, q + Vec3{r, r, r}, [&](const GridKey& k) {
+      if (changed) return;
+      auto it = changed_cells_.find(k);
+      changed = it != changed_cells_.end() && it->second > since;
+    });
     return changed;
+  }
+  template <typename F>
+  void for_change_cells(const Vec3& lo, const Vec3& hi, F&& fn) const {
+    const GridKey a = grid_key(lo, inv_change_cell_), b = grid_key(hi, inv_change_cell_);
+    for (int64_t x = a.x; x <= b.x; ++x)
+      for (int64_t y = a.y; y <= b.y; ++y)
+        for (int64_t z = a.z; z <= b.z; ++z) fn(GridKey{x, y, z});
   }
   void mark_changed(std::initializer_list<uint32_t> faces) {
     ++clock_;
     for (uint32_t f : faces) {
-      if (f >= changed_at_.size()) changed_at_.resize(f + 1, 0);
-      changed_at_[f] = clock_;
+      Box3 box;
+      for (uint32_t v : t_[f]) box.add(p_[v]);
+      for_change_cells(box.lo, box.hi, [&](const GridKey& k) { changed_cells_[k] = clock_; });
     }
   }
 
@@ -88,17 +104,18 @@ class Inserter {
 
   // Brings the wrap to curve point q when it misses it; returns the node now at q, if any.
   // `refused`: q was missed and some change that could reach it was refused.
-  uint32_t visit(const Vec3& q, bool& refused, FeatureInsertStats& stats) {
-    const double r = prm_.max_move;
+  struct Candidate {
+    double distance, t;
+    uint32_t a, b;
+  };
+  // The wrap's edges within r of q (each once), and the distance from q to the nearest triangle
+  // in reach (infinite when none is).
+  double look_around(const Vec3& q, double r, std::vector<Candidate>& edges) {
     Box3 box;
     box.add(q - Vec3{r, r, r});
     box.add(q + Vec3{r, r, r});
     double nearest = std::numeric_limits<double>::infinity();
-    struct Candidate {
-      double distance, t;
-      uint32_t a, b;
-    };
-    std::vector<Candidate> edges;
+    edges.clear();
     buckets_.for_each_in_box(box, [&](uint32_t f) {
       if (f >= t_.size()) return;  // a stale entry of an undone split
       const Tri& tri = t_[f];
@@ -111,6 +128,17 @@ class Inserter {
         if (dist <= r) edges.push_back({dist, t, u, w});
       }
     });
+    return nearest;
+  }
+
+  uint32_t visit(const Vec3& q, bool& refused, FeatureInsertStats& stats) {
+    // The nearest six edges in reach are all that is tried. Looked for within a quarter of the
+    // reach first: when six are there, they are the nearest six of the whole reach, and a
+    // triangle within the tolerance is there too.
+    const double r = prm_.max_move;
+    std::vector<Candidate>& edges = candidates_;
+    double nearest = look_around(q, 0.25 * r, edges);
+    if (edges.size() < 6 && nearest > prm_.tolerance) nearest = look_around(q, r, edges);
     if (nearest <= prm_.tolerance) {
       // Already on the wrap: report the node there, if one is.
       for (const Candidate& c : edges)
@@ -120,7 +148,9 @@ class Inserter {
     }
     ++stats.samples_missed;
     // The nearest edges first: the nearest may fold where the next one does not.
-    std::sort(edges.begin(), edges.end(), [](const Candidate& x, const Candidate& y) { return x.distance < y.distance; });
+    std::sort(edges.begin(), edges.end(), [](const Candidate& x, const Candidate& y) {
+      return x.distance != y.distance ? x.distance < y.distance : (x.a != y.a ? x.a < y.a : x.b < y.b);
+    });
     const size_t tries = std::min<size_t>(edges.size(), 6);
     for (size_t k = 0; k < tries; ++k) {
       const Candidate& c = edges[k];
@@ -189,8 +219,9 @@ class Inserter {
     s_.snapped[v] = 1;
     ++clock_;
     for (uint32_t f : vf_[v]) {
-      if (f >= changed_at_.size()) changed_at_.resize(f + 1, 0);
-      changed_at_[f] = clock_;
+      Box3 box;
+      for (uint32_t w : t_[f]) box.add(p_[w]);
+      for_change_cells(box.lo, box.hi, [&](const GridKey& k) { changed_cells_[k] = clock_; });
     }
     return true;
   }
@@ -323,10 +354,13 @@ class Inserter {
   TriangleBuckets buckets_;
   std::vector<std::vector<uint32_t>> vf_;
   std::set<std::pair<uint32_t, uint32_t>> edges_;
-  // Change times: a counter that ticks with every accepted change, the time each triangle
-  // last changed, and the time each curve point was last visited.
+  std::vector<Candidate> candidates_;
+  // Change times: a counter that ticks with every accepted change, the time each cell last
+  // saw a change, and the time each curve point was last visited.
+  double inv_change_cell_;
   uint64_t clock_ = 0;
-  std::vector<uint64_t> changed_at_, seen_;
+  std::unordered_map<GridKey, uint64_t, GridKeyHash> changed_cells_;
+  std::vector<uint64_t> seen_;
 };
 
 }  // namespace
