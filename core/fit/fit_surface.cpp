@@ -237,17 +237,22 @@ FittedSurface fit_to_input(const extract::LatticeSurface& surf, const grid::Adap
   // one curve, so the triangle would be flat.
   auto is_traced = [&](uint32_t a, uint32_t b) { return traced.count({std::min(a, b), std::max(a, b)}) > 0; };
   // The input's choice of diagonal for every quad, in parallel (two nearest-point queries each).
-  std::vector<uint8_t> input_prefers_02(quads.size());
+  // Decided in parallel: the traced edges (read only) and the input's choice of diagonal (two
+  // nearest-point queries per quad); the triangles are then appended in quad order.
+  std::vector<uint8_t> split_02(quads.size());
   tbb::parallel_for(tbb::blocked_range<size_t>(0, quads.size(), 512), [&](const tbb::blocked_range<size_t>& r) {
-    for (size_t k = r.begin(); k != r.end(); ++k) input_prefers_02[k] = split_along_02(quads[k], target, input, min_area2);
+    for (size_t k = r.begin(); k != r.end(); ++k) {
+      const auto& q = quads[k];
+      const bool side[4] = {is_traced(q[0], q[1]), is_traced(q[1], q[2]), is_traced(q[2], q[3]), is_traced(q[3], q[0])};
+      bool along02 = is_traced(q[0], q[2]) || (side[0] && side[3]) || (side[1] && side[2]);
+      bool along13 = is_traced(q[1], q[3]) || (side[0] && side[1]) || (side[2] && side[3]);
+      if (along02 == along13) along02 = along13 = false;  // both or neither: the input decides
+      split_02[k] = along02 || (!along13 && split_along_02(q, target, input, min_area2));
+    }
   });
   for (size_t k = 0; k < quads.size(); ++k) {
     const auto& q = quads[k];
-    const bool side[4] = {is_traced(q[0], q[1]), is_traced(q[1], q[2]), is_traced(q[2], q[3]), is_traced(q[3], q[0])};
-    bool along02 = is_traced(q[0], q[2]) || (side[0] && side[3]) || (side[1] && side[2]);
-    bool along13 = is_traced(q[1], q[3]) || (side[0] && side[1]) || (side[2] && side[3]);
-    if (along02 == along13) along02 = along13 = false;  // both or neither: the input decides
-    if (along02 || (!along13 && input_prefers_02[k])) {
+    if (split_02[k]) {
       out.triangles.push_back({q[0], q[1], q[2]});
       out.triangles.push_back({q[0], q[2], q[3]});
     } else {
@@ -287,8 +292,10 @@ FittedSurface fit_to_input(const extract::LatticeSurface& surf, const grid::Adap
   };
   NodeBuckets nodes(p, 1e-3 * hf);
   auto full_check = [&](std::vector<uint8_t>& flag) {
-    for (uint32_t i = 0; i < n; ++i)
-      if (nodes.crowded(i)) flag[i] = 1;
+    tbb::parallel_for(tbb::blocked_range<uint32_t>(0, uint32_t(n), 4096), [&](const tbb::blocked_range<uint32_t>& r) {
+      for (uint32_t i = r.begin(); i != r.end(); ++i)
+        if (nodes.crowded(i)) flag[i] = 1;  // each task writes its own range of flags
+    });
     for (uint32_t f : invalid_triangles(p, out.triangles, min_area2)) flag_triangle(f, flag);
   };
   TriangleBuckets buckets(p, out.triangles, 2.0 * g.base_size());
