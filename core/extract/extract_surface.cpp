@@ -4,6 +4,8 @@
 #include <set>
 #include <unordered_map>
 
+#include <tbb/parallel_for.h>
+
 #include "grid/flood_fill.h"
 #include "vdbwrap/errors.h"
 
@@ -52,28 +54,40 @@ Quad make_quad(int axis, int32_t plane, int32_t u0, int32_t v0, int32_t s, int n
 }  // namespace
 
 LatticeSurface extract_faces(const AdaptiveGrid& g, int32_t label, VolumeChoice choice) {
-  std::vector<Quad> quads;
   // The wrap's outward normal points into the outside volume, or out of an inside volume.
   const int orient = choice == VolumeChoice::Outside ? -1 : 1;
+  // The volume's cells first, then their faces in parallel (the grid is only read), in
+  // chunks joined in cell order: the same quads in the same order as one pass would give.
+  std::vector<std::pair<int, Coord>> cells;
   g.for_each_leaf([&](int level, const Coord& c, int32_t value) {
-    if (value != label) return;
-    const int32_t s = g.fine_units(level);
-    const Coord C(c.x() * s, c.y() * s, c.z() * s);
-    for (int axis = 0; axis < 3; ++axis)
-      for (int dir = -1; dir <= 1; dir += 2) {
-        const int32_t plane = C[axis] + (dir > 0 ? s : 0);
-        const int b = (axis + 1) % 3, cc = (axis + 2) % 3;
-        g.for_each_face_neighbour(level, c, axis, dir, [&](const LeafRef& n) {
-          if (in_volume(n, label, choice)) return;
-          if (n.outside_box || n.level <= level) {
-            quads.push_back(make_quad(axis, plane, C[b], C[cc], s, orient * dir));
-          } else {
-            const int32_t sn = g.fine_units(n.level);
-            quads.push_back(make_quad(axis, plane, n.ijk[b] * sn, n.ijk[cc] * sn, sn, orient * dir));
-          }
-        });
-      }
+    if (value == label) cells.emplace_back(level, c);
   });
+  constexpr size_t chunk = 2048;
+  std::vector<std::vector<Quad>> chunks((cells.size() + chunk - 1) / chunk);
+  tbb::parallel_for(size_t(0), chunks.size(), [&](size_t k) {
+    std::vector<Quad>& out = chunks[k];
+    for (size_t i = k * chunk; i < std::min(cells.size(), (k + 1) * chunk); ++i) {
+      const auto& [level, c] = cells[i];
+      const int32_t s = g.fine_units(level);
+      const Coord C(c.x() * s, c.y() * s, c.z() * s);
+      for (int axis = 0; axis < 3; ++axis)
+        for (int dir = -1; dir <= 1; dir += 2) {
+          const int32_t plane = C[axis] + (dir > 0 ? s : 0);
+          const int b = (axis + 1) % 3, cc = (axis + 2) % 3;
+          g.for_each_face_neighbour(level, c, axis, dir, [&, level = level](const LeafRef& n) {
+            if (in_volume(n, label, choice)) return;
+            if (n.outside_box || n.level <= level) {
+              out.push_back(make_quad(axis, plane, C[b], C[cc], s, orient * dir));
+            } else {
+              const int32_t sn = g.fine_units(n.level);
+              out.push_back(make_quad(axis, plane, n.ijk[b] * sn, n.ijk[cc] * sn, sn, orient * dir));
+            }
+          });
+        }
+    }
+  });
+  std::vector<Quad> quads;
+  for (auto& part : chunks) quads.insert(quads.end(), part.begin(), part.end()), std::vector<Quad>().swap(part);
 
   LatticeSurface surf;
   std::unordered_map<uint64_t, uint32_t> node_of;
@@ -91,25 +105,28 @@ LatticeSurface extract_faces(const AdaptiveGrid& g, int32_t label, VolumeChoice 
   for (const Quad& q : quads)
     for (const Coord& p : q.corner) node(p, q.size);
 
-  // Conforming polygons: every surface node on a quad's edge becomes a polygon vertex.
-  surf.polygons.reserve(quads.size());
-  for (const Quad& q : quads) {
-    std::vector<uint32_t> poly;
-    for (int e = 0; e < 4; ++e) {
-      const Coord& a = q.corner[e];
-      const Coord& b = q.corner[(e + 1) % 4];
-      poly.push_back(node_of[pack(a)]);
-      if (q.size > 1) {
-        Coord step((b.x() - a.x()) / q.size, (b.y() - a.y()) / q.size, (b.z() - a.z()) / q.size);
-        for (int32_t k = 1; k < q.size; ++k) {
-          Coord p(a.x() + step.x() * k, a.y() + step.y() * k, a.z() + step.z() * k);
-          auto it = node_of.find(pack(p));
-          if (it != node_of.end()) poly.push_back(it->second);
+  // Conforming polygons: every surface node on a quad's edge becomes a polygon vertex. The
+  // node map is only read here, so the quads go in parallel.
+  surf.polygons.resize(quads.size());
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, quads.size(), 1024), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t i = r.begin(); i != r.end(); ++i) {
+      const Quad& q = quads[i];
+      std::vector<uint32_t>& poly = surf.polygons[i];
+      for (int e = 0; e < 4; ++e) {
+        const Coord& a = q.corner[e];
+        const Coord& b = q.corner[(e + 1) % 4];
+        poly.push_back(node_of.find(pack(a))->second);
+        if (q.size > 1) {
+          Coord step((b.x() - a.x()) / q.size, (b.y() - a.y()) / q.size, (b.z() - a.z()) / q.size);
+          for (int32_t k = 1; k < q.size; ++k) {
+            Coord p(a.x() + step.x() * k, a.y() + step.y() * k, a.z() + step.z() * k);
+            auto it = node_of.find(pack(p));
+            if (it != node_of.end()) poly.push_back(it->second);
+          }
         }
       }
     }
-    surf.polygons.push_back(std::move(poly));
-  }
+  });
   return surf;
 }
 
