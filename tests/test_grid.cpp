@@ -1,6 +1,8 @@
 // Stage 2: triangle/box overlap, refinement, flood fill, and the extracted surface's topology.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <memory>
 #include <random>
 
 #include "extract/extract_surface.h"
@@ -190,5 +192,65 @@ TEST(Extract, RandomCellConfigurationsAlwaysGiveClosedManifoldSurfaces) {
       SCOPED_TRACE("trial " + std::to_string(trial) + (choice == VolumeChoice::Inside ? " inside" : " outside"));
       expect_closed_manifold(surf, choice);
     }
+  }
+}
+
+// The extraction's rounds take non-manifold cells out of the volume; the pieces this cuts off
+// are found by searches from the cells next to the ones taken out, without labelling the
+// whole volume again. A closed shell cuts off its inside; an open one cuts off nothing; a wall
+// through the middle leaves two large halves, which only a full labelling may decide.
+TEST(Extract, CutOffPocketsAreFoundNearTheCellsTakenOut) {
+  const int32_t label = 5;
+  auto volume_grid = [&] {
+    auto g = std::make_unique<grid::AdaptiveGrid>(Vec3{0, 0, 0}, 1.0, 1, Coord(12, 12, 12));
+    for (int z = 0; z < 12; ++z)
+      for (int y = 0; y < 12; ++y)
+        for (int x = 0; x < 12; ++x) g->set(0, Coord(x, y, z), label);
+    return g;
+  };
+  auto count = [&](const grid::AdaptiveGrid& g, int32_t value) {
+    size_t n = 0;
+    g.for_each_leaf([&](int, const Coord&, int32_t v) { n += v == value; });
+    return n;
+  };
+  auto take_out = [](grid::AdaptiveGrid& g, const std::vector<std::pair<int, Coord>>& cells) {
+    for (const auto& [level, c] : cells) g.set(level, c, grid::kExcluded);
+  };
+  // The shell of the 4x4x4 block at 4..7 around the 2x2x2 block at 5..6.
+  std::vector<std::pair<int, Coord>> shell;
+  for (int z = 4; z < 8; ++z)
+    for (int y = 4; y < 8; ++y)
+      for (int x = 4; x < 8; ++x)
+        if (x == 4 || x == 7 || y == 4 || y == 7 || z == 4 || z == 7) shell.emplace_back(0, Coord(x, y, z));
+  {
+    auto g = volume_grid();
+    take_out(*g, shell);
+    size_t dropped = 99;
+    ASSERT_TRUE(extract::drop_cut_off_pockets(*g, label, shell, 0.25 * 1728, dropped));
+    EXPECT_EQ(dropped, 1u);
+    EXPECT_EQ(g->get(0, Coord(5, 5, 5)), grid::kExcluded);
+    EXPECT_EQ(g->get(0, Coord(6, 6, 6)), grid::kExcluded);
+    EXPECT_EQ(count(*g, label), 1728u - 64u);
+  }
+  {
+    auto open = shell;
+    open.erase(std::find(open.begin(), open.end(), std::pair<int, Coord>(0, Coord(5, 5, 4))));
+    auto g = volume_grid();
+    take_out(*g, open);
+    size_t dropped = 99;
+    ASSERT_TRUE(extract::drop_cut_off_pockets(*g, label, open, 0.25 * 1728, dropped));
+    EXPECT_EQ(dropped, 0u);
+    EXPECT_EQ(g->get(0, Coord(5, 5, 5)), label);
+    EXPECT_EQ(count(*g, label), 1728u - 55u);
+  }
+  {
+    std::vector<std::pair<int, Coord>> wall;
+    for (int z = 0; z < 12; ++z)
+      for (int y = 0; y < 12; ++y) wall.emplace_back(0, Coord(6, y, z));
+    auto g = volume_grid();
+    take_out(*g, wall);
+    size_t dropped = 99;
+    EXPECT_FALSE(extract::drop_cut_off_pockets(*g, label, wall, 0.25 * 1728, dropped));
+    EXPECT_EQ(count(*g, label), 1728u - 144u) << "nothing may change when the searches cannot tell";
   }
 }

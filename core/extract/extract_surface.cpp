@@ -1,11 +1,13 @@
 #include "extract/extract_surface.h"
 
 #include <algorithm>
+#include <map>
 #include <set>
 #include <unordered_map>
 
 #include <tbb/parallel_for.h>
 
+#include "common/grid_key.h"
 #include "grid/flood_fill.h"
 #include "vdbwrap/errors.h"
 
@@ -159,7 +161,7 @@ void octant_groups(const bool in[8], int group[8], int& groups_in, int& groups_o
 }  // namespace
 
 size_t exclude_nonmanifold_cells(AdaptiveGrid& g, int32_t label, VolumeChoice choice, const LatticeSurface& surf,
-                                 int min_exclude_level) {
+                                 int min_exclude_level, std::vector<std::pair<int, Coord>>* taken_out) {
   const int L = g.max_level();
   const int exclude_from = min_exclude_level < 0 ? L : std::min(min_exclude_level, L);
   struct LeafKey {
@@ -239,7 +241,10 @@ size_t exclude_nonmanifold_cells(AdaptiveGrid& g, int32_t label, VolumeChoice ch
         if (leaf[o].level == key.level && leaf[o].ijk == key.c) in[o] = false;
     }
   }
-  for (const LeafKey& k : to_exclude) g.set(k.level, k.c, grid::kExcluded);
+  for (const LeafKey& k : to_exclude) {
+    g.set(k.level, k.c, grid::kExcluded);
+    if (taken_out) taken_out->emplace_back(k.level, k.c);
+  }
   for (const LeafKey& k : to_split) {
     if (to_exclude.count(k)) continue;
     g.set(k.level, k.c, grid::kRefined);
@@ -247,6 +252,110 @@ size_t exclude_nonmanifold_cells(AdaptiveGrid& g, int32_t label, VolumeChoice ch
       g.set(k.level + 1, Coord(2 * k.c.x() + (j & 1), 2 * k.c.y() + ((j >> 1) & 1), 2 * k.c.z() + ((j >> 2) & 1)), label);
   }
   return to_exclude.size() + to_split.size();
+}
+
+bool drop_cut_off_pockets(AdaptiveGrid& g, int32_t label, const std::vector<std::pair<int, Coord>>& taken_out, double pocket_limit,
+                          size_t& dropped) {
+  // Why looking near the taken-out cells is enough: the volume was one piece before. A path
+  // through it that crossed taken-out cells entered and left a cluster of them through
+  // volume cells next to it; when those are joined without the taken-out cells, the path
+  // can go round. A search from each of them that ends without meeting the others has found
+  // all of a piece that was cut off. Clusters: taken-out cells within a cell's size of each
+  // other (adjacent ones always share one: their corners differ by at most the larger one's
+  // size, half the span).
+  int32_t span = 1;
+  for (const auto& cell : taken_out) span = std::max(span, 2 * g.fine_units(cell.first));
+  auto fine_corner = [&](const std::pair<int, Coord>& cell) {
+    const int32_t s = g.fine_units(cell.first);
+    return Coord(cell.second.x() * s, cell.second.y() * s, cell.second.z() * s);
+  };
+  std::vector<uint32_t> parent(taken_out.size());
+  for (uint32_t i = 0; i < parent.size(); ++i) parent[i] = i;
+  auto find = [](std::vector<uint32_t>& up, uint32_t x) {
+    while (up[x] != x) x = up[x] = up[up[x]];
+    return x;
+  };
+  {
+    std::unordered_map<GridKey, std::vector<uint32_t>, GridKeyHash> near;
+    auto key_of = [&](const Coord& c) { return GridKey{c.x() / span, c.y() / span, c.z() / span}; };
+    for (uint32_t i = 0; i < taken_out.size(); ++i) near[key_of(fine_corner(taken_out[i]))].push_back(i);
+    for (uint32_t i = 0; i < taken_out.size(); ++i) {
+      const GridKey k = key_of(fine_corner(taken_out[i]));
+      for (int dx = -1; dx <= 1; ++dx)
+        for (int dy = -1; dy <= 1; ++dy)
+          for (int dz = -1; dz <= 1; ++dz) {
+            auto it = near.find({k.x + dx, k.y + dy, k.z + dz});
+            if (it != near.end())
+              for (uint32_t j : it->second) parent[find(parent, i)] = find(parent, j);
+          }
+    }
+  }
+  std::map<uint32_t, std::vector<uint32_t>> clusters;  // ordered: the same drops on every run
+  for (uint32_t i = 0; i < taken_out.size(); ++i) clusters[find(parent, i)].push_back(i);
+
+  auto cell_key = [](int level, const Coord& c) { return GridKey{int64_t(c.x()) + (int64_t(level) << 32), c.y(), c.z()}; };
+  constexpr size_t budget_base = 50000, budget_per_seed = 200;  // per cluster, before leaving it to a full labelling
+  std::vector<std::vector<std::pair<int, Coord>>> pockets;
+  for (const auto& [root, members] : clusters) {
+    // One search per volume cell next to the cluster, run together (breadth first); searches
+    // that meet are joined. pending[g]: cells queued and not yet expanded by joined search g.
+    std::vector<std::pair<int, Coord>> queue;
+    std::vector<uint32_t> from;  // the search that queued each cell
+    std::unordered_map<GridKey, uint32_t, GridKeyHash> owner;
+    for (uint32_t i : members)
+      for (int axis = 0; axis < 3; ++axis)
+        for (int dir = -1; dir <= 1; dir += 2)
+          g.for_each_face_neighbour(taken_out[i].first, taken_out[i].second, axis, dir, [&](const grid::LeafRef& n) {
+            if (n.outside_box || n.value != label) return;
+            if (owner.emplace(cell_key(n.level, n.ijk), uint32_t(queue.size())).second)
+              from.push_back(uint32_t(queue.size())), queue.emplace_back(n.level, n.ijk);
+          });
+    if (queue.size() <= 1) continue;
+    const size_t budget = budget_base + budget_per_seed * queue.size();
+    std::vector<uint32_t> up(queue.size()), pending(queue.size(), 1);
+    for (uint32_t i = 0; i < up.size(); ++i) up[i] = i;
+    size_t open = queue.size();  // searches not yet joined to another nor finished
+    std::vector<uint32_t> finished;
+    for (size_t q = 0; q < queue.size() && open > 1; ++q) {
+      if (queue.size() > budget) return false;
+      const auto [level, c] = queue[q];
+      const uint32_t mine = find(up, from[q]);
+      for (int axis = 0; axis < 3; ++axis)
+        for (int dir = -1; dir <= 1; dir += 2)
+          g.for_each_face_neighbour(level, c, axis, dir, [&](const grid::LeafRef& n) {
+            if (n.outside_box || n.value != label) return;
+            const uint32_t me = find(up, mine);
+            auto [it, added] = owner.emplace(cell_key(n.level, n.ijk), me);
+            if (added) {
+              from.push_back(me), queue.emplace_back(n.level, n.ijk);
+              ++pending[me];
+              return;
+            }
+            const uint32_t other = find(up, it->second);
+            if (other != me) up[other] = me, pending[me] += pending[other], --open;
+          });
+      const uint32_t me = find(up, mine);
+      if (--pending[me] == 0) finished.push_back(me), --open;  // all of a cut-off piece
+    }
+    if (open > 1) return false;
+    if (open == 0) return false;  // every search ended: nothing reached beyond (a tiny volume)  // every search ended: no piece reached beyond (a tiny volume)
+    for (uint32_t f : finished) {
+      std::vector<std::pair<int, Coord>> cells;
+      double volume = 0;
+      for (size_t k = 0; k < queue.size(); ++k)
+        if (find(up, from[k]) == f) {
+          cells.push_back(queue[k]);
+          const double side = g.fine_units(queue[k].first);
+          volume += side * side * side;
+        }
+      if (volume >= pocket_limit) return false;  // not clearly smaller than the rest: a full labelling decides  // not clearly smaller than the rest: a full labelling decides
+      pockets.push_back(std::move(cells));
+    }
+  }
+  for (const auto& cells : pockets)
+    for (const auto& [level, c] : cells) g.set(level, c, grid::kExcluded);
+  dropped = pockets.size();
+  return true;
 }
 
 LatticeSurface extract_manifold_surface(AdaptiveGrid& g, int32_t& label, VolumeChoice choice, ExtractStats& stats,
@@ -265,7 +374,8 @@ LatticeSurface extract_manifold_surface(AdaptiveGrid& g, int32_t& label, VolumeC
     }
     LatticeSurface surf = extract_faces(g, label, choice);
     if (surf.polygons.empty()) throw Error(ErrorKind::WrapFailed, "the chosen volume has no boundary: nothing to wrap");
-    size_t excluded = exclude_nonmanifold_cells(g, label, choice, surf, min_exclude_level);
+    std::vector<std::pair<int, Coord>> taken_out;
+    size_t excluded = exclude_nonmanifold_cells(g, label, choice, surf, min_exclude_level, &taken_out);
     stats.rounds = round + 1;
     if (excluded == 0) {
       if (progress)
@@ -273,6 +383,21 @@ LatticeSurface extract_manifold_surface(AdaptiveGrid& g, int32_t& label, VolumeC
       return surf;
     }
     stats.excluded_cells += excluded;
+    // Still one piece: nothing to drop, and labelling the whole volume again (most of a round
+    // on fine grids) is not needed. With seed points the volume may hold several chambers,
+    // and the full labelling below decides which stay.
+    if (choice != VolumeChoice::SeedPoints) {
+      double volume = 0;
+      g.for_each_leaf([&](int level, const Coord&, int32_t v) {
+        const double side = g.fine_units(level);
+        if (v == label) volume += side * side * side;
+      });
+      size_t pockets = 0;
+      if (drop_cut_off_pockets(g, label, taken_out, 0.25 * volume, pockets)) {
+        stats.dropped_pieces += pockets;
+        continue;
+      }
+    }
     // Taking cells out may cut small pockets off the volume: keep its main piece only.
     const int32_t old = label;
     grid::Components comps = grid::label_components(g, [old](int32_t v) { return v == old; }, next_label, progress);
