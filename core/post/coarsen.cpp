@@ -106,7 +106,10 @@ class Coarsener {
         end_claim_[e.a] = end_claim_[e.b] = batch_id_;
         batch.push_back(e);
       }
-      std::vector<Plan> plans(batch.size());
+      // Plans keep their buffers from batch to batch (plan() clears them): allocations were a
+      // tenth of coarsening.
+      if (plans_.size() < batch.size()) plans_.resize(batch.size());
+      std::vector<Plan>& plans = plans_;
       batch_made_.clear();
       tbb::parallel_for(tbb::blocked_range<size_t>(0, batch.size(), 4), [&](const tbb::blocked_range<size_t>& r) {
         for (size_t i = r.begin(); i != r.end(); ++i) {
@@ -115,8 +118,8 @@ class Coarsener {
             plans[i].ok = false;
         }
       });
-      for (Plan& pl : plans)
-        if (pl.ok && clear_of_batch(pl)) apply(pl), ++collapses;
+      for (size_t i = 0; i < batch.size(); ++i)
+        if (plans[i].ok && clear_of_batch(plans[i])) apply(plans[i]), ++collapses;
       for (const Entry& e : deferred) queue_.push(e);
     }
     return collapses;
@@ -170,7 +173,9 @@ class Coarsener {
 
   // Checks merging u into v against the current mesh (read only: safe in parallel).
   bool plan(uint32_t u, uint32_t v, Plan& out) const {
-    out = Plan{};
+    out.ok = false;
+    out.u = out.v = 0;
+    out.shared.clear(), out.moved.clear(), out.fresh.clear();
     // The two faces on edge u-v, and the link condition: u and v share exactly their two
     // opposite vertices as neighbours (else the collapse pinches the surface).
     for (uint32_t f : vf_[u]) {
@@ -178,9 +183,15 @@ class Coarsener {
       (tri[0] == v || tri[1] == v || tri[2] == v ? out.shared : out.moved).push_back(f);
     }
     if (out.shared.size() != 2) return false;
-    std::vector<uint32_t> nu = neighbours(u), nv = neighbours(v), common;
-    std::set_intersection(nu.begin(), nu.end(), nv.begin(), nv.end(), std::back_inserter(common));
-    if (common.size() != 2) return false;
+    Marks& scratch = marks_.local();
+    neighbours(u, scratch.nu), neighbours(v, scratch.nv);
+    size_t common = 0;
+    for (size_t i = 0, j = 0; i < scratch.nu.size() && j < scratch.nv.size();) {
+      if (scratch.nu[i] < scratch.nv[j]) ++i;
+      else if (scratch.nv[j] < scratch.nu[i]) ++j;
+      else ++common, ++i, ++j;
+    }
+    if (common != 2) return false;
     if (vf_[v].size() + out.moved.size() > 24) return false;  // a star vertex makes slivers
 
     for (uint32_t f : out.moved) {
@@ -293,12 +304,16 @@ class Coarsener {
 
   std::vector<uint32_t> neighbours(uint32_t v) const {
     std::vector<uint32_t> out;
+    neighbours(v, out);
+    return out;
+  }
+  void neighbours(uint32_t v, std::vector<uint32_t>& out) const {
+    out.clear();
     for (uint32_t f : vf_[v])
       for (uint32_t w : t_[f])
         if (w != v) out.push_back(w);
     std::sort(out.begin(), out.end());
     out.erase(std::unique(out.begin(), out.end()), out.end());
-    return out;
   }
 
  public:
@@ -330,10 +345,12 @@ class Coarsener {
   std::vector<uint32_t> ring_claim_, end_claim_, made_in_, changed_in_;
   uint32_t batch_id_ = 0;
   std::unordered_map<GridKey, std::vector<uint32_t>, GridKeyHash> batch_made_;  // the batch's new triangles
-  struct Marks {
+  struct Marks {  // per thread: bucket marks, and neighbour lists for the link condition
     std::vector<uint32_t> seen;
     uint32_t stamp = 0;
+    std::vector<uint32_t> nu, nv;
   };
+  std::vector<Plan> plans_;
   mutable tbb::enumerable_thread_specific<Marks> marks_;
   uint32_t pass_ = 0;
   std::vector<std::vector<uint32_t>> vf_;
