@@ -137,6 +137,15 @@ Mesh sliver_mesh() {
   }
   return m;
 }
+// Uniform doubles in [lo, hi) from a fixed seed (the same sequence on every platform).
+struct Uniform {
+  explicit Uniform(uint64_t seed) : state(seed) {}
+  double operator()(double lo, double hi) {
+    state = state * 6364136223846793005ull + 1442695040888963407ull;
+    return lo + (hi - lo) * double(state >> 11) / double(1ull << 53);
+  }
+  uint64_t state;
+};
 }  // namespace
 
 // The index splits long thin triangles into pieces for its tree; every answer must still be the
@@ -144,11 +153,7 @@ Mesh sliver_mesh() {
 TEST(SurfaceIndex, NearestPointsAreExactOnSliversAndFans) {
   const Mesh m = sliver_mesh();
   fit::SurfaceIndex index(m.points, m.triangles);
-  uint64_t state = 12345;
-  auto uniform = [&](double lo, double hi) {
-    state = state * 6364136223846793005ull + 1442695040888963407ull;
-    return lo + (hi - lo) * double(state >> 11) / double(1ull << 53);
-  };
+  Uniform uniform(12345);
   for (int k = 0; k < 3000; ++k) {
     const Vec3 q{uniform(-2, 3), uniform(-2, 3), uniform(-2, 4)};
     double best = INFINITY;
@@ -207,11 +212,7 @@ TEST(SurfaceIndex, AnswersDoNotDependOnTheOrderOfQueries) {
 TEST(SurfaceIndex, TouchesAgreesWithEveryTriangleTestedDirectly) {
   const Mesh m = sliver_mesh();
   fit::SurfaceIndex index(m.points, m.triangles);
-  uint64_t state = 777;
-  auto uniform = [&](double lo, double hi) {
-    state = state * 6364136223846793005ull + 1442695040888963407ull;
-    return lo + (hi - lo) * double(state >> 11) / double(1ull << 53);
-  };
+  Uniform uniform(777);
   size_t touching = 0;
   for (int k = 0; k < 3000; ++k) {
     const Vec3 a{uniform(-1.5, 2.5), uniform(-1.5, 2.5), uniform(-1.5, 3.5)};
