@@ -226,7 +226,7 @@ TEST(Extract, CutOffPocketsAreFoundNearTheCellsTakenOut) {
     auto g = volume_grid();
     take_out(*g, shell);
     size_t dropped = 99;
-    ASSERT_TRUE(extract::drop_cut_off_pockets(*g, label, shell, 0.25 * 1728, dropped));
+    ASSERT_TRUE(extract::drop_cut_off_pockets(*g, label, shell, 0.25, dropped));
     EXPECT_EQ(dropped, 1u);
     EXPECT_EQ(g->get(0, Coord(5, 5, 5)), grid::kExcluded);
     EXPECT_EQ(g->get(0, Coord(6, 6, 6)), grid::kExcluded);
@@ -238,7 +238,7 @@ TEST(Extract, CutOffPocketsAreFoundNearTheCellsTakenOut) {
     auto g = volume_grid();
     take_out(*g, open);
     size_t dropped = 99;
-    ASSERT_TRUE(extract::drop_cut_off_pockets(*g, label, open, 0.25 * 1728, dropped));
+    ASSERT_TRUE(extract::drop_cut_off_pockets(*g, label, open, 0.25, dropped));
     EXPECT_EQ(dropped, 0u);
     EXPECT_EQ(g->get(0, Coord(5, 5, 5)), label);
     EXPECT_EQ(count(*g, label), 1728u - 55u);
@@ -250,7 +250,7 @@ TEST(Extract, CutOffPocketsAreFoundNearTheCellsTakenOut) {
     auto g = volume_grid();
     take_out(*g, wall);
     size_t dropped = 99;
-    EXPECT_FALSE(extract::drop_cut_off_pockets(*g, label, wall, 0.25 * 1728, dropped));
+    EXPECT_FALSE(extract::drop_cut_off_pockets(*g, label, wall, 0.25, dropped));
     EXPECT_EQ(count(*g, label), 1728u - 144u) << "nothing may change when the searches cannot tell";
   }
 }

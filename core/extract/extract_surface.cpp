@@ -254,7 +254,7 @@ size_t exclude_nonmanifold_cells(AdaptiveGrid& g, int32_t label, VolumeChoice ch
   return to_exclude.size() + to_split.size();
 }
 
-bool drop_cut_off_pockets(AdaptiveGrid& g, int32_t label, const std::vector<std::pair<int, Coord>>& taken_out, double pocket_limit,
+bool drop_cut_off_pockets(AdaptiveGrid& g, int32_t label, const std::vector<std::pair<int, Coord>>& taken_out, double pocket_share,
                           size_t& dropped) {
   // Why looking near the taken-out cells is enough: the volume was one piece before. A path
   // through it that crossed taken-out cells entered and left a cluster of them through
@@ -296,6 +296,18 @@ bool drop_cut_off_pockets(AdaptiveGrid& g, int32_t label, const std::vector<std:
   auto cell_key = [](int level, const Coord& c) { return GridKey{int64_t(c.x()) + (int64_t(level) << 32), c.y(), c.z()}; };
   constexpr size_t budget_base = 50000, budget_per_seed = 200;  // per cluster, before leaving it to a full labelling
   std::vector<std::vector<std::pair<int, Coord>>> pockets;
+  double pocket_limit = -1;  // pocket_share of the volume, measured when a first pocket is found
+  auto limit = [&] {
+    if (pocket_limit < 0) {
+      double volume = 0;
+      g.for_each_leaf([&](int level, const Coord&, int32_t v) {
+        const double side = g.fine_units(level);
+        if (v == label) volume += side * side * side;
+      });
+      pocket_limit = pocket_share * volume;
+    }
+    return pocket_limit;
+  };
   for (const auto& [root, members] : clusters) {
     // One search per volume cell next to the cluster, run together (breadth first); searches
     // that meet are joined. pending[g]: cells queued and not yet expanded by joined search g.
@@ -348,7 +360,7 @@ bool drop_cut_off_pockets(AdaptiveGrid& g, int32_t label, const std::vector<std:
           const double side = g.fine_units(queue[k].first);
           volume += side * side * side;
         }
-      if (volume >= pocket_limit) return false;  // not clearly smaller than the rest: a full labelling decides  // not clearly smaller than the rest: a full labelling decides
+      if (volume >= limit()) return false;  // not clearly smaller than the rest: a full labelling decides  // not clearly smaller than the rest: a full labelling decides
       pockets.push_back(std::move(cells));
     }
   }
@@ -387,13 +399,8 @@ LatticeSurface extract_manifold_surface(AdaptiveGrid& g, int32_t& label, VolumeC
     // on fine grids) is not needed. With seed points the volume may hold several chambers,
     // and the full labelling below decides which stay.
     if (choice != VolumeChoice::SeedPoints) {
-      double volume = 0;
-      g.for_each_leaf([&](int level, const Coord&, int32_t v) {
-        const double side = g.fine_units(level);
-        if (v == label) volume += side * side * side;
-      });
       size_t pockets = 0;
-      if (drop_cut_off_pockets(g, label, taken_out, 0.25 * volume, pockets)) {
+      if (drop_cut_off_pockets(g, label, taken_out, 0.25, pockets)) {
         stats.dropped_pieces += pockets;
         continue;
       }

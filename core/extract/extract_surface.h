@@ -34,10 +34,10 @@ size_t exclude_nonmanifold_cells(grid::AdaptiveGrid& grid, int32_t label, Volume
 // After `taken_out` left the volume `label` (one piece before), the pieces cut off from
 // the rest, found by searches from the volume cells next to the taken-out ones, are taken
 // out too (`dropped`: how many). Returns false, changing nothing, when the searches cannot
-// tell within their budget, or a piece is not below `pocket_limit` (fine cells cubed): a
+// tell within their budget, or a piece is not below `pocket_share` of the volume left: a
 // full labelling must decide.
 bool drop_cut_off_pockets(grid::AdaptiveGrid& grid, int32_t label, const std::vector<std::pair<int, Coord>>& taken_out,
-                          double pocket_limit, size_t& dropped);
+                          double pocket_share, size_t& dropped);
 
 struct ExtractStats {
   size_t excluded_cells = 0, rounds = 0, dropped_pieces = 0;

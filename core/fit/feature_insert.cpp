@@ -88,7 +88,9 @@ class Inserter {
       for (int64_t y = a.y; y <= b.y; ++y)
         for (int64_t z = a.z; z <= b.z; ++z) fn(GridKey{x, y, z});
   }
-  void mark_changed(std::initializer_list<uint32_t> faces) {
+  // After an accepted change: the clock ticks, and the cells of the changed faces take its time.
+  template <typename Faces>
+  void mark_changed(const Faces& faces) {
     ++clock_;
     for (uint32_t f : faces) {
       Box3 box;
@@ -217,12 +219,7 @@ class Inserter {
       return false;
     }
     s_.snapped[v] = 1;
-    ++clock_;
-    for (uint32_t f : vf_[v]) {
-      Box3 box;
-      for (uint32_t w : t_[f]) box.add(p_[w]);
-      for_change_cells(box.lo, box.hi, [&](const GridKey& k) { changed_cells_[k] = clock_; });
-    }
+    mark_changed(vf_[v]);
     return true;
   }
 
@@ -275,7 +272,7 @@ class Inserter {
       std::replace(ly.begin(), ly.end(), face, half);
       vf_[h[2]].push_back(half);
     }
-    mark_changed({faces[0], faces[1], f2, f3});
+    mark_changed(std::array<uint32_t, 4>{faces[0], faces[1], f2, f3});
     s_.snapped.push_back(1);
     s_.cell_size.push_back(std::min(s_.cell_size[a], s_.cell_size[b]));
     if (edges_.erase({std::min(a, b), std::max(a, b)})) add_feature_edge(a, m), add_feature_edge(m, b);

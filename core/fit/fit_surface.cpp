@@ -236,7 +236,6 @@ FittedSurface fit_to_input(const extract::LatticeSurface& surf, const grid::Adap
   // A split that puts two traced sides into one triangle is avoided: their three nodes lie on
   // one curve, so the triangle would be flat.
   auto is_traced = [&](uint32_t a, uint32_t b) { return traced.count({std::min(a, b), std::max(a, b)}) > 0; };
-  // The input's choice of diagonal for every quad, in parallel (two nearest-point queries each).
   // Decided in parallel: the traced edges (read only) and the input's choice of diagonal (two
   // nearest-point queries per quad); the triangles are then appended in quad order.
   std::vector<uint8_t> split_02(quads.size());

@@ -84,9 +84,24 @@ CGAL::Bbox_3 box_of(const Vec3& a, const Vec3& b, const Vec3& c) {
   return {std::min({a[0], b[0], c[0]}), std::min({a[1], b[1], c[1]}), std::min({a[2], b[2], c[2]}),
           std::max({a[0], b[0], c[0]}), std::max({a[1], b[1], c[1]}), std::max({a[2], b[2], c[2]})};
 }
-CGAL::Bbox_3 box_of(const Triangle& t) { return t.bbox(); }
 double diagonal(const CGAL::Bbox_3& b) {
   return std::sqrt(std::pow(b.xmax() - b.xmin(), 2) + std::pow(b.ymax() - b.ymin(), 2) + std::pow(b.zmax() - b.zmin(), 2));
+}
+
+// Calls split(x, y, z) on the two halves of triangle abc cut at the midpoint of its longest edge.
+template <typename Split>
+void halve_longest_edge(const Vec3& a, const Vec3& b, const Vec3& c, Split&& split) {
+  const double ab = norm2(b - a), bc = norm2(c - b), ca = norm2(a - c);
+  if (ab >= bc && ab >= ca) {
+    const Vec3 m = (a + b) * 0.5;
+    split(a, m, c), split(m, b, c);
+  } else if (bc >= ca) {
+    const Vec3 m = (b + c) * 0.5;
+    split(a, b, m), split(a, m, c);
+  } else {
+    const Vec3 m = (c + a) * 0.5;
+    split(a, b, m), split(m, b, c);
+  }
 }
 
 // Parts of triangle abc by halving the longest edge, until a part's box is no longer than
@@ -97,17 +112,7 @@ void add_parts(const Vec3& a, const Vec3& b, const Vec3& c, double size, int dep
     out.push_back(box);
     return;
   }
-  const double ab = norm2(b - a), bc = norm2(c - b), ca = norm2(a - c);
-  if (ab >= bc && ab >= ca) {
-    const Vec3 m = (a + b) * 0.5;
-    add_parts(a, m, c, size, depth - 1, out), add_parts(m, b, c, size, depth - 1, out);
-  } else if (bc >= ca) {
-    const Vec3 m = (b + c) * 0.5;
-    add_parts(a, b, m, size, depth - 1, out), add_parts(a, m, c, size, depth - 1, out);
-  } else {
-    const Vec3 m = (c + a) * 0.5;
-    add_parts(a, b, m, size, depth - 1, out), add_parts(m, b, c, size, depth - 1, out);
-  }
+  halve_longest_edge(a, b, c, [&](const Vec3& x, const Vec3& y, const Vec3& z) { add_parts(x, y, z, size, depth - 1, out); });
 }
 
 // The cell grid that cuts long triangles: cubes of side `cell` from `origin`, keyed by 21 bits
@@ -139,17 +144,7 @@ void cells_of(const Vec3& a, const Vec3& b, const Vec3& c, const CellGrid& grid,
     small = small && hi[k] - lo[k] <= 3;
   }
   if (!small) {
-    const double ab = norm2(b - a), bc = norm2(c - b), ca = norm2(a - c);
-    if (ab >= bc && ab >= ca) {
-      const Vec3 m = (a + b) * 0.5;
-      cells_of(a, m, c, grid, out), cells_of(m, b, c, grid, out);
-    } else if (bc >= ca) {
-      const Vec3 m = (b + c) * 0.5;
-      cells_of(a, b, m, grid, out), cells_of(a, m, c, grid, out);
-    } else {
-      const Vec3 m = (c + a) * 0.5;
-      cells_of(a, b, m, grid, out), cells_of(m, b, c, grid, out);
-    }
+    halve_longest_edge(a, b, c, [&](const Vec3& x, const Vec3& y, const Vec3& z) { cells_of(x, y, z, grid, out); });
     return;
   }
   if (lo[0] == hi[0] && lo[1] == hi[1] && lo[2] == hi[2]) {  // inside one cell
