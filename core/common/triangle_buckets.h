@@ -24,6 +24,8 @@ class TriangleBuckets {
   }
   // After triangle f moved, or was appended to the triangle list.
   void update(uint32_t f) { insert(f); }
+  // The bounding box of triangle f when it was last inserted or updated.
+  const Box3& box(uint32_t f) const { return boxes_[f]; }
   // Triangles whose (bucketed) bounding box overlaps that of triangle f, f excluded.
   template <typename F>
   void for_each_candidate(uint32_t f, F&& fn) {

@@ -27,10 +27,12 @@ inline Vec3 area_vector(const Vec3& a, const Vec3& b, const Vec3& c) { return cr
 
 struct Box3 {
   Vec3 lo{INFINITY, INFINITY, INFINITY}, hi{-INFINITY, -INFINITY, -INFINITY};
+  // Comparisons rather than std::fmin/fmax, which are library calls here; the same result
+  // (a NaN coordinate is ignored, as fmin ignores it) since lo and hi are never NaN.
   void add(const Vec3& p) {
     for (int k = 0; k < 3; ++k) {
-      lo[k] = std::fmin(lo[k], p[k]);
-      hi[k] = std::fmax(hi[k], p[k]);
+      lo[k] = p[k] < lo[k] ? p[k] : lo[k];
+      hi[k] = p[k] > hi[k] ? p[k] : hi[k];
     }
   }
   bool empty() const { return lo[0] > hi[0]; }

@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <queue>
 
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
@@ -49,7 +48,7 @@ class Coarsener {
     for (uint32_t f = 0; f < t.size(); ++f)
       for (int e = 0; e < 3; ++e) {
         uint32_t a = t[f][e], b = t[f][(e + 1) % 3];
-        if (a < b) push(a, b);
+        if (a < b) push_at_start(a, b);
       }
   }
 
@@ -64,8 +63,9 @@ class Coarsener {
           if (alive_[f])
             for (int e = 0; e < 3; ++e) {
               uint32_t a = t_[f][e], b = t_[f][(e + 1) % 3];
-              if (a < b && (changed_in_[a] == pass || changed_in_[b] == pass)) push(a, b);
+              if (a < b && (changed_in_[a] == pass || changed_in_[b] == pass)) push_at_start(a, b);
             }
+      queue_.start();
       pass_ = pass + 1;
       size_t n = one_pass(progress);
       total += n;
@@ -88,8 +88,7 @@ class Coarsener {
       batch.clear();
       deferred.clear();
       while (!queue_.empty() && batch.size() < kBatch && deferred.size() < 4 * kBatch) {
-        Entry e = queue_.top();
-        queue_.pop();
+        const Entry e = queue_.pop();
         if (!vertex_alive_[e.a] || !vertex_alive_[e.b] || stamp_[e.a] != e.sa || stamp_[e.b] != e.sb) continue;
         // Compatible with the batch when neither end is in a claimed ring and no claimed end
         // is in this ring.
@@ -120,7 +119,7 @@ class Coarsener {
       });
       for (size_t i = 0; i < batch.size(); ++i)
         if (plans[i].ok && clear_of_batch(plans[i])) apply(plans[i]), ++collapses;
-      for (const Entry& e : deferred) queue_.push(e);
+      queue_.put_back(deferred);
     }
     return collapses;
   }
@@ -132,7 +131,57 @@ class Coarsener {
   struct Entry {
     double length2;
     uint32_t a, b, sa, sb;
-    bool operator<(const Entry& o) const { return length2 > o.length2; }  // shortest first
+    // Shortest first; ties in a fixed order, so that the order does not depend on the queue.
+    bool operator<(const Entry& o) const {
+      return length2 != o.length2 ? length2 < o.length2 : a != o.a ? a < o.a : b != o.b ? b < o.b : sa != o.sa ? sa < o.sa : sb < o.sb;
+    }
+  };
+  // Shortest edge first. Most entries are known when a pass starts (its edges) or are put back
+  // unchanged by a batch that could not take them: those stay in sorted runs, and only the
+  // edges a collapse shortened or lengthened go through a heap. A heap of every edge had cost
+  // a third of coarsening: hundreds of thousands of entries, each pop a walk through memory.
+  class EdgeQueue {
+   public:
+    void add(const Entry& e) { start_.push_back(e); }  // before start()
+    void start() {
+      std::sort(start_.begin(), start_.end());
+      next_ = 0;
+    }
+    void push(const Entry& e) {
+      heap_.push_back(e);
+      std::push_heap(heap_.begin(), heap_.end(), later);
+    }
+    bool empty() const { return next_ == start_.size() && held_next_ == held_.size() && heap_.empty(); }
+    Entry pop() {  // not empty
+      const Entry* best = nullptr;
+      int from = 0;
+      if (next_ < start_.size()) best = &start_[next_], from = 0;
+      if (held_next_ < held_.size() && (!best || held_[held_next_] < *best)) best = &held_[held_next_], from = 1;
+      if (!heap_.empty() && (!best || heap_.front() < *best)) best = &heap_.front(), from = 2;
+      const Entry e = *best;
+      if (from == 0) {
+        if (++next_ == start_.size()) start_.clear(), next_ = 0;
+      } else if (from == 1) {
+        ++held_next_;
+      } else {
+        std::pop_heap(heap_.begin(), heap_.end(), later);
+        heap_.pop_back();
+      }
+      return e;
+    }
+    // Entries popped since the last put_back, in the order popped: every one of them comes
+    // before every entry still held, so together they are one sorted run.
+    void put_back(const std::vector<Entry>& popped) {
+      std::vector<Entry> run(popped);
+      run.insert(run.end(), held_.begin() + held_next_, held_.end());
+      held_.swap(run);
+      held_next_ = 0;
+    }
+
+   private:
+    static bool later(const Entry& x, const Entry& y) { return y < x; }
+    std::vector<Entry> start_, held_, heap_;
+    size_t next_ = 0, held_next_ = 0;
   };
   // A checked collapse of u into v: the two faces on the edge go, the others of u are rewritten.
   struct Plan {
@@ -144,6 +193,10 @@ class Coarsener {
   void push(uint32_t a, uint32_t b) {
     double l2 = norm2(p_[a] - p_[b]);
     if (l2 <= prm_.max_edge * prm_.max_edge) queue_.push({l2, a, b, stamp_[a], stamp_[b]});
+  }
+  void push_at_start(uint32_t a, uint32_t b) {
+    double l2 = norm2(p_[a] - p_[b]);
+    if (l2 <= prm_.max_edge * prm_.max_edge) queue_.add({l2, a, b, stamp_[a], stamp_[b]});
   }
   // a, b and all their neighbours: everything a collapse of the edge reads or writes.
   void closed_ring(uint32_t a, uint32_t b, std::vector<uint32_t>& out) const {
@@ -218,21 +271,28 @@ class Coarsener {
           !near_input((c + a) * 0.5))
         return false;
     }
-    // No intersection with the rest of the surface, nor among the new triangles.
+    // No intersection among the new triangles, nor with the rest of the surface: one bucket
+    // scan over the box of all new triangles (one scan each read mostly the same cells again).
     Marks& marks = marks_.local();
+    marks.boxes.clear();
+    Box3 all;
     for (size_t i = 0; i < out.fresh.size(); ++i) {
       if (check::triangle_is_degenerate(p_, out.fresh[i])) return false;
       for (size_t j = 0; j < i; ++j)
         if (check::triangle_pair_intersects(p_, out.fresh[i], out.fresh[j])) return false;
-      bool hit = false;
-      buckets_.for_each_in_box(box_of(out.fresh[i]), marks.seen, marks.stamp, [&](uint32_t g) {
-        if (hit || !alive_[g]) return;
-        const Tri& other = t_[g];
-        if (other[0] == u || other[1] == u || other[2] == u) return;  // replaced or removed
-        hit = check::triangle_pair_intersects(p_, out.fresh[i], other);
-      });
-      if (hit) return false;
+      marks.boxes.push_back(box_of(out.fresh[i]));
+      all.add(marks.boxes.back().lo), all.add(marks.boxes.back().hi);
     }
+    bool hit = false;
+    buckets_.for_each_in_box(all, marks.seen, marks.stamp, [&](uint32_t g) {
+      if (hit || !alive_[g]) return;
+      const Tri& other = t_[g];
+      if (other[0] == u || other[1] == u || other[2] == u) return;  // replaced or removed
+      const Box3& box = buckets_.box(g);
+      for (size_t i = 0; i < out.fresh.size() && !hit; ++i)
+        hit = overlap(marks.boxes[i], box) && check::triangle_pair_intersects(p_, out.fresh[i], other);
+    });
+    if (hit) return false;
     out.u = u, out.v = v, out.ok = true;
     return true;
   }
@@ -349,12 +409,13 @@ class Coarsener {
     std::vector<uint32_t> seen;
     uint32_t stamp = 0;
     std::vector<uint32_t> nu, nv;
+    std::vector<Box3> boxes;  // of a plan's new triangles
   };
   std::vector<Plan> plans_;
   mutable tbb::enumerable_thread_specific<Marks> marks_;
   uint32_t pass_ = 0;
   std::vector<std::vector<uint32_t>> vf_;
-  std::priority_queue<Entry> queue_;
+  EdgeQueue queue_;
   double cos_turn_ = 0, cos_min_angle_ = 0, dev2_ = 0;
 };
 
