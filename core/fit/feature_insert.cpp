@@ -88,15 +88,18 @@ class Inserter {
       for (int64_t y = a.y; y <= b.y; ++y)
         for (int64_t z = a.z; z <= b.z; ++z) fn(GridKey{x, y, z});
   }
-  // After an accepted change: the clock ticks, and the cells of the changed faces take its time.
+  // After an accepted change: the clock ticks, and the cells of the changed faces take its time
+  // (and those of the boxes they had before, when they moved: a face leaving a point's reach
+  // changes what a check there sees, as one entering it does).
   template <typename Faces>
-  void mark_changed(const Faces& faces) {
+  void mark_changed(const Faces& faces, const std::vector<Box3>& before = {}) {
     ++clock_;
     for (uint32_t f : faces) {
       Box3 box;
       for (uint32_t v : t_[f]) box.add(p_[v]);
       for_change_cells(box.lo, box.hi, [&](const GridKey& k) { changed_cells_[k] = clock_; });
     }
+    for (const Box3& box : before) for_change_cells(box.lo, box.hi, [&](const GridKey& k) { changed_cells_[k] = clock_; });
   }
 
   Vec3 world(const Vec3& local) const {
@@ -197,7 +200,13 @@ class Inserter {
     const Vec3 from = p_[v];
     std::vector<Vec3> before;
     std::vector<Tri> old_faces;
-    for (uint32_t f : vf_[v]) before.push_back(normal_of(t_[f])), old_faces.push_back(t_[f]);
+    std::vector<Box3> old_boxes;
+    for (uint32_t f : vf_[v]) {
+      before.push_back(normal_of(t_[f])), old_faces.push_back(t_[f]);
+      Box3 box;
+      for (uint32_t w : t_[f]) box.add(p_[w]);
+      old_boxes.push_back(box);
+    }
     p_[v] = to;
     for (uint32_t f : vf_[v]) buckets_.update(f);
     bool ok = !crowded(v);
@@ -219,7 +228,7 @@ class Inserter {
       return false;
     }
     s_.snapped[v] = 1;
-    mark_changed(vf_[v]);
+    mark_changed(vf_[v], old_boxes);
     return true;
   }
 
