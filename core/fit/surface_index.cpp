@@ -45,8 +45,27 @@ struct Piece {
 
 struct Store {
   std::vector<Triangle> triangles;
+  std::vector<Vec3> normals;  // unit, or zero where too thin to trust (see plane_gap)
   std::vector<uint32_t> ids;
 };
+
+// Unit normal of abc, or zero when the triangle is so thin that the direction's rounding error
+// could exceed the margin plane_gap allows (1e-9 of the distance along the plane).
+Vec3 trusted_normal(const Vec3& a, const Vec3& b, const Vec3& c) {
+  const Vec3 u = b - a, v = c - a, n = cross(u, v);
+  const double len = norm(n);
+  if (!(len > 1e-6 * norm(u) * norm(v))) return {0, 0, 0};
+  return n * (1.0 / len);
+}
+
+// A lower bound on the distance from q to a triangle: its distance to the triangle's plane,
+// less a margin for rounding (0 or less: no bound). On side by side slivers (a cylinder's
+// sides in one cell) it dismisses the slivers turned away from q, which their boxes do not.
+double plane_gap(const Vec3& q, const Triangle& t, const Vec3& n) {
+  const double dx = q[0] - t.vertex(0).x(), dy = q[1] - t.vertex(0).y(), dz = q[2] - t.vertex(0).z();
+  const double s = n[0] * dx + n[1] * dy + n[2] * dz;
+  return std::fabs(s) - 1e-9 * (std::fabs(dx) + std::fabs(dy) + std::fabs(dz)) - 1e-300;
+}
 
 class PiecePrimitive {
  public:
@@ -207,6 +226,8 @@ class NearestTraits {
   void consider(uint32_t triangle) {
     const Triangle& t = store_.triangles[triangle];
     if (box_beyond(q_, t, best_d2)) return;
+    const double gap = plane_gap(q_, t, store_.normals[triangle]);
+    if (gap > 0 && gap * gap > best_d2) return;  // farther than the best even at its plane
     Vec3 nearest;
     const double d2 = squared_distance_to(q_, t, nearest);
     if (d2 < best_d2 || (d2 == best_d2 && triangle < best)) best_d2 = d2, best_point = nearest, best = triangle;
@@ -241,8 +262,11 @@ class WithinTraits {
     if (squared_distance_to_box(q_, piece.box) > r2_) return;
     for (uint32_t k = piece.first; k < piece.first + piece.count && !found; ++k) {
       const Triangle& t = store_.triangles[store_.ids[k]];
+      if (box_beyond(q_, t, r2_)) continue;
+      const double gap = plane_gap(q_, t, store_.normals[store_.ids[k]]);
+      if (gap > 0 && gap * gap > r2_) continue;
       Vec3 nearest;
-      if (!box_beyond(q_, t, r2_) && squared_distance_to(q_, t, nearest) <= r2_) found = true, triangle = store_.ids[k];
+      if (squared_distance_to(q_, t, nearest) <= r2_) found = true, triangle = store_.ids[k];
     }
   }
   bool do_intersect(const K::Point_3&, const Node& node) const { return squared_distance_to_box(q_, node.bbox()) <= r2_; }
@@ -289,12 +313,14 @@ struct SurfaceIndex::Impl {
 SurfaceIndex::SurfaceIndex(const std::vector<Vec3>& points, const std::vector<Tri>& triangles) : impl_(new Impl) {
   Store& store = impl_->store;
   store.triangles.reserve(triangles.size());
+  store.normals.reserve(triangles.size());
   std::vector<double> sizes;
   sizes.reserve(triangles.size());
   CGAL::Bbox_3 all;
   for (const Tri& t : triangles) {
     const Vec3 &a = points[t[0]], &b = points[t[1]], &c = points[t[2]];
     store.triangles.emplace_back(point(a), point(b), point(c));
+    store.normals.push_back(trusted_normal(a, b, c));
     const CGAL::Bbox_3 box = box_of(a, b, c);
     sizes.push_back(diagonal(box));
     all += box;
