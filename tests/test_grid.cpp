@@ -58,6 +58,41 @@ TEST(TriangleBox, SeparatingAxesDecideOverlap) {
   EXPECT_FALSE(grid::segment_overlaps_box({-1, 1, 0}, {1, 1, 0}, {-0.5, -0.5, -0.5}, {0.5, 0.5, 0.5}));
 }
 
+// The block search must find exactly the cells a test of every cell in the box finds, for
+// small triangles and for long slanted slivers whose box holds far more cells than they cross.
+TEST(TriangleBox, BlockSearchFindsTheSameCellsAsTestingEach) {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> coord(-3.0, 3.0), small(-0.4, 0.4);
+  const Vec3 origin{-3.17, -2.93, -3.05};
+  const double cell = 0.25, half_cell = cell * (0.5 + 1e-3);
+  size_t cells_found = 0;
+  for (int n = 0; n < 400; ++n) {
+    Vec3 a{coord(rng), coord(rng), coord(rng)};
+    // Alternately a long triangle across the box and a small one; some exactly on grid planes.
+    Vec3 b = n % 2 ? Vec3{coord(rng), coord(rng), coord(rng)} : a + Vec3{small(rng), small(rng), small(rng)};
+    Vec3 c = n % 2 ? b + Vec3{small(rng), small(rng), small(rng)} * 0.1 : a + Vec3{small(rng), small(rng), small(rng)};
+    if (n % 7 == 0) a[2] = b[2] = c[2] = origin[2] + 9 * cell;
+    int lo[3], hi[3];
+    for (int k = 0; k < 3; ++k) {
+      lo[k] = int(std::floor((std::min({a[k], b[k], c[k]}) - origin[k]) / cell - 1e-3));
+      hi[k] = int(std::floor((std::max({a[k], b[k], c[k]}) - origin[k]) / cell + 1e-3));
+    }
+    std::vector<std::array<int, 3>> each, blocks;
+    for (int z = lo[2]; z <= hi[2]; ++z)
+      for (int y = lo[1]; y <= hi[1]; ++y)
+        for (int x = lo[0]; x <= hi[0]; ++x) {
+          const Vec3 center{origin[0] + (x + 0.5) * cell, origin[1] + (y + 0.5) * cell, origin[2] + (z + 0.5) * cell};
+          if (triangle_overlaps_box(a, b, c, center, {half_cell, half_cell, half_cell})) each.push_back({x, y, z});
+        }
+    for_cells_overlapping(a, b, c, origin, cell, half_cell, lo, hi, [&](int x, int y, int z) { blocks.push_back({x, y, z}); });
+    std::sort(each.begin(), each.end());
+    std::sort(blocks.begin(), blocks.end());
+    ASSERT_EQ(each, blocks) << "triangle " << n;
+    cells_found += each.size();
+  }
+  EXPECT_GT(cells_found, 2000u);  // the triangles do cross many cells
+}
+
 TEST(Refine, FeaturesRefineAndFlatFacesDoNot) {
   // Normal spread is switched off (179 degrees) so features alone decide.
   Mesh box = box_mesh({0, 0, 0}, {1, 1, 1});

@@ -5,6 +5,7 @@
 #pragma once
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <utility>
 
 #include "common/vec.h"
@@ -34,6 +35,44 @@ inline bool triangle_overlaps_box(const Vec3& a, const Vec3& b, const Vec3& c, c
   double d = dot(n, v0);
   double r = h[0] * std::fabs(n[0]) + h[1] * std::fabs(n[1]) + h[2] * std::fabs(n[2]);
   return std::fabs(d) <= r;
+}
+
+// Calls fn(x, y, z) for every cell of the block lo..hi (inclusive, per axis) of a grid of cubes
+// of side `cell` from `origin` that triangle abc overlaps, each cell grown to half-width
+// `half_cell`: the cells a test of each one would find, but blocks of cells are tested first
+// and only those the triangle meets are opened. (A long slanted triangle's box holds hundreds
+// of cells for each one it passes through.) A block is grown a little beyond its cells, so
+// that rounding never drops a cell the cell's own test would keep.
+template <typename F>
+void for_cells_overlapping(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& origin, double cell, double half_cell,
+                           const int lo[3], const int hi[3], F&& fn) {
+  const int64_t count = int64_t(hi[0] - lo[0] + 1) * (hi[1] - lo[1] + 1) * (hi[2] - lo[2] + 1);
+  if (count <= 0) return;
+  if (count <= 8) {
+    const Vec3 half{half_cell, half_cell, half_cell};
+    for (int z = lo[2]; z <= hi[2]; ++z)
+      for (int y = lo[1]; y <= hi[1]; ++y)
+        for (int x = lo[0]; x <= hi[0]; ++x) {
+          const Vec3 center{origin[0] + (x + 0.5) * cell, origin[1] + (y + 0.5) * cell, origin[2] + (z + 0.5) * cell};
+          if (triangle_overlaps_box(a, b, c, center, half)) fn(x, y, z);
+        }
+    return;
+  }
+  Vec3 center, half;
+  const double grow = (half_cell - 0.5 * cell) + 1e-6 * cell;
+  for (int k = 0; k < 3; ++k) {
+    center[k] = origin[k] + 0.5 * (double(lo[k]) + double(hi[k]) + 1) * cell;
+    half[k] = 0.5 * double(hi[k] - lo[k] + 1) * cell + grow;
+  }
+  if (!triangle_overlaps_box(a, b, c, center, half)) return;
+  int axis = 0;
+  for (int k = 1; k < 3; ++k)
+    if (hi[k] - lo[k] > hi[axis] - lo[axis]) axis = k;
+  const int mid = lo[axis] + (hi[axis] - lo[axis]) / 2;
+  int lo2[3] = {lo[0], lo[1], lo[2]}, hi1[3] = {hi[0], hi[1], hi[2]};
+  hi1[axis] = mid, lo2[axis] = mid + 1;
+  for_cells_overlapping(a, b, c, origin, cell, half_cell, lo, hi1, fn);
+  for_cells_overlapping(a, b, c, origin, cell, half_cell, lo2, hi, fn);
 }
 
 inline bool segment_overlaps_box(const Vec3& a, const Vec3& b, const Vec3& lo, const Vec3& hi) {

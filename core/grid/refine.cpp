@@ -136,18 +136,13 @@ RefineResult build_refined_grid(const prep::PreparedInput& in, const WrapParams&
       const Vec3 &a = pts[tris[t][0]], &b = pts[tris[t][1]], &c = pts[tris[t][2]];
       Box3 tb;
       tb.add(a), tb.add(b), tb.add(c);
-      Coord lo, hi;
+      int lo[3], hi[3];
       for (int k = 0; k < 3; ++k) {
         lo[k] = int(std::floor((tb.lo[k] - origin[k]) / h0 - margin_fraction));
         hi[k] = int(std::floor((tb.hi[k] - origin[k]) / h0 + margin_fraction));
       }
-      Vec3 half{h0 * (0.5 + margin_fraction), h0 * (0.5 + margin_fraction), h0 * (0.5 + margin_fraction)};
-      for (int z = lo.z(); z <= hi.z(); ++z)
-        for (int y = lo.y(); y <= hi.y(); ++y)
-          for (int x = lo.x(); x <= hi.x(); ++x) {
-            Vec3 center{origin[0] + (x + 0.5) * h0, origin[1] + (y + 0.5) * h0, origin[2] + (z + 0.5) * h0};
-            if (triangle_overlaps_box(a, b, c, center, half)) hits.emplace_back(Coord(x, y, z), uint32_t(t));
-          }
+      for_cells_overlapping(a, b, c, origin, h0, h0 * (0.5 + margin_fraction), lo, hi,
+                            [&](int x, int y, int z) { hits.emplace_back(Coord(x, y, z), uint32_t(t)); });
     }
   });
   std::vector<std::pair<Coord, uint32_t>> hits;
