@@ -143,7 +143,9 @@ bool apart_at_shared_vertex(const P3& c, const P3& a, const P3& b, const P3& d, 
 }
 
 // Triangles intersect when they share points other than their common vertices/edge.
-bool triangles_intersect(const std::vector<P3>& p, const Tri& x, const Tri& y, bool use_proofs_2d = true) {
+// `p`: any container of points indexed by the triangles' vertices.
+template <typename Points>
+bool triangles_intersect(const Points& p, const Tri& x, const Tri& y, bool use_proofs_2d = true) {
   int shared = 0;
   int xi[3], yi[3];  // positions of shared vertices
   for (int i = 0; i < 3; ++i)
@@ -183,9 +185,10 @@ bool triangles_intersect(const std::vector<P3>& p, const Tri& x, const Tri& y, b
 }  // namespace
 
 bool triangle_pair_intersects(const std::vector<Vec3>& points, const Tri& a, const Tri& b, bool use_proofs_2d) {
-  // Only the six points involved are converted; the index map keeps the shared-vertex logic.
-  std::vector<P3> p;
-  p.reserve(6);
+  // Only the six points involved are converted (on the stack: this runs millions of times in a
+  // wrap, and a heap buffer each time showed in profiles); the index map keeps the
+  // shared-vertex logic.
+  std::array<P3, 6> p;
   Tri la, lb;
   std::array<uint32_t, 6> ids;
   size_t count = 0;
@@ -193,7 +196,7 @@ bool triangle_pair_intersects(const std::vector<Vec3>& points, const Tri& a, con
     for (size_t i = 0; i < count; ++i)
       if (ids[i] == v) return uint32_t(i);
     ids[count] = v;
-    p.push_back(to_point(points[v]));
+    p[count] = to_point(points[v]);
     return uint32_t(count++);
   };
   for (int k = 0; k < 3; ++k) la[k] = local(a[k]);
