@@ -236,15 +236,6 @@ class Coarsener {
       (tri[0] == v || tri[1] == v || tri[2] == v ? out.shared : out.moved).push_back(f);
     }
     if (out.shared.size() != 2) return false;
-    Marks& scratch = marks_.local();
-    neighbours(u, scratch.nu), neighbours(v, scratch.nv);
-    size_t common = 0;
-    for (size_t i = 0, j = 0; i < scratch.nu.size() && j < scratch.nv.size();) {
-      if (scratch.nu[i] < scratch.nv[j]) ++i;
-      else if (scratch.nv[j] < scratch.nu[i]) ++j;
-      else ++common, ++i, ++j;
-    }
-    if (common != 2) return false;
     if (vf_[v].size() + out.moved.size() > 24) return false;  // a star vertex makes slivers
 
     for (uint32_t f : out.moved) {
@@ -264,6 +255,17 @@ class Coarsener {
       if (cos_new > cos_min_angle_ && cos_new > min_angle_cos_max(p_[o[0]], p_[o[1]], p_[o[2]])) return false;
       out.fresh.push_back(n);
     }
+    // The link condition, after the shape tests that refuse most collapses (it sorts two
+    // neighbour lists).
+    Marks& scratch = marks_.local();
+    neighbours(u, scratch.nu), neighbours(v, scratch.nv);
+    size_t common = 0;
+    for (size_t i = 0, j = 0; i < scratch.nu.size() && j < scratch.nv.size();) {
+      if (scratch.nu[i] < scratch.nv[j]) ++i;
+      else if (scratch.nv[j] < scratch.nu[i]) ++j;
+      else ++common, ++i, ++j;
+    }
+    if (common != 2) return false;
     // Close to the input: the centroid of every new triangle and the midpoint of every new
     // edge, once each (the spokes from v; the edge across from v is an old one, unchanged).
     // Half the queries of probing each triangle's three midpoints, and these queries were
