@@ -166,6 +166,13 @@ TEST(SurfaceIndex, NearestPointsAreExactOnSliversAndFans) {
     const double d = std::sqrt(best);
     EXPECT_TRUE(index.within(q, d * 1.001 + 1e-12));
     if (d > 1e-6) EXPECT_FALSE(index.within(q, d * 0.999));
+    // Bounded: the same hit within a radius beyond the nearest distance, none short of it.
+    fit::SurfaceIndex::Hit near;
+    ASSERT_TRUE(index.closest_within(q, d * 1.001 + 1e-12, near)) << "query " << k;
+    EXPECT_EQ(near.triangle, hit.triangle);
+    EXPECT_EQ(near.point, hit.point);
+    EXPECT_EQ(near.squared_distance, hit.squared_distance);
+    if (d > 1e-6) EXPECT_FALSE(index.closest_within(q, d * 0.999, near)) << "query " << k;
   }
 }
 

@@ -402,22 +402,31 @@ SurfaceIndex::SurfaceIndex(const std::vector<Vec3>& points, const std::vector<Tr
 
 SurfaceIndex::~SurfaceIndex() = default;
 
+namespace {
+// Start from the triangle this thread found last on this index: queries come in runs along
+// a surface, so it is usually near, and a near start prunes most of the tree. The answer
+// does not depend on it (see NearestTraits). A traversal starting at best_d2 = r^2 finds the
+// same nearest triangle when one is within r (a triangle exactly at r is still taken).
+thread_local const void* last_closest_index = nullptr;
+thread_local uint32_t last_closest_triangle = UINT32_MAX;
+}  // namespace
+
 SurfaceIndex::Hit SurfaceIndex::closest(const Vec3& q) const {
-  // Start from the triangle this thread found last on this index: queries come in runs along
-  // a surface, so it is usually near, and a near start prunes most of the tree. The answer
-  // does not depend on it (see NearestTraits).
-  thread_local const Impl* last_index = nullptr;
-  thread_local uint32_t last_triangle = UINT32_MAX;
+  Hit hit;
+  if (!closest_within(q, std::numeric_limits<double>::infinity(), hit)) {  // no input triangles
+    hit.point = q, hit.triangle = UINT32_MAX, hit.squared_distance = std::numeric_limits<double>::infinity(), hit.normal = {0, 0, 0};
+  }
+  return hit;
+}
+
+bool SurfaceIndex::closest_within(const Vec3& q, double radius, Hit& hit) const {
   const Store& store = impl_->store;
   NearestTraits traits(q, store);
-  if (last_index == impl_.get() && last_triangle < store.triangles.size()) traits.consider(last_triangle);
+  traits.best_d2 = radius * radius;
+  if (last_closest_index == impl_.get() && last_closest_triangle < store.triangles.size()) traits.consider(last_closest_triangle);
   impl_->tree.traversal_with_priority(point(q), traits);
-  last_index = impl_.get(), last_triangle = traits.best;
-  Hit hit;
-  if (traits.best == UINT32_MAX) {  // no input triangles
-    hit.point = q, hit.triangle = UINT32_MAX, hit.squared_distance = traits.best_d2, hit.normal = {0, 0, 0};
-    return hit;
-  }
+  if (traits.best == UINT32_MAX) return false;
+  last_closest_index = impl_.get(), last_closest_triangle = traits.best;
   hit.point = traits.best_point;
   hit.triangle = traits.best;
   hit.squared_distance = traits.best_d2;
@@ -425,7 +434,7 @@ SurfaceIndex::Hit SurfaceIndex::closest(const Vec3& q) const {
   K::Vector_3 n = CGAL::cross_product(t.vertex(1) - t.vertex(0), t.vertex(2) - t.vertex(0));
   double len = std::sqrt(n.squared_length());
   hit.normal = len > 0 ? Vec3{n.x() / len, n.y() / len, n.z() / len} : Vec3{0, 0, 0};
-  return hit;
+  return true;
 }
 
 bool SurfaceIndex::within(const Vec3& q, double radius) const {

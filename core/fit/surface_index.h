@@ -23,6 +23,9 @@ class SurfaceIndex {
     Vec3 normal;  // unit normal of the triangle hit (its vertex order decides the sign)
   };
   Hit closest(const Vec3& query) const;
+  // The same hit when the input is within `radius` of the query (false, and `hit` untouched,
+  // when it is not): boxes beyond the radius are never opened, so a far query costs little.
+  bool closest_within(const Vec3& query, double radius, Hit& hit) const;
   double squared_distance(const Vec3& query) const { return closest(query).squared_distance; }
   // Is the input within `radius` of the query? (Much cheaper than closest() for small radii.)
   bool within(const Vec3& query, double radius) const;

@@ -22,8 +22,8 @@ double angle_deg(const Vec3& u, const Vec3& w) { return std::atan2(norm(cross(u,
 // of its normal cone that points at q (the wrap over a rim is not "perpendicular" to the wall
 // below the rim).
 double deviation_at(const Vec3& q, const Vec3& unit_normal, double reach, const QualityReference& ref) {
-  auto hit = ref.input->closest(q);
-  if (hit.squared_distance > reach * reach) return -1;
+  fit::SurfaceIndex::Hit hit;
+  if (!ref.input->closest_within(q, reach, hit)) return -1;
   const double d = std::sqrt(hit.squared_distance);
   const Vec3 n = d > 1e-6 * reach ? (q - hit.point) * (1.0 / d) : hit.normal;
   if (norm2(n) == 0) return -1;
