@@ -18,18 +18,6 @@ int32_t AdaptiveGrid::get(int level, const Coord& c) const { return grids_[level
 
 void AdaptiveGrid::set(int level, const Coord& c, int32_t value) { grids_[level]->tree().setValue(c, value); }
 
-LeafRef AdaptiveGrid::leaf_at(int level, const Coord& c) const {
-  Coord c0(c.x() >> level, c.y() >> level, c.z() >> level);  // arithmetic shift = floor division
-  if (!in_box0(c0)) return LeafRef{0, c0, 1, true};
-  for (int l = 0; l <= level; ++l) {
-    int s = level - l;
-    Coord cl(c.x() >> s, c.y() >> s, c.z() >> s);
-    int32_t v = get(l, cl);
-    if (v != kRefined) return LeafRef{l, cl, v, false};
-  }
-  return LeafRef{level, c, kRefined, false};
-}
-
 size_t AdaptiveGrid::count(int level, int32_t value) const {
   size_t n = 0;
   for (auto it = grids_[level]->cbeginValueOn(); it; ++it)

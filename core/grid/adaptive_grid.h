@@ -51,33 +51,53 @@ class AdaptiveGrid {
   int32_t get(int level, const Coord& c) const;
   void set(int level, const Coord& c, int32_t value);
 
+  // Reads through the trees (from the root each time; safe from any number of threads).
+  struct TreeGet {
+    const AdaptiveGrid* grid;
+    int32_t operator()(int level, const Coord& c) const { return grid->get(level, c); }
+  };
   // The leaf that contains cell c of `level` (c itself, or an ancestor). If c is refined,
   // returns c with value kRefined.
-  LeafRef leaf_at(int level, const Coord& c) const;
+  LeafRef leaf_at(int level, const Coord& c) const { return leaf_at_by(TreeGet{this}, level, c); }
 
   // Calls f(LeafRef) for each leaf across face (axis, dir) of cell c: the same-or-coarser
   // neighbour, or all finer leaves of a refined neighbour that touch the face.
   template <typename F>
   void for_each_face_neighbour(int level, const Coord& c, int axis, int dir, F&& f) const {
-    Coord n = c;
-    n[axis] += dir;
-    LeafRef r = leaf_at(level, n);
-    if (r.value != kRefined) {
-      f(r);
-      return;
-    }
-    descend_face(level, n, axis, dir, f);
+    for_each_face_neighbour_by(TreeGet{this}, level, c, axis, dir, f);
   }
 
-  // Calls f(level, coord, value) for every leaf cell stored in the box (level 0 densely).
+  // Cached access for one thread's long walk through neighbouring cells (the flood fill):
+  // VDB value accessors keep the nodes last visited, where get() starts from the root every
+  // time. Only while no other thread reads or changes the grid.
+  class Cursor {
+   public:
+    explicit Cursor(AdaptiveGrid& g) : g_(g) {
+      for (auto& grid : g.grids_) acc_.push_back(grid->getAccessor());
+    }
+    int32_t get(int level, const Coord& c) { return acc_[size_t(level)].getValue(c); }
+    void set(int level, const Coord& c, int32_t value) { acc_[size_t(level)].setValue(c, value); }
+    template <typename F>
+    void for_each_face_neighbour(int level, const Coord& c, int axis, int dir, F&& f) {
+      g_.for_each_face_neighbour_by([this](int l, const Coord& x) { return get(l, x); }, level, c, axis, dir, f);
+    }
+
+   private:
+    AdaptiveGrid& g_;
+    std::vector<openvdb::Int32Grid::Accessor> acc_;
+  };
+
+  // Calls f(level, coord, value) for every leaf cell stored in the box (level 0 densely,
+  // through a cached accessor: the cells come in order).
   template <typename F>
   void for_each_leaf(F&& f) const {
     const Coord& d = dims0_;
+    auto level0 = grids_[0]->getConstAccessor();
     for (int z = 0; z < d.z(); ++z)
       for (int y = 0; y < d.y(); ++y)
         for (int x = 0; x < d.x(); ++x) {
           Coord c(x, y, z);
-          int32_t v = get(0, c);
+          int32_t v = level0.getValue(c);
           if (v != kRefined) f(0, c, v);
         }
     for (int l = 1; l <= levels_; ++l)
@@ -95,8 +115,31 @@ class AdaptiveGrid {
   size_t count(int level, int32_t value) const;
 
  private:
-  template <typename F>
-  void descend_face(int level, const Coord& n, int axis, int dir, F& f) const {
+  template <typename Get>
+  LeafRef leaf_at_by(Get&& get, int level, const Coord& c) const {
+    Coord c0(c.x() >> level, c.y() >> level, c.z() >> level);  // arithmetic shift = floor division
+    if (!in_box0(c0)) return LeafRef{0, c0, 1, true};
+    for (int l = 0; l <= level; ++l) {
+      int s = level - l;
+      Coord cl(c.x() >> s, c.y() >> s, c.z() >> s);
+      int32_t v = get(l, cl);
+      if (v != kRefined) return LeafRef{l, cl, v, false};
+    }
+    return LeafRef{level, c, kRefined, false};
+  }
+  template <typename Get, typename F>
+  void for_each_face_neighbour_by(Get&& get, int level, const Coord& c, int axis, int dir, F& f) const {
+    Coord n = c;
+    n[axis] += dir;
+    LeafRef r = leaf_at_by(get, level, n);
+    if (r.value != kRefined) {
+      f(r);
+      return;
+    }
+    descend_face(get, level, n, axis, dir, f);
+  }
+  template <typename Get, typename F>
+  void descend_face(Get& get, int level, const Coord& n, int axis, int dir, F& f) const {
     // Children of n on the side facing the cell we came from (dir>0: low side of n).
     int side = dir > 0 ? 0 : 1;
     for (int a = 0; a < 2; ++a)
@@ -108,7 +151,7 @@ class AdaptiveGrid {
         Coord child(2 * n.x() + bits[0], 2 * n.y() + bits[1], 2 * n.z() + bits[2]);
         int32_t v = get(level + 1, child);
         if (v == kRefined)
-          descend_face(level + 1, child, axis, dir, f);
+          descend_face(get, level + 1, child, axis, dir, f);
         else
           f(LeafRef{level + 1, child, v, false});
       }
