@@ -68,6 +68,7 @@ LatticeSurface extract_faces(const AdaptiveGrid& g, int32_t label, VolumeChoice 
   std::vector<std::vector<Quad>> chunks((cells.size() + chunk - 1) / chunk);
   tbb::parallel_for(size_t(0), chunks.size(), [&](size_t k) {
     std::vector<Quad>& out = chunks[k];
+    AdaptiveGrid::Reader reader(g);  // neighbouring cells: cached reads
     for (size_t i = k * chunk; i < std::min(cells.size(), (k + 1) * chunk); ++i) {
       const auto& [level, c] = cells[i];
       const int32_t s = g.fine_units(level);
@@ -76,7 +77,7 @@ LatticeSurface extract_faces(const AdaptiveGrid& g, int32_t label, VolumeChoice 
         for (int dir = -1; dir <= 1; dir += 2) {
           const int32_t plane = C[axis] + (dir > 0 ? s : 0);
           const int b = (axis + 1) % 3, cc = (axis + 2) % 3;
-          g.for_each_face_neighbour(level, c, axis, dir, [&, level = level](const LeafRef& n) {
+          reader.for_each_face_neighbour(level, c, axis, dir, [&, level = level](const LeafRef& n) {
             if (in_volume(n, label, choice)) return;
             if (n.outside_box || n.level <= level) {
               out.push_back(make_quad(axis, plane, C[b], C[cc], s, orient * dir));
@@ -178,13 +179,14 @@ size_t exclude_nonmanifold_cells(AdaptiveGrid& g, int32_t label, VolumeChoice ch
     return r.ijk.x() > 0 && r.ijk.y() > 0 && r.ijk.z() > 0 && r.ijk.x() < d.x() - 1 && r.ijk.y() < d.y() - 1 &&
            r.ijk.z() < d.z() - 1;
   };
+  AdaptiveGrid::Reader reader(g);  // nodes come in order: cached reads (the grid changes only after)
   for (const Coord& p : surf.nodes) {
     // The 8 finest cells around node p; octant bit k set means the +side along axis k.
     LeafRef leaf[8];
     bool in[8];
     for (int o = 0; o < 8; ++o) {
       Coord cell(p.x() - 1 + (o & 1), p.y() - 1 + ((o >> 1) & 1), p.z() - 1 + ((o >> 2) & 1));
-      leaf[o] = g.leaf_at(L, cell);
+      leaf[o] = reader.leaf_at(L, cell);
       LeafKey key{leaf[o].level, leaf[o].ijk};
       in[o] = in_volume(leaf[o], label, choice) && !to_exclude.count(key);
     }

@@ -86,6 +86,26 @@ class AdaptiveGrid {
     AdaptiveGrid& g_;
     std::vector<openvdb::Int32Grid::Accessor> acc_;
   };
+  // Cached reads only, one per thread or per chunk of parallel work, while nothing changes
+  // the grid.
+  class Reader {
+   public:
+    explicit Reader(const AdaptiveGrid& g) : g_(g) {
+      for (const auto& grid : g.grids_) acc_.push_back(grid->getConstAccessor());
+    }
+    int32_t get(int level, const Coord& c) { return acc_[size_t(level)].getValue(c); }
+    LeafRef leaf_at(int level, const Coord& c) {
+      return g_.leaf_at_by([this](int l, const Coord& x) { return get(l, x); }, level, c);
+    }
+    template <typename F>
+    void for_each_face_neighbour(int level, const Coord& c, int axis, int dir, F&& f) {
+      g_.for_each_face_neighbour_by([this](int l, const Coord& x) { return get(l, x); }, level, c, axis, dir, f);
+    }
+
+   private:
+    const AdaptiveGrid& g_;
+    std::vector<openvdb::Int32Grid::ConstAccessor> acc_;
+  };
 
   // Calls f(level, coord, value) for every leaf cell stored in the box (level 0 densely,
   // through a cached accessor: the cells come in order).
