@@ -351,8 +351,9 @@ bool drop_cut_off_pockets(AdaptiveGrid& g, int32_t label, const std::vector<std:
       const uint32_t me = find(up, mine);
       if (--pending[me] == 0) finished.push_back(me), --open;  // all of a cut-off piece
     }
-    if (open > 1) return false;
-    if (open == 0) return false;  // every search ended: nothing reached beyond (a tiny volume)  // every search ended: no piece reached beyond (a tiny volume)
+    // Undecided within the budget, or every search ended (no piece reached beyond: a tiny
+    // volume): a full labelling decides.
+    if (open != 1) return false;
     for (uint32_t f : finished) {
       std::vector<std::pair<int, Coord>> cells;
       double volume = 0;
@@ -362,7 +363,7 @@ bool drop_cut_off_pockets(AdaptiveGrid& g, int32_t label, const std::vector<std:
           const double side = g.fine_units(queue[k].first);
           volume += side * side * side;
         }
-      if (volume >= limit()) return false;  // not clearly smaller than the rest: a full labelling decides  // not clearly smaller than the rest: a full labelling decides
+      if (volume >= limit()) return false;  // not clearly smaller than the rest: a full labelling decides
       pockets.push_back(std::move(cells));
     }
   }

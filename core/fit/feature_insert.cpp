@@ -94,12 +94,14 @@ class Inserter {
   template <typename Faces>
   void mark_changed(const Faces& faces, const std::vector<Box3>& before = {}) {
     ++clock_;
-    for (uint32_t f : faces) {
-      Box3 box;
-      for (uint32_t v : t_[f]) box.add(p_[v]);
-      for_change_cells(box.lo, box.hi, [&](const GridKey& k) { changed_cells_[k] = clock_; });
-    }
-    for (const Box3& box : before) for_change_cells(box.lo, box.hi, [&](const GridKey& k) { changed_cells_[k] = clock_; });
+    auto mark = [&](const Box3& box) { for_change_cells(box.lo, box.hi, [&](const GridKey& k) { changed_cells_[k] = clock_; }); };
+    for (uint32_t f : faces) mark(face_box(f));
+    for (const Box3& box : before) mark(box);
+  }
+  Box3 face_box(uint32_t f) const {
+    Box3 box;
+    for (uint32_t v : t_[f]) box.add(p_[v]);
+    return box;
   }
 
   Vec3 world(const Vec3& local) const {
@@ -107,8 +109,7 @@ class Inserter {
     return prm_.float_coordinates ? round_to_float(w) : w;
   }
 
-  // Brings the wrap to curve point q when it misses it; returns the node now at q, if any.
-  // `refused`: q was missed and some change that could reach it was refused.
+  // A wrap edge near a curve point: how near, and where along it (0 to 1) the nearest point is.
   struct Candidate {
     double distance, t;
     uint32_t a, b;
@@ -136,6 +137,8 @@ class Inserter {
     return nearest;
   }
 
+  // Brings the wrap to curve point q when it misses it; returns the node now at q, if any.
+  // `refused`: q was missed and some change that could reach it was refused.
   uint32_t visit(const Vec3& q, bool& refused, FeatureInsertStats& stats) {
     // The nearest six edges in reach are all that is tried. Looked for within a quarter of the
     // reach first: when six are there, they are the nearest six of the whole reach, and a
@@ -201,12 +204,7 @@ class Inserter {
     std::vector<Vec3> before;
     std::vector<Tri> old_faces;
     std::vector<Box3> old_boxes;
-    for (uint32_t f : vf_[v]) {
-      before.push_back(normal_of(t_[f])), old_faces.push_back(t_[f]);
-      Box3 box;
-      for (uint32_t w : t_[f]) box.add(p_[w]);
-      old_boxes.push_back(box);
-    }
+    for (uint32_t f : vf_[v]) before.push_back(normal_of(t_[f])), old_faces.push_back(t_[f]), old_boxes.push_back(face_box(f));
     p_[v] = to;
     for (uint32_t f : vf_[v]) buckets_.update(f);
     bool ok = !crowded(v);

@@ -67,32 +67,12 @@ class AdaptiveGrid {
     for_each_face_neighbour_by(TreeGet{this}, level, c, axis, dir, f);
   }
 
-  // Cached access for one thread's long walk through neighbouring cells (the flood fill):
-  // VDB value accessors keep the nodes last visited, where get() starts from the root every
-  // time. Only while no other thread reads or changes the grid.
-  class Cursor {
+  // Cached access for a walk through neighbouring cells: VDB value accessors keep the nodes
+  // last visited, where get() starts from the root every time. One per thread (or per chunk
+  // of parallel work).
+  template <typename Accessor>
+  class Cached {
    public:
-    explicit Cursor(AdaptiveGrid& g) : g_(g) {
-      for (auto& grid : g.grids_) acc_.push_back(grid->getAccessor());
-    }
-    int32_t get(int level, const Coord& c) { return acc_[size_t(level)].getValue(c); }
-    void set(int level, const Coord& c, int32_t value) { acc_[size_t(level)].setValue(c, value); }
-    template <typename F>
-    void for_each_face_neighbour(int level, const Coord& c, int axis, int dir, F&& f) {
-      g_.for_each_face_neighbour_by([this](int l, const Coord& x) { return get(l, x); }, level, c, axis, dir, f);
-    }
-
-   private:
-    AdaptiveGrid& g_;
-    std::vector<openvdb::Int32Grid::Accessor> acc_;
-  };
-  // Cached reads only, one per thread or per chunk of parallel work, while nothing changes
-  // the grid.
-  class Reader {
-   public:
-    explicit Reader(const AdaptiveGrid& g) : g_(g) {
-      for (const auto& grid : g.grids_) acc_.push_back(grid->getConstAccessor());
-    }
     int32_t get(int level, const Coord& c) { return acc_[size_t(level)].getValue(c); }
     LeafRef leaf_at(int level, const Coord& c) {
       return g_.leaf_at_by([this](int l, const Coord& x) { return get(l, x); }, level, c);
@@ -102,9 +82,25 @@ class AdaptiveGrid {
       g_.for_each_face_neighbour_by([this](int l, const Coord& x) { return get(l, x); }, level, c, axis, dir, f);
     }
 
-   private:
+   protected:
+    explicit Cached(const AdaptiveGrid& g) : g_(g) {}
     const AdaptiveGrid& g_;
-    std::vector<openvdb::Int32Grid::ConstAccessor> acc_;
+    std::vector<Accessor> acc_;
+  };
+  // Reads only, while nothing changes the grid.
+  class Reader : public Cached<openvdb::Int32Grid::ConstAccessor> {
+   public:
+    explicit Reader(const AdaptiveGrid& g) : Cached(g) {
+      for (const auto& grid : g.grids_) acc_.push_back(grid->getConstAccessor());
+    }
+  };
+  // Reads and writes (the flood fill), while no other thread uses the grid.
+  class Cursor : public Cached<openvdb::Int32Grid::Accessor> {
+   public:
+    explicit Cursor(AdaptiveGrid& g) : Cached(g) {
+      for (auto& grid : g.grids_) acc_.push_back(grid->getAccessor());
+    }
+    void set(int level, const Coord& c, int32_t value) { acc_[size_t(level)].setValue(c, value); }
   };
 
   // Calls f(level, coord, value) for every leaf cell stored in the box (level 0 densely,

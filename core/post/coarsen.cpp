@@ -44,7 +44,6 @@ class Coarsener {
       for (uint32_t v : t[f]) vf_[v].push_back(f);
     cos_turn_ = std::cos(prm_.max_normal_turn_deg * M_PI / 180.0);
     cos_min_angle_ = std::cos(prm_.min_angle_deg * M_PI / 180.0);
-    dev2_ = prm_.max_deviation * prm_.max_deviation;
     for (uint32_t f = 0; f < t.size(); ++f)
       for (int e = 0; e < 3; ++e) {
         uint32_t a = t[f][e], b = t[f][(e + 1) % 3];
@@ -190,13 +189,18 @@ class Coarsener {
     std::vector<uint32_t> shared, moved;
     std::vector<Tri> fresh;
   };
-  void push(uint32_t a, uint32_t b) {
-    double l2 = norm2(p_[a] - p_[b]);
-    if (l2 <= prm_.max_edge * prm_.max_edge) queue_.push({l2, a, b, stamp_[a], stamp_[b]});
+  // Edge a-b as a queue entry; false when it is already too long to collapse.
+  bool entry_of(uint32_t a, uint32_t b, Entry& e) const {
+    e = {norm2(p_[a] - p_[b]), a, b, stamp_[a], stamp_[b]};
+    return e.length2 <= prm_.max_edge * prm_.max_edge;
   }
-  void push_at_start(uint32_t a, uint32_t b) {
-    double l2 = norm2(p_[a] - p_[b]);
-    if (l2 <= prm_.max_edge * prm_.max_edge) queue_.add({l2, a, b, stamp_[a], stamp_[b]});
+  void push(uint32_t a, uint32_t b) {  // an edge a collapse changed
+    Entry e;
+    if (entry_of(a, b, e)) queue_.push(e);
+  }
+  void push_at_start(uint32_t a, uint32_t b) {  // an edge of the pass about to start
+    Entry e;
+    if (entry_of(a, b, e)) queue_.add(e);
   }
   // a, b and all their neighbours: everything a collapse of the edge reads or writes.
   void closed_ring(uint32_t a, uint32_t b, std::vector<uint32_t>& out) const {
@@ -257,7 +261,7 @@ class Coarsener {
     }
     // The link condition, after the shape tests that refuse most collapses (it sorts two
     // neighbour lists).
-    Marks& scratch = marks_.local();
+    Marks& scratch = marks_.local();  // this thread's buffers for the rest of the check
     neighbours(u, scratch.nu), neighbours(v, scratch.nv);
     size_t common = 0;
     for (size_t i = 0, j = 0; i < scratch.nu.size() && j < scratch.nv.size();) {
@@ -270,38 +274,38 @@ class Coarsener {
     // edge, once each (the spokes from v; the edge across from v is an old one, unchanged).
     // Half the queries of probing each triangle's three midpoints, and these queries were
     // most of a successful check.
-    Marks& probes = marks_.local();
-    probes.spokes.clear();
+    std::vector<uint32_t>& spokes = scratch.spokes;
+    spokes.clear();
     for (const Tri& n : out.fresh) {
       const Vec3 &a = p_[n[0]], &b = p_[n[1]], &c = p_[n[2]];
       if (!near_input((a + b + c) * (1.0 / 3.0))) return false;
       for (uint32_t w : n)
-        if (w != v) probes.spokes.push_back(w);
+        if (w != v) spokes.push_back(w);
     }
-    std::sort(probes.spokes.begin(), probes.spokes.end());
-    probes.spokes.erase(std::unique(probes.spokes.begin(), probes.spokes.end()), probes.spokes.end());
-    for (uint32_t w : probes.spokes)
+    std::sort(spokes.begin(), spokes.end());
+    spokes.erase(std::unique(spokes.begin(), spokes.end()), spokes.end());
+    for (uint32_t w : spokes)
       if (!near_input((p_[v] + p_[w]) * 0.5)) return false;
     // No intersection among the new triangles, nor with the rest of the surface: one bucket
     // scan over the box of all new triangles (one scan each read mostly the same cells again).
-    Marks& marks = marks_.local();
-    marks.boxes.clear();
+    std::vector<Box3>& boxes = scratch.boxes;
+    boxes.clear();
     Box3 all;
     for (size_t i = 0; i < out.fresh.size(); ++i) {
       if (check::triangle_is_degenerate(p_, out.fresh[i])) return false;
       for (size_t j = 0; j < i; ++j)
         if (check::triangle_pair_intersects(p_, out.fresh[i], out.fresh[j])) return false;
-      marks.boxes.push_back(box_of(out.fresh[i]));
-      all.add(marks.boxes.back().lo), all.add(marks.boxes.back().hi);
+      boxes.push_back(box_of(out.fresh[i]));
+      all.add(boxes.back().lo), all.add(boxes.back().hi);
     }
     bool hit = false;
-    buckets_.for_each_in_box(all, marks.seen, marks.stamp, [&](uint32_t g) {
+    buckets_.for_each_in_box(all, scratch.seen, scratch.stamp, [&](uint32_t g) {
       if (hit || !alive_[g]) return;
       const Tri& other = t_[g];
       if (other[0] == u || other[1] == u || other[2] == u) return;  // replaced or removed
       const Box3& box = buckets_.box(g);
       for (size_t i = 0; i < out.fresh.size() && !hit; ++i)
-        hit = overlap(marks.boxes[i], box) && check::triangle_pair_intersects(p_, out.fresh[i], other);
+        hit = overlap(boxes[i], box) && check::triangle_pair_intersects(p_, out.fresh[i], other);
     });
     if (hit) return false;
     out.u = u, out.v = v, out.ok = true;
@@ -416,7 +420,7 @@ class Coarsener {
   std::vector<uint32_t> ring_claim_, end_claim_, made_in_, changed_in_;
   uint32_t batch_id_ = 0;
   std::unordered_map<GridKey, std::vector<uint32_t>, GridKeyHash> batch_made_;  // the batch's new triangles
-  struct Marks {  // per thread: bucket marks, and neighbour lists for the link condition
+  struct Marks {  // per thread: bucket marks and plan()'s scratch lists
     std::vector<uint32_t> seen;
     uint32_t stamp = 0;
     std::vector<uint32_t> nu, nv;
@@ -428,7 +432,7 @@ class Coarsener {
   uint32_t pass_ = 0;
   std::vector<std::vector<uint32_t>> vf_;
   EdgeQueue queue_;
-  double cos_turn_ = 0, cos_min_angle_ = 0, dev2_ = 0;
+  double cos_turn_ = 0, cos_min_angle_ = 0;
 };
 
 }  // namespace
