@@ -2,6 +2,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <map>
 #include <memory>
 #include <random>
 
@@ -161,6 +162,143 @@ TEST(FloodFill, NestedShellsGiveThreeVolumesAndInsideIsTheLargest) {
   double chosen = comps.volume[inside - comps.first_label];
   for (size_t i = 0; i < comps.count(); ++i)
     if (!comps.touches_outside[i]) EXPECT_GE(chosen, comps.volume[i]);
+}
+
+namespace {
+
+// A grid larger than a few level-0 blocks (and not a multiple of them) with hollow boxes of
+// touched cells, some with a hole, random touched and refined cells between: components of
+// every kind, large uniform stretches of free space, and blocks clipped by the box.
+std::unique_ptr<grid::AdaptiveGrid> blocky_grid(uint32_t seed) {
+  const Coord dims(29, 21, 26);
+  auto g = std::make_unique<grid::AdaptiveGrid>(Vec3{0, 0, 0}, 1.0, 1, dims);
+  if (seed == 0) {
+    // One pocket: the uniform block 8..15 and two layers of a mixed block above it, reached
+    // from the block only across its top face.
+    for (int z = 7; z <= 18; ++z)
+      for (int y = 7; y <= 16; ++y)
+        for (int x = 7; x <= 16; ++x)
+          if (x == 7 || x == 16 || y == 7 || y == 16 || z == 7 || z == 18) g->set(0, Coord(x, y, z), grid::kTouched);
+    return g;
+  }
+  std::mt19937 rng(seed);
+  std::uniform_int_distribution<int> pick(0, 1 << 20);
+  for (int shell = 0; shell < 3; ++shell) {
+    Coord lo, hi;
+    for (int k = 0; k < 3; ++k) {
+      lo[k] = 1 + pick(rng) % (dims[k] / 2);
+      hi[k] = std::min(dims[k] - 2, lo[k] + 4 + pick(rng) % (dims[k] / 2));
+    }
+    const bool holed = shell == 2;
+    for (int z = lo.z(); z <= hi.z(); ++z)
+      for (int y = lo.y(); y <= hi.y(); ++y)
+        for (int x = lo.x(); x <= hi.x(); ++x) {
+          const bool wall = x == lo.x() || x == hi.x() || y == lo.y() || y == hi.y() || z == lo.z() || z == hi.z();
+          const bool hole = holed && z == hi.z() && std::abs(x - (lo.x() + hi.x()) / 2) <= 1 && std::abs(y - (lo.y() + hi.y()) / 2) <= 1;
+          if (wall && !hole) g->set(0, Coord(x, y, z), grid::kTouched);
+        }
+  }
+  for (int n = 0; n < 60; ++n) {
+    const Coord c(1 + pick(rng) % (dims.x() - 2), 1 + pick(rng) % (dims.y() - 2), 1 + pick(rng) % (dims.z() - 2));
+    if (g->get(0, c) != grid::kFree) continue;  // a refined cell keeps its children
+    if (n % 3) {
+      g->set(0, c, grid::kTouched);
+      continue;
+    }
+    g->set(0, c, grid::kRefined);
+    for (int k = 0; k < 8; ++k)
+      g->set(1, Coord(2 * c.x() + (k & 1), 2 * c.y() + ((k >> 1) & 1), 2 * c.z() + ((k >> 2) & 1)),
+             pick(rng) % 3 == 0 ? grid::kTouched : grid::kFree);
+  }
+  return g;
+}
+
+struct LeafKey {
+  int level;
+  Coord c;
+  bool operator<(const LeafKey& o) const { return level != o.level ? level < o.level : c < o.c; }
+};
+
+}  // namespace
+
+// The flood fill labels uniform level-0 blocks whole (VDB tiles). Its labels, volumes and
+// flags must be those of a plain walk from leaf to leaf, numbered the same way: the outside
+// first, then in the order of for_each_leaf.
+TEST(FloodFill, LabellingByBlocksMatchesAWalkFromLeafToLeaf) {
+  for (uint32_t seed = 0; seed <= 6; ++seed) {
+    SCOPED_TRACE("seed " + std::to_string(seed));
+    auto g = blocky_grid(seed);
+    std::vector<LeafKey> leaves;
+    g->for_each_leaf([&](int level, const Coord& c, int32_t v) {
+      if (v == grid::kFree) leaves.push_back({level, c});
+    });
+    std::map<LeafKey, int32_t> expected;
+    std::vector<double> volume;
+    std::vector<uint8_t> outside, level0;
+    auto walk = [&](const LeafKey& start) {
+      const int32_t label = int32_t(volume.size()) + 1;
+      volume.push_back(0), outside.push_back(0), level0.push_back(0);
+      std::vector<LeafKey> queue{start};
+      expected[start] = label;
+      for (size_t q = 0; q < queue.size(); ++q) {
+        const LeafKey cur = queue[q];
+        const double side = g->fine_units(cur.level);
+        volume.back() += side * side * side;
+        level0.back() |= cur.level == 0;
+        for (int axis = 0; axis < 3; ++axis)
+          for (int dir = -1; dir <= 1; dir += 2)
+            g->for_each_face_neighbour(cur.level, cur.c, axis, dir, [&](const grid::LeafRef& n) {
+              if (n.outside_box) outside.back() = 1;
+              if (n.outside_box || n.value != grid::kFree) return;
+              if (expected.emplace(LeafKey{n.level, n.ijk}, label).second) queue.push_back({n.level, n.ijk});
+            });
+      }
+    };
+    walk({0, Coord(0, 0, 0)});
+    for (const LeafKey& k : leaves)
+      if (!expected.count(k)) walk(k);
+    ASSERT_GE(volume.size(), 2u) << "the configuration should enclose something";
+
+    const size_t blocks_before = g->level_grid(0)->tree().leafCount();
+    const grid::Components comps = grid::label_components(*g, [](int32_t v) { return v == grid::kFree; }, 1);
+    ASSERT_EQ(comps.count(), volume.size());
+    for (size_t i = 0; i < volume.size(); ++i) {
+      EXPECT_EQ(comps.volume[i], volume[i]) << "component " << i;
+      EXPECT_EQ(comps.touches_outside[i], outside[i]) << "component " << i;
+      EXPECT_EQ(comps.holds_level0[i], level0[i]) << "component " << i;
+    }
+    size_t wrong = 0;
+    for (const auto& [k, label] : expected) wrong += g->leaf_at(k.level, k.c).value != label;
+    EXPECT_EQ(wrong, 0u);
+    // Whole blocks went in as tiles: the labelling added no leaf nodes for them.
+    EXPECT_LE(g->level_grid(0)->tree().leafCount(), blocks_before);
+  }
+}
+
+// The extraction lists only the cells of uniform blocks that can have a face: it must find
+// every face a cell-by-cell search finds (one quad per leaf face, or per finer neighbour).
+TEST(Extract, FacesOfBlockLabelledVolumesAreAllFound) {
+  for (uint32_t seed = 0; seed <= 6; ++seed) {
+    SCOPED_TRACE("seed " + std::to_string(seed));
+    grid::Components comps;
+    for (VolumeChoice choice : {VolumeChoice::Outside, VolumeChoice::Inside}) {
+      auto h = blocky_grid(seed);
+      const int32_t label = grid::choose_volume(*h, choice, comps, nullptr);
+      size_t faces = 0;
+      h->for_each_leaf([&](int level, const Coord& c, int32_t v) {
+        if (v != label) return;
+        for (int axis = 0; axis < 3; ++axis)
+          for (int dir = -1; dir <= 1; dir += 2)
+            h->for_each_face_neighbour(level, c, axis, dir, [&](const grid::LeafRef& n) {
+              const bool in = n.outside_box ? choice == VolumeChoice::Outside : n.value == label;
+              faces += in ? 0 : 1;
+            });
+      });
+      const auto surf = extract::extract_faces(*h, label, choice);
+      EXPECT_GT(faces, 0u);
+      EXPECT_EQ(surf.polygons.size(), faces) << (choice == VolumeChoice::Inside ? "inside" : "outside");
+    }
+  }
 }
 
 TEST(Extract, HandMadeEdgeAndCornerContactsBecomeManifold) {

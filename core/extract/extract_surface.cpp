@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <map>
 #include <set>
+#include <tuple>
 #include <unordered_map>
 
 #include <tbb/parallel_for.h>
@@ -53,6 +54,48 @@ Quad make_quad(int axis, int32_t plane, int32_t u0, int32_t v0, int32_t s, int n
   return q;
 }
 
+// The volume's leaves that may have a face, in the order of for_each_leaf. In a uniform
+// level-0 block of the volume only cells on its sides can, and only on sides where the next
+// block is not all volume too: the cells deep inside an outside volume (most of a fine box)
+// are never listed.
+std::vector<std::pair<int, Coord>> cells_with_faces(const AdaptiveGrid& g, int32_t label) {
+  std::vector<std::pair<int, Coord>> cells;
+  AdaptiveGrid::Reader reader(g);
+  auto closed = [&](const AdaptiveGrid::Block& b, int axis, int dir) {
+    const int across = dir < 0 ? b.lo[axis] - 1 : b.hi[axis];
+    if (across < 0 || across >= g.dims0()[axis]) return false;
+    Coord next = b.lo;
+    next[axis] = across & ~(AdaptiveGrid::kBlock - 1);
+    int32_t v;
+    return reader.uniform_block(next, v) && v == label;
+  };
+  g.for_each_level0_run(
+      [&](const Coord& first, int length, int32_t v, const AdaptiveGrid::Block& b) {
+        if (v != label) return;
+        const int y = first.y(), z = first.z();
+        const bool side_row = (y == b.lo.y() && !closed(b, 1, -1)) || (y == b.hi.y() - 1 && !closed(b, 1, 1)) ||
+                              (z == b.lo.z() && !closed(b, 2, -1)) || (z == b.hi.z() - 1 && !closed(b, 2, 1));
+        if (side_row) {
+          for (int x = first.x(); x < first.x() + length; ++x) cells.emplace_back(0, Coord(x, y, z));
+          return;
+        }
+        const bool low = !closed(b, 0, -1), high = !closed(b, 0, 1);
+        if (length == 1) {
+          if (low || high) cells.emplace_back(0, first);
+          return;
+        }
+        if (low) cells.emplace_back(0, first);
+        if (high) cells.emplace_back(0, Coord(first.x() + length - 1, y, z));
+      },
+      [&](const Coord& c, int32_t v) {
+        if (v == label) cells.emplace_back(0, c);
+      });
+  g.for_each_fine_leaf([&](int level, const Coord& c, int32_t v) {
+    if (v == label) cells.emplace_back(level, c);
+  });
+  return cells;
+}
+
 }  // namespace
 
 LatticeSurface extract_faces(const AdaptiveGrid& g, int32_t label, VolumeChoice choice) {
@@ -60,10 +103,7 @@ LatticeSurface extract_faces(const AdaptiveGrid& g, int32_t label, VolumeChoice 
   const int orient = choice == VolumeChoice::Outside ? -1 : 1;
   // The volume's cells first, then their faces in parallel (the grid is only read), in
   // chunks joined in cell order: the same quads in the same order as one pass would give.
-  std::vector<std::pair<int, Coord>> cells;
-  g.for_each_leaf([&](int level, const Coord& c, int32_t value) {
-    if (value == label) cells.emplace_back(level, c);
-  });
+  const std::vector<std::pair<int, Coord>> cells = cells_with_faces(g, label);
   constexpr size_t chunk = 2048;
   std::vector<std::vector<Quad>> chunks((cells.size() + chunk - 1) / chunk);
   tbb::parallel_for(size_t(0), chunks.size(), [&](size_t k) {
@@ -302,7 +342,10 @@ bool drop_cut_off_pockets(AdaptiveGrid& g, int32_t label, const std::vector<std:
   auto limit = [&] {
     if (pocket_limit < 0) {
       double volume = 0;
-      g.for_each_leaf([&](int level, const Coord&, int32_t v) {
+      const double side0 = g.fine_units(0);
+      g.for_each_level0_block([&](const AdaptiveGrid::Block& b, int32_t v) { volume += v == label ? double(b.cells()) * side0 * side0 * side0 : 0.0; },
+                              [&](const Coord&, int32_t v) { volume += v == label ? side0 * side0 * side0 : 0.0; });
+      g.for_each_fine_leaf([&](int level, const Coord&, int32_t v) {
         const double side = g.fine_units(level);
         if (v == label) volume += side * side * side;
       });
@@ -380,7 +423,9 @@ LatticeSurface extract_manifold_surface(AdaptiveGrid& g, int32_t& label, VolumeC
       throw Error(ErrorKind::InvalidArgument, "too many cells across the model at this base size and number of levels");
   // New labels must not collide with the labels of other free components.
   int32_t next_label = label + 1;
-  g.for_each_leaf([&](int, const Coord&, int32_t v) { next_label = std::max(next_label, v + 1); });
+  auto higher = [&](int32_t v) { next_label = std::max(next_label, v + 1); };
+  g.for_each_level0_block([&](const AdaptiveGrid::Block&, int32_t v) { higher(v); }, [&](const Coord&, int32_t v) { higher(v); });
+  g.for_each_fine_leaf([&](int, const Coord&, int32_t v) { higher(v); });
   const int max_rounds = 64;
   for (int round = 0; round < max_rounds; ++round) {
     if (progress) {
@@ -435,16 +480,26 @@ LatticeSurface extract_manifold_surface(AdaptiveGrid& g, int32_t& label, VolumeC
     }
     stats.dropped_pieces += comps.count() - kept.size();
     if (comps.count() > 1) {
-      std::vector<std::pair<int, Coord>> drop, merge;
-      g.for_each_leaf([&](int level, const Coord& c, int32_t v) {
-        if (v < comps.first_label) return;
-        if (std::find(kept.begin(), kept.end(), v) == kept.end())
-          drop.emplace_back(level, c);
-        else if (v != kept.front())
-          merge.emplace_back(level, c);
+      // New values by leaf, and by whole block where level 0 is uniform.
+      auto new_value = [&](int32_t v) {
+        if (v < comps.first_label) return v;
+        return std::find(kept.begin(), kept.end(), v) == kept.end() ? int32_t(grid::kExcluded) : kept.front();
+      };
+      std::vector<std::tuple<int, Coord, int32_t>> changes;
+      std::vector<std::pair<Coord, int32_t>> block_changes;
+      g.for_each_level0_block(
+          [&](const AdaptiveGrid::Block& b, int32_t v) {
+            if (new_value(v) != v) block_changes.emplace_back(b.lo, new_value(v));
+          },
+          [&](const Coord& c, int32_t v) {
+            if (new_value(v) != v) changes.emplace_back(0, c, new_value(v));
+          });
+      g.for_each_fine_leaf([&](int level, const Coord& c, int32_t v) {
+        if (new_value(v) != v) changes.emplace_back(level, c, new_value(v));
       });
-      for (auto& [level, c] : drop) g.set(level, c, grid::kExcluded);
-      for (auto& [level, c] : merge) g.set(level, c, kept.front());
+      AdaptiveGrid::Cursor cursor(g);
+      for (const auto& [lo, v] : block_changes) cursor.set_block(lo, v);
+      for (const auto& [level, c, v] : changes) cursor.set(level, c, v);
     }
     label = kept.front();
   }

@@ -18,11 +18,4 @@ int32_t AdaptiveGrid::get(int level, const Coord& c) const { return grids_[level
 
 void AdaptiveGrid::set(int level, const Coord& c, int32_t value) { grids_[level]->tree().setValue(c, value); }
 
-size_t AdaptiveGrid::count(int level, int32_t value) const {
-  size_t n = 0;
-  for (auto it = grids_[level]->cbeginValueOn(); it; ++it)
-    if (*it == value) ++n;
-  return n;
-}
-
 }  // namespace vdbwrap::grid

@@ -5,6 +5,7 @@
 #pragma once
 #include <openvdb/openvdb.h>
 
+#include <algorithm>
 #include <cstdint>
 #include <vector>
 
@@ -81,6 +82,7 @@ class AdaptiveGrid {
     void for_each_face_neighbour(int level, const Coord& c, int axis, int dir, F&& f) {
       g_.for_each_face_neighbour_by([this](int l, const Coord& x) { return get(l, x); }, level, c, axis, dir, f);
     }
+    bool uniform_block(const Coord& lo, int32_t& value) { return AdaptiveGrid::uniform_block(acc_[0], lo, value); }
 
    protected:
     explicit Cached(const AdaptiveGrid& g) : g_(g) {}
@@ -101,24 +103,99 @@ class AdaptiveGrid {
       for (auto& grid : g.grids_) acc_.push_back(grid->getAccessor());
     }
     void set(int level, const Coord& c, int32_t value) { acc_[size_t(level)].setValue(c, value); }
+    // Every cell of the level-0 block at `lo` takes `value`: one VDB tile, no leaf node.
+    void set_block(const Coord& lo, int32_t value) { acc_[0].addTile(1, lo, value, true); }
   };
 
-  // Calls f(level, coord, value) for every leaf cell stored in the box (level 0 densely,
-  // through a cached accessor: the cells come in order).
-  template <typename F>
-  void for_each_leaf(F&& f) const {
+  // Level 0 is stored in blocks of a VDB leaf node's size. Most of the padded box is free
+  // space far from the input, where a block has no leaf node: one value (the background, or
+  // a tile the flood fill wrote) holds for all its cells, and whole blocks are read and
+  // labelled at once instead of cell by cell.
+  static constexpr int kBlock = int(openvdb::Int32Tree::LeafNodeType::DIM);
+  struct Block {
+    Coord lo, hi;  // cells lo .. hi - 1, clipped to the box
+    size_t cells() const { return size_t(hi.x() - lo.x()) * size_t(hi.y() - lo.y()) * size_t(hi.z() - lo.z()); }
+  };
+  Block block_of(const Coord& c0) const {
+    const Coord lo(c0.x() & ~(kBlock - 1), c0.y() & ~(kBlock - 1), c0.z() & ~(kBlock - 1));
+    return {lo, Coord(std::min(lo.x() + kBlock, dims0_.x()), std::min(lo.y() + kBlock, dims0_.y()),
+                      std::min(lo.z() + kBlock, dims0_.z()))};
+  }
+  // Does every cell of the level-0 block at `lo` hold the same value? (No leaf node there, or
+  // a leaf whose cells all agree.)
+  template <typename Accessor>
+  static bool uniform_block(Accessor& level0, const Coord& lo, int32_t& value) {
+    const auto* leaf = level0.probeConstLeaf(lo);
+    if (!leaf) {
+      value = level0.getValue(lo);
+      return true;
+    }
+    value = leaf->getValue(0);
+    for (openvdb::Index i = 1; i < openvdb::Int32Tree::LeafNodeType::SIZE; ++i)
+      if (leaf->getValue(i) != value) return false;
+    return true;
+  }
+
+  // Level 0 in the order z, y, x (the order of for_each_leaf), by rows of blocks: a uniform
+  // block's cells in a row come as one run, on_run(first, length, value, block); the cells of
+  // other blocks one by one, on_cell(c, value).
+  template <typename OnRun, typename OnCell>
+  void for_each_level0_run(OnRun&& on_run, OnCell&& on_cell) const {
     const Coord& d = dims0_;
     auto level0 = grids_[0]->getConstAccessor();
     for (int z = 0; z < d.z(); ++z)
       for (int y = 0; y < d.y(); ++y)
-        for (int x = 0; x < d.x(); ++x) {
-          Coord c(x, y, z);
-          int32_t v = level0.getValue(c);
-          if (v != kRefined) f(0, c, v);
+        for (int x0 = 0; x0 < d.x(); x0 += kBlock) {
+          const Block b = block_of(Coord(x0, y, z));
+          int32_t v;
+          if (uniform_block(level0, b.lo, v)) {
+            on_run(Coord(x0, y, z), b.hi.x() - x0, v, b);
+            continue;
+          }
+          for (int x = x0; x < b.hi.x(); ++x) on_cell(Coord(x, y, z), level0.getValue(Coord(x, y, z)));
         }
+  }
+  // Level 0 by blocks, in no particular order: on_block(block, value) for a uniform block,
+  // on_cell(c, value) for each cell of the others.
+  template <typename OnBlock, typename OnCell>
+  void for_each_level0_block(OnBlock&& on_block, OnCell&& on_cell) const {
+    const Coord& d = dims0_;
+    auto level0 = grids_[0]->getConstAccessor();
+    for (int z0 = 0; z0 < d.z(); z0 += kBlock)
+      for (int y0 = 0; y0 < d.y(); y0 += kBlock)
+        for (int x0 = 0; x0 < d.x(); x0 += kBlock) {
+          const Block b = block_of(Coord(x0, y0, z0));
+          int32_t v;
+          if (uniform_block(level0, b.lo, v)) {
+            on_block(b, v);
+            continue;
+          }
+          for (int z = z0; z < b.hi.z(); ++z)
+            for (int y = y0; y < b.hi.y(); ++y)
+              for (int x = x0; x < b.hi.x(); ++x) on_cell(Coord(x, y, z), level0.getValue(Coord(x, y, z)));
+        }
+  }
+  // Calls f(level, coord, value) for every leaf cell of the levels above 0.
+  template <typename F>
+  void for_each_fine_leaf(F&& f) const {
     for (int l = 1; l <= levels_; ++l)
       for (auto it = grids_[l]->cbeginValueOn(); it; ++it)
         if (*it != kRefined && *it != kAbsent) f(l, it.getCoord(), *it);
+  }
+
+  // Calls f(level, coord, value) for every leaf cell in the box, level 0 first (in the order
+  // z, y, x), then the finer levels.
+  template <typename F>
+  void for_each_leaf(F&& f) const {
+    for_each_level0_run(
+        [&](const Coord& first, int length, int32_t v, const Block&) {
+          if (v == kRefined) return;
+          for (int x = first.x(); x < first.x() + length; ++x) f(0, Coord(x, first.y(), first.z()), v);
+        },
+        [&](const Coord& c, int32_t v) {
+          if (v != kRefined) f(0, c, v);
+        });
+    for_each_fine_leaf(f);
   }
 
   // World position of a fine-lattice node.
@@ -128,7 +205,6 @@ class AdaptiveGrid {
   }
 
   openvdb::Int32Grid::Ptr level_grid(int level) const { return grids_[level]; }
-  size_t count(int level, int32_t value) const;
 
  private:
   template <typename Get>

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 #include <queue>
 #include <unordered_map>
 
@@ -17,9 +18,10 @@ namespace {
 // from the input.
 class FreeLeaves {
  public:
+  // The leaves that are free: not yet labelled (kFree), or labelled (>= 1) by the flood fill.
   explicit FreeLeaves(const AdaptiveGrid& g) : g_(g) {
     g.for_each_leaf([&](int level, const Coord& c, int32_t v) {
-      if (v != kFree) return;
+      if (v != kFree && v < 1) return;
       index_.emplace(key(level, c), uint32_t(leaves_.size()));
       leaves_.push_back({level, c});
     });
@@ -143,15 +145,22 @@ VolumeSelection select_volume(AdaptiveGrid& g, const VolumeRequest& req, const D
   VolumeSelection sel;
   sel.report.gap_closure = req.gap_closure;
   if (progress) progress->progress("flood fill", 0.0, "labelling free cells");
-  FreeLeaves leaves(g);
   const double r = 0.5 * req.gap_closure;
+  // Every free cell numbered, with its clearance from the input: only for gap closure and
+  // leak tracing. On a fine grid the free cells are most of the box (millions), and listing
+  // them was most of this stage's time and the wrap's peak memory.
+  std::optional<FreeLeaves> free_leaves;
+  auto leaves = [&]() -> FreeLeaves& {
+    if (!free_leaves) free_leaves.emplace(g);
+    return *free_leaves;
+  };
 
   // Gap closure: cells too close to the input for a ball of the gap's diameter stay out of
   // the flood (a narrow opening then does not connect two volumes); they are grown back below.
   if (r > 0) {
-    const auto& clearance = leaves.clearance(distance, progress);
-    for (uint32_t i = 0; i < leaves.size(); ++i)
-      if (clearance[i] < r && !leaves.on_box_boundary(i)) g.set(leaves.level(i), leaves.coord(i), kNarrow);
+    const auto& clearance = leaves().clearance(distance, progress);
+    for (uint32_t i = 0; i < leaves().size(); ++i)
+      if (clearance[i] < r && !leaves().on_box_boundary(i)) g.set(leaves().level(i), leaves().coord(i), kNarrow);
   }
   Components comps = label_components(g, [](int32_t v) { return v == kFree; }, 1, progress);
 
@@ -161,14 +170,8 @@ VolumeSelection select_volume(AdaptiveGrid& g, const VolumeRequest& req, const D
   // An enclosed volume counts when it holds at least one whole base cell: faces lying
   // exactly on cell faces touch the cells on both sides and can seal slivers of finer free
   // cells along edges, which enclose nothing the user would call a volume.
-  std::vector<uint8_t> holds_base_cell(comps.count(), 0);
-  for (uint32_t i = 0; i < leaves.size(); ++i) {
-    if (leaves.level(i) != 0) continue;
-    const int32_t v = g.get(0, leaves.coord(i));
-    if (v >= comps.first_label) holds_base_cell[size_t(v - comps.first_label)] = 1;
-  }
   for (size_t i = 0; i < comps.count(); ++i)
-    if (!comps.touches_outside[i] && holds_base_cell[i]) {
+    if (!comps.touches_outside[i] && comps.holds_level0[i]) {
       ++sel.report.enclosed_volumes;
       sel.report.largest_enclosed = std::max(sel.report.largest_enclosed, comps.volume[i] * fine_volume);
     }
@@ -192,7 +195,7 @@ VolumeSelection select_volume(AdaptiveGrid& g, const VolumeRequest& req, const D
   } else {
     if (req.seeds.empty()) throw Error(ErrorKind::InvalidArgument, "volume by seed points, but no seed point given");
     const int L = g.max_level();
-    std::vector<uint32_t> seed_leaf;
+    std::vector<LeafRef> seed_leaf;
     for (size_t s = 0; s < req.seeds.size(); ++s) {
       const Vec3 q = (req.seeds[s] - g.origin()) * (1.0 / hf);
       const std::string name = "seed point " + std::to_string(s + 1);
@@ -210,23 +213,25 @@ VolumeSelection select_volume(AdaptiveGrid& g, const VolumeRequest& req, const D
                                                     " wide): move it farther into the volume");
       if (leaf.value == kNarrow)
         throw Error(ErrorKind::InvalidArgument, name + " lies closer to the input than half the gap closure: move it farther into the volume");
-      int64_t idx = leaves.find(leaf.level, leaf.ijk);
-      if (leaf.value < 1 || idx < 0) throw Error(ErrorKind::Internal, name + ": its cell is not a free cell");
-      seed_leaf.push_back(uint32_t(idx));
+      if (leaf.value < 1) throw Error(ErrorKind::Internal, name + ": its cell is not a free cell");
+      seed_leaf.push_back(leaf);
       const int32_t label = leaf.value;
       // A leak: this seed's volume is the outside's, or another seed's.
-      auto leak_to = [&](int64_t target, const std::string& what) {
+      auto leak_to = [&](const LeafRef* target, const std::string& what) {
         if (progress) progress->progress("flood fill", 0.8, name + " " + what + ": tracing the leak");
-        const auto& clearance = leaves.clearance(distance, progress);
-        sel.leak = widest_path(g, leaves, clearance, label, seed_leaf.back(), target);
+        FreeLeaves& all = leaves();
+        const auto& clearance = all.clearance(distance, progress);
+        const int64_t from = all.find(leaf.level, leaf.ijk), to = target ? all.find(target->level, target->ijk) : -1;
+        if (from < 0 || (target && to < 0)) throw Error(ErrorKind::Internal, name + ": its cell is not a free cell");
+        sel.leak = widest_path(g, all, clearance, label, uint32_t(from), to);
         sel.leak.description = name + " " + point_text(req.seeds[s] + req.world_offset) + " " + what;
         sel.label = 0;
         return sel;
       };
-      if (comps.touches_outside[size_t(label - comps.first_label)]) return leak_to(-1, "reaches the outside");
+      if (comps.touches_outside[size_t(label - comps.first_label)]) return leak_to(nullptr, "reaches the outside");
       for (size_t t = 0; t + 1 < seed_leaf.size(); ++t)
-        if (g.get(leaves.level(seed_leaf[t]), leaves.coord(seed_leaf[t])) == label)
-          return leak_to(seed_leaf[t], "reaches the volume of seed point " + std::to_string(t + 1));
+        if (g.get(seed_leaf[t].level, seed_leaf[t].ijk) == label)
+          return leak_to(&seed_leaf[t], "reaches the volume of seed point " + std::to_string(t + 1));
       chosen.push_back(label);
     }
   }
@@ -234,17 +239,30 @@ VolumeSelection select_volume(AdaptiveGrid& g, const VolumeRequest& req, const D
   // One label for the whole chosen volume.
   sel.label = chosen.front();
   if (chosen.size() > 1) {
+    auto relabelled = [&](int32_t v) { return v != sel.label && std::find(chosen.begin(), chosen.end(), v) != chosen.end(); };
     std::vector<std::pair<int, Coord>> relabel;
-    g.for_each_leaf([&](int level, const Coord& c, int32_t v) {
-      if (v != sel.label && std::find(chosen.begin(), chosen.end(), v) != chosen.end()) relabel.emplace_back(level, c);
+    std::vector<Coord> relabel_blocks;  // uniform level-0 blocks: whole
+    g.for_each_level0_block(
+        [&](const AdaptiveGrid::Block& b, int32_t v) {
+          if (relabelled(v)) relabel_blocks.push_back(b.lo);
+        },
+        [&](const Coord& c, int32_t v) {
+          if (relabelled(v)) relabel.emplace_back(0, c);
+        });
+    g.for_each_fine_leaf([&](int level, const Coord& c, int32_t v) {
+      if (relabelled(v)) relabel.emplace_back(level, c);
     });
-    for (auto& [level, c] : relabel) g.set(level, c, sel.label);
+    AdaptiveGrid::Cursor cursor(g);
+    for (const Coord& lo : relabel_blocks) cursor.set_block(lo, sel.label);
+    for (auto& [level, c] : relabel) cursor.set(level, c, sel.label);
   }
 
   // Gap closure, second half: grow the volume back into the narrow cells within reach of a
   // ball of radius r centred in the volume (a cell centre within r of a chosen cell, give or
   // take the two cells' half diagonals).
+  double volume = 0;
   if (r > 0) {
+    FreeLeaves& leaves = *free_leaves;
     if (progress) progress->progress("flood fill", 0.9, "growing the volume back toward the input");
     struct Front {
       uint32_t cell;
@@ -267,14 +285,15 @@ VolumeSelection select_volume(AdaptiveGrid& g, const VolumeRequest& req, const D
             queue.push_back({uint32_t(j), f.source, f.source_half_diagonal});
           });
     }
+    for (uint32_t i = 0; i < leaves.size(); ++i)
+      if (g.get(leaves.level(i), leaves.coord(i)) == sel.label) {
+        double h = g.cell_size(leaves.level(i));
+        volume += h * h * h;
+      }
+  } else {
+    // Without gap closure the chosen volume is the chosen components, as labelled.
+    for (int32_t label : chosen) volume += comps.volume[size_t(label - comps.first_label)] * fine_volume;
   }
-
-  double volume = 0;
-  for (uint32_t i = 0; i < leaves.size(); ++i)
-    if (g.get(leaves.level(i), leaves.coord(i)) == sel.label) {
-      double h = g.cell_size(leaves.level(i));
-      volume += h * h * h;
-    }
   sel.report.chosen_volume = volume;
   if (progress) progress->progress("flood fill", 1.0, std::to_string(comps.count()) + " free volume(s) found");
   return sel;
