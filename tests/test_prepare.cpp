@@ -1,6 +1,8 @@
 // Stage 1: weld, degenerate removal, orientation, feature edges.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
 #include <random>
 
 #include "check/intersections.h"
@@ -19,6 +21,50 @@ TEST(Weld, MergesPointsWithinToleranceOnly) {
   EXPECT_EQ(remap[0], remap[1]);
   EXPECT_EQ(remap[0], remap[4]);
   EXPECT_NE(remap[2], remap[3]);
+}
+
+// Thousands of points, most with exact copies, some in clusters within the tolerance (and
+// straddling the welding grid's cells), -0 beside +0: every point goes to a weld within the
+// tolerance, exact copies to the same one, no two welds within the tolerance of each other,
+// and welds numbered in the order their first point comes.
+TEST(Weld, CopiesAndClustersWeldLikeTheOrderedGreedyPass) {
+  const double tol = 1e-3;
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> u(-1, 1), jitter(-0.4 * tol, 0.4 * tol);
+  std::vector<Vec3> pts;
+  for (int i = 0; i < 3000; ++i) {
+    Vec3 p{u(rng), u(rng), u(rng)};
+    if (i % 7 == 0) p = {std::round(p[0] * 100) / 100 * 1024 * tol / 10.24, p[1], p[2]};  // on cell boundaries
+    pts.push_back(p);
+    if (i % 2 == 0) pts.push_back(p);                                                   // an exact copy
+    if (i % 5 == 0) pts.push_back(p + Vec3{jitter(rng), jitter(rng), jitter(rng)});     // a near one
+    if (i % 11 == 0) pts.push_back(p + Vec3{0.9 * tol, 0, 0}), pts.push_back(p + Vec3{1.8 * tol, 0, 0});  // a chain
+  }
+  pts.push_back({0.0, 0.5, 0.5});
+  pts.push_back({-0.0, 0.5, 0.5});
+  std::shuffle(pts.begin(), pts.end(), rng);
+  std::vector<Vec3> welded;
+  const auto remap = prep::weld_points(pts, tol, welded);
+  ASSERT_EQ(remap.size(), pts.size());
+  uint32_t next = 0;
+  for (size_t i = 0; i < pts.size(); ++i) {
+    ASSERT_LT(remap[i], welded.size());
+    EXPECT_LE(norm(welded[remap[i]] - pts[i]), tol) << "point " << i;
+    EXPECT_LE(remap[i], next) << "welds are numbered in order of first use";
+    if (remap[i] == next) ++next;
+  }
+  EXPECT_EQ(next, welded.size());
+  for (size_t i = 0; i < pts.size(); ++i)
+    for (size_t j = i + 1; j < pts.size(); ++j)
+      if (pts[i] == pts[j]) EXPECT_EQ(remap[i], remap[j]) << i << " " << j;
+  size_t close = 0;
+  for (size_t a = 0; a < welded.size(); ++a)
+    for (size_t b = a + 1; b < welded.size(); ++b) close += norm(welded[a] - welded[b]) <= tol;
+  EXPECT_EQ(close, 0u);
+  // At least one weld per random point (with this seed no two lie within the tolerance), at
+  // most three per chain.
+  EXPECT_GE(welded.size(), 3001u);
+  EXPECT_LE(welded.size(), 3001u + 2 * (3000 / 11 + 1));
 }
 
 TEST(Orient, FlippedTrianglesOfAClosedBoxComeOutConsistentAndOutward) {

@@ -1,16 +1,15 @@
 // Mesh diagnostics: the combinatorial checks (borders, non-manifold edges and vertices,
 // orientation) and the geometric ones (degenerate and intersecting triangles).
 #include <algorithm>
-#include <cstring>
 #include <numeric>
 #include <stdexcept>
-#include <unordered_map>
 
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_reduce.h>
 #include <tbb/parallel_sort.h>
 
 #include "check/intersections.h"
+#include "common/exact_weld.h"
 #include "common/edge_key.h"
 #include "common/vec.h"
 #include "prep/prepare.h"
@@ -18,19 +17,6 @@
 
 namespace vdbwrap {
 namespace {
-
-struct PointHash {
-  size_t operator()(const Vec3& p) const {
-    uint64_t h = 1469598103934665603ULL;
-    for (double d : p) {
-      uint64_t bits;
-      double z = d == 0 ? 0.0 : d;  // +0 and -0 alike
-      std::memcpy(&bits, &z, 8);
-      h = (h ^ bits) * 1099511628211ULL;
-    }
-    return size_t(h);
-  }
-};
 
 struct UnionFind {
   std::vector<uint32_t> parent;
@@ -140,15 +126,9 @@ size_t count_nonmanifold_vertices(const std::vector<Tri>& tris, size_t vertices,
 MeshDiagnostics diagnose(const Mesh& mesh, bool find_intersections) {
   MeshDiagnostics d;
   // Exact weld: only bit-identical coordinates merge, so the counts describe the file as it is.
-  std::unordered_map<Vec3, uint32_t, PointHash> index;
   std::vector<Vec3> pts;
-  std::vector<uint32_t> remap(mesh.points.size());
+  const std::vector<uint32_t> remap = exact_weld(mesh.points, pts);
   Box3 box;
-  for (size_t i = 0; i < mesh.points.size(); ++i) {
-    auto [it, added] = index.emplace(mesh.points[i], uint32_t(pts.size()));
-    if (added) pts.push_back(mesh.points[i]);
-    remap[i] = it->second;
-  }
   std::vector<Tri> tris;
   tris.reserve(mesh.triangles.size());
   for (const Tri& t : mesh.triangles) tris.push_back({remap[t[0]], remap[t[1]], remap[t[2]]});

@@ -10,6 +10,7 @@
 
 #include "check/intersections.h"
 #include "common/edge_key.h"
+#include "common/exact_weld.h"
 #include "common/grid_key.h"
 #include "common/vec.h"
 #include "vdbwrap/errors.h"
@@ -54,36 +55,95 @@ EdgeTriangles edge_triangles(const std::vector<Tri>& triangles) {
 
 }  // namespace
 
-std::vector<uint32_t> weld_points(const std::vector<Vec3>& points, double tolerance, std::vector<Vec3>& welded) {
-  // Hash grid with cells of the tolerance: a match can only be in the 27 cells around.
-  const double inv = tolerance > 0 ? 1.0 / tolerance : 0;
-  std::unordered_map<GridKey, std::vector<uint32_t>, GridKeyHash> buckets;
-  buckets.reserve(points.size());
-  std::vector<uint32_t> remap(points.size());
-  welded.clear();
-  const double tol2 = tolerance * tolerance;
-  for (size_t i = 0; i < points.size(); ++i) {
-    const Vec3& p = points[i];
-    GridKey key = grid_key(p, inv);
-    uint32_t found = UINT32_MAX;
-    for (int dx = -1; dx <= 1 && found == UINT32_MAX; ++dx)
-      for (int dy = -1; dy <= 1 && found == UINT32_MAX; ++dy)
-        for (int dz = -1; dz <= 1 && found == UINT32_MAX; ++dz) {
-          auto it = buckets.find({key.x + dx, key.y + dy, key.z + dz});
-          if (it == buckets.end()) continue;
-          for (uint32_t w : it->second)
-            if (norm2(welded[w] - p) <= tol2) {
-              found = w;
-              break;
-            }
-        }
-    if (found == UINT32_MAX) {
-      found = uint32_t(welded.size());
-      welded.push_back(p);
-      buckets[key].push_back(found);
+namespace {
+
+// Per point: is another point within the tolerance? In parallel, on a grid of cells much
+// wider than the tolerance, so that most points look in their own cell only. A point that
+// has none is its own weld whatever the order (and no other point's), so only the crowded
+// ones need the ordered pass below: on most inputs none.
+std::vector<uint8_t> crowded_points(const std::vector<Vec3>& points, double tolerance) {
+  const size_t n = points.size();
+  const double inv = 1.0 / (1024 * tolerance), reach = 2 * tolerance, tol2 = tolerance * tolerance;
+  struct Entry {
+    GridKey key;
+    uint32_t point;
+    bool operator<(const Entry& o) const {
+      return key.x != o.key.x ? key.x < o.key.x : key.y != o.key.y ? key.y < o.key.y : key.z != o.key.z ? key.z < o.key.z : point < o.point;
     }
-    remap[i] = found;
+  };
+  std::vector<Entry> entries(n);
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 8192), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t i = r.begin(); i != r.end(); ++i) entries[i] = {grid_key(points[i], inv), uint32_t(i)};
+  });
+  tbb::parallel_sort(entries.begin(), entries.end());
+  std::vector<uint8_t> crowded(n, 0);
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 4096), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t i = r.begin(); i != r.end(); ++i) {
+      const Vec3& p = points[i];
+      // Cells the tolerance box around p reaches (widened: a rounding never hides a match).
+      const GridKey lo = grid_key(p - Vec3{reach, reach, reach}, inv), hi = grid_key(p + Vec3{reach, reach, reach}, inv);
+      bool found = false;
+      for (int64_t x = lo.x; x <= hi.x && !found; ++x)
+        for (int64_t y = lo.y; y <= hi.y && !found; ++y)
+          for (int64_t z = lo.z; z <= hi.z && !found; ++z) {
+            const GridKey k{x, y, z};
+            auto it = std::lower_bound(entries.begin(), entries.end(), Entry{k, 0});
+            for (; it != entries.end() && it->key == k && !found; ++it)
+              found = it->point != i && norm2(points[it->point] - p) <= tol2;
+          }
+      crowded[i] = found ? 1 : 0;
+    }
+  });
+  return crowded;
+}
+
+}  // namespace
+
+std::vector<uint32_t> weld_points(const std::vector<Vec3>& points, double tolerance, std::vector<Vec3>& welded) {
+  // Bit-identical copies first, in parallel (an STL file repeats every point about six
+  // times); then the tolerance, among the distinct points only.
+  std::vector<Vec3> distinct;
+  const std::vector<uint32_t> copy_of = exact_weld(points, distinct);
+  std::vector<uint32_t> distinct_to_welded(distinct.size());
+  welded.clear();
+  if (tolerance > 0) {
+    // In order, each crowded point goes to the first weld within the tolerance (hash grid with
+    // cells of the tolerance: a match can only be in the 27 cells around), or starts one.
+    const std::vector<uint8_t> crowded = crowded_points(distinct, tolerance);
+    const double inv = 1.0 / tolerance, tol2 = tolerance * tolerance;
+    std::unordered_map<GridKey, std::vector<uint32_t>, GridKeyHash> buckets;
+    for (size_t i = 0; i < distinct.size(); ++i) {
+      const Vec3& p = distinct[i];
+      uint32_t found = UINT32_MAX;
+      if (crowded[i]) {
+        const GridKey key = grid_key(p, inv);
+        for (int dx = -1; dx <= 1 && found == UINT32_MAX; ++dx)
+          for (int dy = -1; dy <= 1 && found == UINT32_MAX; ++dy)
+            for (int dz = -1; dz <= 1 && found == UINT32_MAX; ++dz) {
+              auto it = buckets.find({key.x + dx, key.y + dy, key.z + dz});
+              if (it == buckets.end()) continue;
+              for (uint32_t w : it->second)
+                if (norm2(welded[w] - p) <= tol2) {
+                  found = w;
+                  break;
+                }
+            }
+        if (found == UINT32_MAX) buckets[key].push_back(uint32_t(welded.size()));
+      }
+      if (found == UINT32_MAX) {
+        found = uint32_t(welded.size());
+        welded.push_back(p);
+      }
+      distinct_to_welded[i] = found;
+    }
+  } else {
+    welded = distinct;
+    for (size_t i = 0; i < distinct.size(); ++i) distinct_to_welded[i] = uint32_t(i);
   }
+  std::vector<uint32_t> remap(points.size());
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, points.size(), 8192), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t i = r.begin(); i != r.end(); ++i) remap[i] = distinct_to_welded[copy_of[i]];
+  });
   return remap;
 }
 
@@ -210,35 +270,56 @@ PreparedInput prepare(const Mesh& input, const WrapParams& params, ProgressSink*
   m.points = std::move(welded);
   m.part_names = input.part_names;
   if (m.part_names.empty()) m.part_names.push_back("part0");
-  std::unordered_map<uint64_t, std::vector<uint32_t>> seen;  // keyed by sorted triple hash
-  out.input_to_mesh.assign(input.triangles.size(), UINT32_MAX);
-  for (size_t t = 0; t < input.triangles.size(); ++t) {
-    Tri tri{remap[input.triangles[t][0]], remap[input.triangles[t][1]], remap[input.triangles[t][2]]};
-    const Vec3 &a = m.points[tri[0]], &b = m.points[tri[1]], &c = m.points[tri[2]];
-    double longest2 = std::max({norm2(b - a), norm2(c - b), norm2(a - c)});
-    if (tri[0] == tri[1] || tri[1] == tri[2] || tri[0] == tri[2] || norm2(area_vector(a, b, c)) <= 1e-24 * longest2 * longest2) {
+  // Per input triangle, in parallel: its welded corners, and whether it is degenerate. Then
+  // copies by a parallel sort of the sorted corner triples: the first of each group (in input
+  // order) stays, the others map to it. (A hash map of buckets, one heap block per triangle,
+  // was a serial tenth of preparing a million triangles.)
+  const size_t n = input.triangles.size();
+  std::vector<Tri> welded_tris(n);
+  std::vector<uint8_t> degenerate(n, 0);
+  struct Corners {
+    Tri sorted;
+    uint32_t t;
+    bool operator<(const Corners& o) const { return sorted != o.sorted ? sorted < o.sorted : t < o.t; }
+  };
+  std::vector<Corners> corners(n);
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 4096), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t t = r.begin(); t != r.end(); ++t) {
+      const Tri tri{remap[input.triangles[t][0]], remap[input.triangles[t][1]], remap[input.triangles[t][2]]};
+      welded_tris[t] = tri;
+      const Vec3 &a = m.points[tri[0]], &b = m.points[tri[1]], &c = m.points[tri[2]];
+      const double longest2 = std::max({norm2(b - a), norm2(c - b), norm2(a - c)});
+      degenerate[t] = tri[0] == tri[1] || tri[1] == tri[2] || tri[0] == tri[2] ||
+                      norm2(area_vector(a, b, c)) <= 1e-24 * longest2 * longest2;
+      Tri sorted = tri;
+      std::sort(sorted.begin(), sorted.end());
+      corners[t] = {sorted, uint32_t(t)};
+    }
+  });
+  tbb::parallel_sort(corners.begin(), corners.end());
+  std::vector<uint32_t> copy_of(n, UINT32_MAX);  // the first non-degenerate triangle with the same corners
+  for (size_t k = 0; k < n;) {
+    size_t e = k;
+    uint32_t first = UINT32_MAX;
+    for (; e < n && corners[e].sorted == corners[k].sorted; ++e)
+      if (!degenerate[corners[e].t]) {
+        if (first == UINT32_MAX) first = corners[e].t;
+        copy_of[corners[e].t] = first;
+      }
+    k = e;
+  }
+  out.input_to_mesh.assign(n, UINT32_MAX);
+  for (size_t t = 0; t < n; ++t) {
+    if (degenerate[t]) {
       ++out.dropped_degenerate;
-      continue;
-    }
-    Tri sorted = tri;
-    std::sort(sorted.begin(), sorted.end());
-    uint64_t h = (uint64_t(sorted[0]) * 0x9E3779B97F4A7C15ULL) ^ (uint64_t(sorted[1]) * 0xC2B2AE3D27D4EB4FULL) ^ sorted[2];
-    auto& bucket = seen[h];
-    uint32_t duplicate_of = UINT32_MAX;
-    for (uint32_t other : bucket) {
-      Tri o = m.triangles[other];
-      std::sort(o.begin(), o.end());
-      if (o == sorted) duplicate_of = other;
-    }
-    if (duplicate_of != UINT32_MAX) {
-      out.input_to_mesh[t] = duplicate_of;
+    } else if (copy_of[t] != t) {
+      out.input_to_mesh[t] = out.input_to_mesh[copy_of[t]];  // an earlier triangle: numbered
       ++out.dropped_duplicate;
-      continue;
+    } else {
+      out.input_to_mesh[t] = uint32_t(m.triangles.size());
+      m.triangles.push_back(welded_tris[t]);
+      m.triangle_part.push_back(input.part_of(t));
     }
-    out.input_to_mesh[t] = uint32_t(m.triangles.size());
-    bucket.push_back(uint32_t(m.triangles.size()));
-    m.triangles.push_back(tri);
-    m.triangle_part.push_back(input.part_of(t));
   }
   if (m.triangles.empty())
     throw Error(ErrorKind::InvalidInput, "input has no usable triangles: all " + std::to_string(input.triangles.size()) +

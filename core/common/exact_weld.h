@@ -1,0 +1,74 @@
+// Bit-identical points merged (+0 and -0 alike), by a parallel sort of point hashes. STL
+// facets carry their own three points each, so a million-facet file has three million
+// points and about half a million distinct ones; a hash map filled point by point was the
+// serial bulk of diagnosing and welding such inputs.
+#pragma once
+#include <cstdint>
+#include <cstring>
+#include <utility>
+#include <vector>
+
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_sort.h>
+
+#include "vdbwrap/mesh.h"
+
+namespace vdbwrap {
+
+inline uint64_t point_hash(const Vec3& p) {
+  uint64_t h = 1469598103934665603ULL;
+  for (double d : p) {
+    uint64_t bits;
+    const double z = d == 0 ? 0.0 : d;  // +0 and -0 alike
+    std::memcpy(&bits, &z, 8);
+    h = (h ^ bits) * 1099511628211ULL;
+  }
+  return h ^ (h >> 29);
+}
+
+// remap[i]: the index in `unique` of point i. `unique` holds each point once, in the order of
+// first appearance (what inserting the points one by one into a map would give). Points
+// compare with == (a point with a NaN coordinate equals nothing, not even itself).
+inline std::vector<uint32_t> exact_weld(const std::vector<Vec3>& points, std::vector<Vec3>& unique) {
+  const size_t n = points.size();
+  std::vector<std::pair<uint64_t, uint32_t>> keys(n);
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 8192), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t i = r.begin(); i != r.end(); ++i) keys[i] = {point_hash(points[i]), uint32_t(i)};
+  });
+  tbb::parallel_sort(keys.begin(), keys.end());
+  // first[i]: the first point equal to point i (itself when none is before it). Within a run
+  // of one hash the points come in input order; runs are short (a point's copies, and the rare
+  // collision), so each is compared with the earlier firsts of its run.
+  std::vector<uint32_t> first(n);
+  std::vector<uint32_t> firsts;
+  for (size_t s = 0; s < n;) {
+    size_t e = s + 1;
+    while (e < n && keys[e].first == keys[s].first) ++e;
+    firsts.clear();
+    for (size_t k = s; k < e; ++k) {
+      const uint32_t i = keys[k].second;
+      uint32_t match = i;
+      for (uint32_t f : firsts)
+        if (points[f] == points[i]) {
+          match = f;
+          break;
+        }
+      if (match == i) firsts.push_back(i);
+      first[i] = match;
+    }
+    s = e;
+  }
+  std::vector<uint32_t> remap(n);
+  unique.clear();
+  for (size_t i = 0; i < n; ++i) {
+    if (first[i] == i) {
+      remap[i] = uint32_t(unique.size());
+      unique.push_back(points[i]);
+    } else {
+      remap[i] = remap[first[i]];  // first[i] < i: already numbered
+    }
+  }
+  return remap;
+}
+
+}  // namespace vdbwrap
