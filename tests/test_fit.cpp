@@ -95,6 +95,9 @@ TEST(Projection, ValidityLoopHoldsNodesBackInsteadOfFolding) {
   Mesh m = box_mesh({0, 0, 0}, {2, 2, 2});
   add_box(m, {1, 0.5, 1}, {3, 1.5, 3}, 1);
   Fitted f = fit_mesh(m, 2);
+  // The loop's own verdict (one complete full check, then local checks) and CGAL's agree.
+  EXPECT_TRUE(f.surface.valid);
+  EXPECT_GT(f.surface.held_back, 0u);
   EXPECT_TRUE(check::mesh_self_intersecting_faces(f.surface.points, f.surface.triangles).empty());
   for (const Tri& t : f.surface.triangles)
     EXPECT_FALSE(check::triangle_is_degenerate(f.surface.points, t));

@@ -17,12 +17,14 @@
 namespace vdbwrap::fit {
 using grid::Coord;
 
-std::vector<uint32_t> invalid_triangles(const std::vector<Vec3>& points, const std::vector<Tri>& triangles, double min_area2) {
+std::vector<uint32_t> invalid_triangles(const std::vector<Vec3>& points, const std::vector<Tri>& triangles, double min_area2,
+                                        bool* complete) {
   std::vector<uint32_t> bad;
   for (uint32_t t = 0; t < triangles.size(); ++t) {
     const Tri& tri = triangles[t];
     if (norm(area_vector(points[tri[0]], points[tri[1]], points[tri[2]])) < min_area2) bad.push_back(t);
   }
+  if (complete) *complete = bad.empty();
   if (!bad.empty()) return bad;
   // Box intersection and exact predicates, with the fast proofs in doubles first: on a
   // lattice surface most candidate pairs are exactly coplanar neighbours, slow for the exact
@@ -290,12 +292,17 @@ FittedSurface fit_to_input(const extract::LatticeSurface& surf, const grid::Adap
       if (!free_can_move || !snapped[v]) flag[v] = 1;
   };
   NodeBuckets nodes(p, 1e-3 * hf);
+  // A full check that came back complete (intersections tested too, not only small triangles)
+  // and clean stays true while the local checks below keep it so: they test every triangle
+  // around every moved node against all others, and nothing else moves. So the loop needs
+  // one complete check, not one more after the last round (a third of a large wrap's loop).
+  bool complete = false;
   auto full_check = [&](std::vector<uint8_t>& flag) {
     tbb::parallel_for(tbb::blocked_range<uint32_t>(0, uint32_t(n), 4096), [&](const tbb::blocked_range<uint32_t>& r) {
       for (uint32_t i = r.begin(); i != r.end(); ++i)
         if (nodes.crowded(i)) flag[i] = 1;  // each task writes its own range of flags
     });
-    for (uint32_t f : invalid_triangles(p, out.triangles, min_area2)) flag_triangle(f, flag);
+    for (uint32_t f : invalid_triangles(p, out.triangles, min_area2, &complete)) flag_triangle(f, flag);
   };
   TriangleBuckets buckets(p, out.triangles, 2.0 * g.base_size());
   auto local_check = [&](const std::vector<uint32_t>& moved, std::vector<uint8_t>& flag) {
@@ -333,8 +340,12 @@ FittedSurface fit_to_input(const extract::LatticeSurface& surf, const grid::Adap
   for (; round < max_rounds; ++round) {
     if (progress && progress->cancelled()) throw Error(ErrorKind::Cancelled, "cancelled");
     size_t flagged = size_t(std::count(flag.begin(), flag.end(), 1));
+    if (flagged == 0 && complete) {
+      valid = true;
+      break;
+    }
     if (flagged == 0) {
-      full_check(flag);  // confirm on the whole surface
+      full_check(flag);  // the last full check tested small triangles only: the whole surface now
       flagged = size_t(std::count(flag.begin(), flag.end(), 1));
       if (flagged == 0) {
         valid = true;

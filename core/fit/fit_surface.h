@@ -28,9 +28,11 @@ struct FittedSurface {
 };
 
 
-// Offending triangles: self-intersecting ones, degenerate faces, and triangles whose
-// doubled area is below min_area2.
-std::vector<uint32_t> invalid_triangles(const std::vector<Vec3>& points, const std::vector<Tri>& triangles, double min_area2);
+// Offending triangles: those whose doubled area is below min_area2 when there are any (the
+// intersection test, the costly part, then waits for the next call: `complete` is false);
+// else self-intersecting ones and degenerate faces (`complete` true).
+std::vector<uint32_t> invalid_triangles(const std::vector<Vec3>& points, const std::vector<Tri>& triangles, double min_area2,
+                                        bool* complete = nullptr);
 
 // `origin` turns the local frame of the grid and the index into output coordinates.
 // `curves`: feature curves to snap to (empty: no snapping).
