@@ -1,7 +1,9 @@
 // Stage 3: projection of the voxel surface onto the input, kept valid at every step.
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
+#include <random>
 
 #include "check/intersections.h"
 #include "common/closest_point.h"
@@ -214,6 +216,38 @@ TEST(SurfaceIndex, AnswersDoNotDependOnTheOrderOfQueries) {
     ties += equal > 1;
   }
   EXPECT_GT(ties, 100u) << "the test needs queries equally near several triangles";
+}
+
+// within() with hints gives the tree's answer whatever the hints (near, far, none, invalid),
+// and a triangle it reports is within the radius.
+TEST(SurfaceIndex, WithinGivesTheSameAnswerWithAnyHints) {
+  Mesh m = sliver_mesh();
+  fit::SurfaceIndex index(m.points, m.triangles);
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> u(-1.5, 3.5);
+  std::uniform_int_distribution<uint32_t> tri(0, uint32_t(m.triangles.size()) - 1);
+  size_t yes = 0, no = 0, hinted = 0;
+  for (int i = 0; i < 3000; ++i) {
+    const Vec3 q{u(rng), u(rng), 0.3 * u(rng)};
+    const double r = 0.05 + 0.2 * (i % 5);
+    const bool expected = index.within(q, r);
+    // A hint that says yes when it may: the nearest triangle, every other query.
+    const uint32_t good = index.closest(q).triangle;
+    const std::array<uint32_t, 3> hints{i % 2 ? good : tri(rng), UINT32_MAX, uint32_t(m.triangles.size() + 7)};
+    uint32_t found = UINT32_MAX;
+    EXPECT_EQ(index.within(q, r, hints.data(), hints.size(), &found), expected) << "query " << i;
+    EXPECT_EQ(index.within(q, r, nullptr, 0, nullptr), expected) << "query " << i;
+    if (found != UINT32_MAX) {
+      const Tri& t = m.triangles[found];
+      EXPECT_LE(norm(closest_on_triangle(q, m.points[t[0]], m.points[t[1]], m.points[t[2]]) - q), r * (1 + 1e-12));
+    } else if (expected) {
+      ++hinted;
+    }
+    (expected ? yes : no)++;
+  }
+  EXPECT_GT(yes, 300u);
+  EXPECT_GT(no, 300u);
+  EXPECT_GT(hinted, 100u) << "the hints should answer some queries without the tree";
 }
 
 // touches() and in_view() walk the same cells of long triangles: against every triangle tested

@@ -453,6 +453,17 @@ bool SurfaceIndex::within(const Vec3& q, double radius) const {
   return traits.found;
 }
 
+bool SurfaceIndex::within(const Vec3& q, double radius, const uint32_t* hints, size_t count, uint32_t* found) const {
+  const Store& store = impl_->store;
+  Vec3 nearest;
+  for (size_t k = 0; k < count; ++k)
+    if (hints[k] < store.triangles.size() && squared_distance_to(q, store.triangles[hints[k]], nearest) <= radius * radius) return true;
+  WithinTraits traits(q, radius, store);
+  impl_->tree.traversal(point(q), traits);
+  if (traits.found && found) *found = traits.triangle;
+  return traits.found;
+}
+
 bool SurfaceIndex::touches(const Vec3& a, const Vec3& b, const Vec3& c) const {
   const Triangle t(point(a), point(b), point(c));
   if (t.is_degenerate()) return true;

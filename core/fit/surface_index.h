@@ -29,6 +29,10 @@ class SurfaceIndex {
   double squared_distance(const Vec3& query) const { return closest(query).squared_distance; }
   // Is the input within `radius` of the query? (Much cheaper than closest() for small radii.)
   bool within(const Vec3& query, double radius) const;
+  // The same answer, trying `hints` first (input triangles, UINT32_MAX for none): a caller that
+  // knows a triangle near the query skips the tree (the answer does not depend on the hints).
+  // On a yes from the tree, `found` (when given) receives the triangle that gave it.
+  bool within(const Vec3& query, double radius, const uint32_t* hints, size_t count, uint32_t* found) const;
   // Does triangle abc touch or cross the input? (Floating point: a near miss may count.)
   bool touches(const Vec3& a, const Vec3& b, const Vec3& c) const;
   // Is input point `on` in view from `from`: within `near` of it, or the segment from `from`

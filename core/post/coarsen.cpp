@@ -1,7 +1,10 @@
 #include "post/coarsen.h"
 
 #include <algorithm>
+#include <array>
+#include <atomic>
 #include <cmath>
+#include <memory>
 
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
@@ -40,6 +43,8 @@ class Coarsener {
     end_claim_.assign(p.size(), 0);
     changed_in_.assign(p.size(), 0);
     made_in_.assign(t.size(), 0);
+    witness_ = std::make_unique<std::atomic<uint32_t>[]>(p.size());
+    for (size_t i = 0; i < p.size(); ++i) witness_[i].store(UINT32_MAX, std::memory_order_relaxed);
     for (uint32_t f = 0; f < t.size(); ++f)
       for (uint32_t v : t[f]) vf_[v].push_back(f);
     cos_turn_ = std::cos(prm_.max_normal_turn_deg * M_PI / 180.0);
@@ -226,7 +231,19 @@ class Coarsener {
     return dot(a, b) < -std::cos(prm_.max_chain_turn_deg * M_PI / 180.0);
   }
 
-  bool near_input(const Vec3& q) const { return input_.within(q - origin_, prm_.max_deviation); }
+  // Is q within the deviation bound of the input? Nodes keep the input triangle that last said
+  // yes near them (a witness), tried before the tree: probes come around a collapse's nodes,
+  // while the batches scatter one thread's successive probes over the whole surface. Any
+  // witness is a valid hint (the answer is the tree's), so plans of one batch may share them.
+  template <size_t N>
+  bool near_input(const Vec3& q, const std::array<uint32_t, N>& nodes) const {
+    std::array<uint32_t, N> hints;
+    for (size_t k = 0; k < N; ++k) hints[k] = witness_[nodes[k]].load(std::memory_order_relaxed);
+    uint32_t found = UINT32_MAX;
+    if (!input_.within(q - origin_, prm_.max_deviation, hints.data(), N, &found)) return false;
+    if (found != UINT32_MAX) witness_[nodes[0]].store(found, std::memory_order_relaxed);
+    return true;
+  }
 
   // Checks merging u into v against the current mesh (read only: safe in parallel).
   bool plan(uint32_t u, uint32_t v, Plan& out) const {
@@ -278,14 +295,14 @@ class Coarsener {
     spokes.clear();
     for (const Tri& n : out.fresh) {
       const Vec3 &a = p_[n[0]], &b = p_[n[1]], &c = p_[n[2]];
-      if (!near_input((a + b + c) * (1.0 / 3.0))) return false;
+      if (!near_input((a + b + c) * (1.0 / 3.0), n)) return false;
       for (uint32_t w : n)
         if (w != v) spokes.push_back(w);
     }
     std::sort(spokes.begin(), spokes.end());
     spokes.erase(std::unique(spokes.begin(), spokes.end()), spokes.end());
     for (uint32_t w : spokes)
-      if (!near_input((p_[v] + p_[w]) * 0.5)) return false;
+      if (!near_input((p_[v] + p_[w]) * 0.5, std::array<uint32_t, 2>{w, v})) return false;
     // No intersection among the new triangles, nor with the rest of the surface: one bucket
     // scan over the box of all new triangles (one scan each read mostly the same cells again).
     std::vector<Box3>& boxes = scratch.boxes;
@@ -428,6 +445,7 @@ class Coarsener {
     std::vector<uint32_t> spokes;  // the other ends of its new edges
   };
   std::vector<Plan> plans_;
+  std::unique_ptr<std::atomic<uint32_t>[]> witness_;  // per node: an input triangle near it, or UINT32_MAX
   mutable tbb::enumerable_thread_specific<Marks> marks_;
   uint32_t pass_ = 0;
   std::vector<std::vector<uint32_t>> vf_;
