@@ -3,6 +3,7 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <unordered_map>
 #include <unordered_set>
@@ -86,10 +87,15 @@ class Remesher {
         regions[i].on_input = fill_on_substrate(regions[i].problem, regions[i].substrate);
         regions[i].by_ears = fill_by_ear_clipping(regions[i].problem);
       });
+      std::vector<std::array<Verdict, 2>> verdicts(regions.size());
+      tbb::parallel_for(size_t(0), regions.size(), [&](size_t i) {
+        if (regions[i].on_input.ok) verdicts[i][0] = precheck(regions[i], regions[i].on_input);
+        if (regions[i].by_ears.ok) verdicts[i][1] = precheck(regions[i], regions[i].by_ears);
+      });
       const size_t rebuilt_before = stats_.on_input + stats_.ear_clipping;
       for (size_t i = 0; i < regions.size(); ++i) {
         if (progress && (i & 63) == 63 && progress->cancelled()) throw Error(ErrorKind::Cancelled, "cancelled");
-        settle(regions[i]);
+        settle(regions[i], verdicts[i]);
       }
       // A round that rebuilt under a tenth of its regions (a wrap bridging gaps everywhere,
       // soup.stl: 6 %) would not do better with bigger regions: stop there.
@@ -312,109 +318,204 @@ class Remesher {
     return true;
   }
 
+  // A fill's checks that do not depend on the other regions of its round (they are kept
+  // apart by a ring of untouched triangles: no node, no triangle and no ring in common), so
+  // they run for all regions in parallel; the check against the rest of the surface, which
+  // the round's earlier fills change, and the change itself stay in region order.
+  struct Verdict {
+    std::string why;                 // the first failed check before the surface test, or empty
+    std::string far_why;             // the first failed distance check, or empty
+    std::vector<Vec3> new_points;    // as written (rounded when asked)
+    std::vector<uint8_t> new_flags;  // per fill triangle
+    std::vector<float> new_deviation;
+  };
+
   // Keeps the first fill that passes every check, or leaves the region as it was.
-  void settle(Region& reg) {
-    bool built = false;
+  void settle(Region& reg, const std::array<Verdict, 2>& verdicts) {
     for (int way = 0; way < 2; ++way) {
-      RegionFill& fill = way == 0 ? reg.on_input : reg.by_ears;
+      const RegionFill& fill = way == 0 ? reg.on_input : reg.by_ears;
       const std::string name = way == 0 ? "on the input: " : "ear clipping: ";
       if (!fill.ok) {
         ++stats_.refusals[name + fill.why];
         continue;
       }
-      built = true;
       std::string why;
-      if (accept(reg, fill, why)) {
+      if (accept(reg, fill, verdicts[size_t(way)], why)) {
         ++(way == 0 ? stats_.on_input : stats_.ear_clipping);
         return;
       }
       ++stats_.refusals[name + why];
     }
     ++stats_.restored;
-    (void)built;
   }
 
-  // Checks a fill against the mesh; applies it when it passes.
-  bool accept(Region& reg, RegionFill fill, std::string& why) {
+  // The checks of `fill` that read only the region, its ring and the input (read only: safe
+  // in parallel). The fill's own numbering: region nodes (reg.node_ids), then its new nodes.
+  Verdict precheck(Region& reg, const RegionFill& fill) const {
+    Verdict out;
     const RegionProblem& pr = reg.problem;
     const uint32_t nc = uint32_t(pr.contour.size()), base = uint32_t(reg.node_ids.size());
-    const uint32_t first_new = uint32_t(s_.points.size());
-    for (Vec3& q : fill.new_points) {
+    out.new_points = fill.new_points;
+    for (Vec3& q : out.new_points) {
       if (prm_.float_coordinates) q = round_to_float(q);
-      if (!std::isfinite(q[0]) || !std::isfinite(q[1]) || !std::isfinite(q[2])) return why = "a new node is not finite", false;
+      if (!std::isfinite(q[0]) || !std::isfinite(q[1]) || !std::isfinite(q[2])) return out.why = "a new node is not finite", out;
     }
-    auto global = [&](uint32_t i) { return i < base ? reg.node_ids[i] : first_new + (i - base); };
-    std::vector<Tri> tris;
-    for (const Tri& t : fill.triangles) tris.push_back({global(t[0]), global(t[1]), global(t[2])});
+    const std::vector<Tri>& tris = fill.triangles;
 
     // Topology: the fill's border is the contour, in its direction; inside, every edge has a
     // triangle on each side; no edge the mesh already has elsewhere.
     std::unordered_map<uint64_t, int> directed;
     for (const Tri& t : tris)
       for (int k = 0; k < 3; ++k) {
-        if (t[k] == t[(k + 1) % 3]) return why = "a triangle repeats a node", false;
-        if (++directed[directed_key(t[k], t[(k + 1) % 3])] > 1) return why = "not consistently oriented", false;
+        if (t[k] == t[(k + 1) % 3]) return out.why = "a triangle repeats a node", out;
+        if (++directed[directed_key(t[k], t[(k + 1) % 3])] > 1) return out.why = "not consistently oriented", out;
       }
     std::unordered_set<uint64_t> contour_edges;
     for (uint32_t i = 0; i < nc; ++i) {
-      const uint32_t u = reg.node_ids[i], v = reg.node_ids[(i + 1) % nc];
-      if (!directed.count(directed_key(u, v)) || directed.count(directed_key(v, u))) return why = "its border is not the contour", false;
+      const uint32_t u = i, v = (i + 1) % nc;
+      if (!directed.count(directed_key(u, v)) || directed.count(directed_key(v, u))) return out.why = "its border is not the contour", out;
       contour_edges.insert(edge_key(u, v));
     }
-    std::unordered_set<uint32_t> in_region(reg.triangles.begin(), reg.triangles.end());
+    const std::unordered_set<uint32_t> in_region(reg.triangles.begin(), reg.triangles.end());
     for (const auto& [key, count] : directed) {
       const uint32_t u = uint32_t(key >> 32), v = uint32_t(key & 0xffffffffu);
       if (contour_edges.count(edge_key(u, v))) continue;
-      if (!directed.count(directed_key(v, u))) return why = "an edge inside has one triangle", false;
-      if (u < first_new && v < first_new)
-        for (uint32_t f : vf_[u])
+      if (!directed.count(directed_key(v, u))) return out.why = "an edge inside has one triangle", out;
+      if (u < base && v < base)
+        for (uint32_t f : vf_[reg.node_ids[u]])
           if (!in_region.count(f)) {
             const Tri& t = s_.triangles[f];
-            if (t[0] == v || t[1] == v || t[2] == v) return why = "it would make a non-manifold edge", false;
+            const uint32_t gv = reg.node_ids[v];
+            if (t[0] == gv || t[1] == gv || t[2] == gv) return out.why = "it would make a non-manifold edge", out;
           }
     }
 
-    // Geometry on the points as they would be.
-    s_.points.insert(s_.points.end(), fill.new_points.begin(), fill.new_points.end());
-    auto undo_points = [&]() { s_.points.resize(first_new); };
-    auto cell_of = [&](uint32_t v) { return v < first_new ? s_.cell_size[v] : reg.cell; };
+    // Geometry on the points as they would be: the fill's nodes, then the other nodes of the
+    // region and of its ring as needed.
+    std::vector<Vec3> points;
+    std::unordered_map<uint32_t, uint32_t> local_of;
+    for (uint32_t i = 0; i < base; ++i) points.push_back(s_.points[reg.node_ids[i]]), local_of.emplace(reg.node_ids[i], i);
+    points.insert(points.end(), out.new_points.begin(), out.new_points.end());
+    auto local = [&](uint32_t g) {
+      auto [it, added] = local_of.emplace(g, uint32_t(points.size()));
+      if (added) points.push_back(s_.points[g]);
+      return it->second;
+    };
+    auto cell_of = [&](uint32_t i) { return i < base ? s_.cell_size[reg.node_ids[i]] : reg.cell; };
     const QualityThresholds& th = ref_.thresholds;
     // The region's defects must drop: bad triangles (the triggers) fewer, defective edges
     // and poor normals not more.
     // Short and long edges, counted per triangle side (inside edges twice, in both).
-    auto count_edges = [&](const Tri& t, size_t& short_edges, size_t& long_edges) {
+    auto count_edges = [&](const std::vector<Vec3>& p, const Tri& t, auto&& cell, size_t& short_edges, size_t& long_edges) {
       for (int k = 0; k < 3; ++k) {
         const uint32_t u = t[k], v = t[(k + 1) % 3];
-        const double len = norm(s_.points[v] - s_.points[u]);
-        if (len < th.short_edge * std::min(cell_of(u), cell_of(v))) ++short_edges;
-        if (len > th.long_edge * std::max(cell_of(u), cell_of(v))) ++long_edges;
+        const double len = norm(p[v] - p[u]);
+        if (len < th.short_edge * std::min(cell(u), cell(v))) ++short_edges;
+        if (len > th.long_edge * std::max(cell(u), cell(v))) ++long_edges;
       }
     };
+    auto mesh_cell = [&](uint32_t v) { return s_.cell_size[v]; };
     size_t old_bad = 0, new_bad = 0, old_normals = 0, new_normals = 0;
     size_t old_short = 0, old_long = 0, new_short = 0, new_long = 0;
     for (uint32_t f : reg.triangles) {
       old_bad += is_bad(f) ? 1 : 0;
       old_normals += (flags_[f] & kNormalDeviation) ? 1 : 0;
-      count_edges(s_.triangles[f], old_short, old_long);
+      count_edges(s_.points, s_.triangles[f], mesh_cell, old_short, old_long);
     }
-    std::vector<uint8_t> new_flags;
-    std::vector<float> new_deviation;
     for (const Tri& t : tris) {
-      if (check::triangle_is_degenerate(s_.points, t)) return undo_points(), why = "a degenerate triangle", false;
-      const Vec3 &a = s_.points[t[0]], &b = s_.points[t[1]], &c = s_.points[t[2]];
+      if (check::triangle_is_degenerate(points, t)) return out.why = "a degenerate triangle", out;
+      const Vec3 &a = points[t[0]], &b = points[t[1]], &c = points[t[2]];
       const double cell = std::min({cell_of(t[0]), cell_of(t[1]), cell_of(t[2])});
       uint8_t f = shape_flags(a, b, c, cell, th);
       const double deviation = normal_deviation_deg(a, b, c, cell, ref_);
       if (deviation > th.normal_deviation_deg) f |= kNormalDeviation;
-      new_flags.push_back(f);
-      new_deviation.push_back(float(deviation));
-      count_edges(t, new_short, new_long);
+      out.new_flags.push_back(f);
+      out.new_deviation.push_back(float(deviation));
+      count_edges(points, t, cell_of, new_short, new_long);
       new_bad += bad_by(f, deviation) ? 1 : 0;
       new_normals += (f & kNormalDeviation) ? 1 : 0;
     }
-    if (new_bad >= old_bad) return undo_points(), why = "bad triangles not fewer", false;
-    if (new_normals > old_normals) return undo_points(), why = "more triangles with poor normals", false;
-    if (new_short > old_short || new_long > old_long) return undo_points(), why = "more edges of uncharacteristic length", false;
+    if (new_bad >= old_bad) return out.why = "bad triangles not fewer", out;
+    if (new_normals > old_normals) return out.why = "more triangles with poor normals", out;
+    if (new_short > old_short || new_long > old_long) return out.why = "more edges of uncharacteristic length", out;
+
+    // Close to the input: as close as the triangles it replaces, or within the bound.
+    auto input_distance = [&](const Vec3& q) { return std::sqrt(ref_.input->squared_distance(q - ref_.origin)); };
+    std::vector<Tri> old_tris;
+    for (uint32_t f : reg.triangles) old_tris.push_back(s_.triangles[f]);
+    if (reg.old_far < 0) {  // the same for both fills: the first one to get here measures it
+      reg.old_far = 0;
+      for (const Vec3& q : samples_of(s_.points, old_tris)) reg.old_far = std::max(reg.old_far, input_distance(q));
+    }
+    const double bound = std::max(prm_.max_deviation, reg.old_far);
+    for (const Vec3& q : samples_of(points, tris))
+      if (input_distance(q) > bound) return out.far_why = "too far from the input", out;
+    // The input near the region as close to the new surface as to the old one (or within
+    // the bound), and its sharp edges kept (or within their tolerance).
+    std::vector<Tri> before = old_tris, after = tris;
+    for (uint32_t f : reg.ring) {
+      before.push_back(s_.triangles[f]);
+      const Tri& t = s_.triangles[f];
+      after.push_back({local(t[0]), local(t[1]), local(t[2])});
+    }
+    fit::SurfaceIndex old_index(s_.points, before), new_index(points, after);
+    Box3 box;
+    for (const Tri& t : old_tris)
+      for (uint32_t v : t) box.add(s_.points[v]);
+    const double eps = 1e-9 * std::max(box.diagonal(), pr.target);
+    // Input points: the feet of points on the old surface, and the corners and edges of the
+    // input under it (ridges and tips are where a rebuild cuts corners).
+    std::vector<Vec3> near_input;
+    for (const Vec3& q : samples_of(s_.points, old_tris)) near_input.push_back(ref_.input->closest(q - ref_.origin).point + ref_.origin);
+    Box3 reach = box;
+    for (int k = 0; k < 3; ++k) reach.lo[k] -= pr.target, reach.hi[k] += pr.target;
+    auto inside = [&](const Vec3& q) {
+      for (int k = 0; k < 3; ++k)
+        if (q[k] < reach.lo[k] || q[k] > reach.hi[k]) return false;
+      return true;
+    };
+    for (const Tri& t : reg.substrate.triangles)
+      for (int k = 0; k < 3; ++k) {
+        const Vec3 &a = reg.substrate.points[t[k]], &b = reg.substrate.points[t[(k + 1) % 3]];
+        const size_t n = std::min<size_t>(64, size_t(std::ceil(4 * norm(b - a) / pr.target)));
+        for (size_t i = 0; i < n; ++i) {
+          const Vec3 q = lerp(a, b, double(i) / double(std::max<size_t>(1, n)));
+          if (inside(q)) near_input.push_back(q);
+        }
+      }
+    for (const Vec3& q : near_input) {
+      const double was = std::sqrt(old_index.squared_distance(q)), now = std::sqrt(new_index.squared_distance(q));
+      if (now > std::max(was, prm_.max_deviation) + eps) return out.far_why = "the input moves away from it", out;
+    }
+    const double tolerance = th.feature_tolerance * ref_.finest_size;
+    const GridKey lo = grid_key(box.lo, 1.0 / feature_cell_), hi = grid_key(box.hi, 1.0 / feature_cell_);
+    for (int64_t x = lo.x - 1; x <= hi.x + 1; ++x)
+      for (int64_t y = lo.y - 1; y <= hi.y + 1; ++y)
+        for (int64_t z = lo.z - 1; z <= hi.z + 1; ++z) {
+          auto it = features_.find({x, y, z});
+          if (it == features_.end()) continue;
+          for (uint32_t i : it->second) {
+            const Vec3 q = ref_.feature_samples[i] + ref_.origin;
+            const double was = std::sqrt(old_index.squared_distance(q)), now = std::sqrt(new_index.squared_distance(q));
+            if (now > std::max(was, tolerance) + eps) return out.far_why = "a sharp edge of the input gets lost", out;
+          }
+        }
+    return out;
+  }
+
+  // The rest of the checks, against the surface as the round's earlier fills left it, in the
+  // order of the checks (the pre-checked ones' verdicts where they come); applies the fill
+  // when it passes.
+  bool accept(Region& reg, const RegionFill& fill, const Verdict& verdict, std::string& why) {
+    if (!verdict.why.empty()) return why = verdict.why, false;
+    const uint32_t base = uint32_t(reg.node_ids.size());
+    const uint32_t first_new = uint32_t(s_.points.size());
+    auto global = [&](uint32_t i) { return i < base ? reg.node_ids[i] : first_new + (i - base); };
+    std::vector<Tri> tris;
+    for (const Tri& t : fill.triangles) tris.push_back({global(t[0]), global(t[1]), global(t[2])});
+    const std::unordered_set<uint32_t> in_region(reg.triangles.begin(), reg.triangles.end());
+    s_.points.insert(s_.points.end(), verdict.new_points.begin(), verdict.new_points.end());
+    auto undo_points = [&]() { s_.points.resize(first_new); };
 
     // No intersection among the new triangles, nor with the rest of the surface.
     for (size_t i = 0; i < tris.size(); ++i) {
@@ -429,66 +530,7 @@ class Remesher {
       });
       if (hit) return undo_points(), why = "it intersects the surface", false;
     }
-
-    // Close to the input: as close as the triangles it replaces, or within the bound.
-    auto input_distance = [&](const Vec3& q) { return std::sqrt(ref_.input->squared_distance(q - ref_.origin)); };
-    std::vector<Tri> old_tris;
-    for (uint32_t f : reg.triangles) old_tris.push_back(s_.triangles[f]);
-    if (reg.old_far < 0) {
-      reg.old_far = 0;
-      for (const Vec3& q : samples_of(s_.points, old_tris)) reg.old_far = std::max(reg.old_far, input_distance(q));
-    }
-    const double bound = std::max(prm_.max_deviation, reg.old_far);
-    for (const Vec3& q : samples_of(s_.points, tris))
-      if (input_distance(q) > bound) return undo_points(), why = "too far from the input", false;
-    // The input near the region as close to the new surface as to the old one (or within
-    // the bound), and its sharp edges kept (or within their tolerance).
-    {
-      std::vector<Tri> before = old_tris, after = tris;
-      for (uint32_t f : reg.ring) before.push_back(s_.triangles[f]), after.push_back(s_.triangles[f]);
-      fit::SurfaceIndex old_index(s_.points, before), new_index(s_.points, after);
-      Box3 box;
-      for (const Tri& t : old_tris)
-        for (uint32_t v : t) box.add(s_.points[v]);
-      const double eps = 1e-9 * std::max(box.diagonal(), pr.target);
-      // Input points: the feet of points on the old surface, and the corners and edges of the
-      // input under it (ridges and tips are where a rebuild cuts corners).
-      std::vector<Vec3> near_input;
-      for (const Vec3& q : samples_of(s_.points, old_tris)) near_input.push_back(ref_.input->closest(q - ref_.origin).point + ref_.origin);
-      Box3 reach = box;
-      for (int k = 0; k < 3; ++k) reach.lo[k] -= pr.target, reach.hi[k] += pr.target;
-      auto inside = [&](const Vec3& q) {
-        for (int k = 0; k < 3; ++k)
-          if (q[k] < reach.lo[k] || q[k] > reach.hi[k]) return false;
-        return true;
-      };
-      for (const Tri& t : reg.substrate.triangles)
-        for (int k = 0; k < 3; ++k) {
-          const Vec3 &a = reg.substrate.points[t[k]], &b = reg.substrate.points[t[(k + 1) % 3]];
-          const size_t n = std::min<size_t>(64, size_t(std::ceil(4 * norm(b - a) / pr.target)));
-          for (size_t i = 0; i < n; ++i) {
-            const Vec3 q = lerp(a, b, double(i) / double(std::max<size_t>(1, n)));
-            if (inside(q)) near_input.push_back(q);
-          }
-        }
-      for (const Vec3& q : near_input) {
-        const double was = std::sqrt(old_index.squared_distance(q)), now = std::sqrt(new_index.squared_distance(q));
-        if (now > std::max(was, prm_.max_deviation) + eps) return undo_points(), why = "the input moves away from it", false;
-      }
-      const double tolerance = th.feature_tolerance * ref_.finest_size;
-      const GridKey lo = grid_key(box.lo, 1.0 / feature_cell_), hi = grid_key(box.hi, 1.0 / feature_cell_);
-      for (int64_t x = lo.x - 1; x <= hi.x + 1; ++x)
-        for (int64_t y = lo.y - 1; y <= hi.y + 1; ++y)
-          for (int64_t z = lo.z - 1; z <= hi.z + 1; ++z) {
-            auto it = features_.find({x, y, z});
-            if (it == features_.end()) continue;
-            for (uint32_t i : it->second) {
-              const Vec3 q = ref_.feature_samples[i] + ref_.origin;
-              const double was = std::sqrt(old_index.squared_distance(q)), now = std::sqrt(new_index.squared_distance(q));
-              if (now > std::max(was, tolerance) + eps) return undo_points(), why = "a sharp edge of the input gets lost", false;
-            }
-          }
-    }
+    if (!verdict.far_why.empty()) return undo_points(), why = verdict.far_why, false;
 
     // Apply: the region's triangles die, the fill's are appended, its nodes too.
     s_.cell_size.resize(s_.points.size(), reg.cell);
@@ -505,8 +547,8 @@ class Remesher {
       const uint32_t id = uint32_t(s_.triangles.size());
       s_.triangles.push_back(tris[i]);
       alive_.push_back(1);
-      flags_.push_back(new_flags[i]);
-      deviation_.push_back(new_deviation[i]);
+      flags_.push_back(verdict.new_flags[i]);
+      deviation_.push_back(verdict.new_deviation[i]);
       for (uint32_t v : tris[i]) vf_[v].push_back(id);
       buckets_.update(id);
     }
