@@ -342,9 +342,9 @@ bool drop_cut_off_pockets(AdaptiveGrid& g, int32_t label, const std::vector<std:
   auto limit = [&] {
     if (pocket_limit < 0) {
       double volume = 0;
-      const double side0 = g.fine_units(0);
-      g.for_each_level0_block([&](const AdaptiveGrid::Block& b, int32_t v) { volume += v == label ? double(b.cells()) * side0 * side0 * side0 : 0.0; },
-                              [&](const Coord&, int32_t v) { volume += v == label ? side0 * side0 * side0 : 0.0; });
+      const double side0 = g.fine_units(0), cell0 = side0 * side0 * side0;
+      g.for_each_level0_block([&](const AdaptiveGrid::Block& b, int32_t v) { volume += v == label ? double(b.cells()) * cell0 : 0.0; },
+                              [&](const Coord&, int32_t v) { volume += v == label ? cell0 : 0.0; });
       g.for_each_fine_leaf([&](int level, const Coord&, int32_t v) {
         const double side = g.fine_units(level);
         if (v == label) volume += side * side * side;
