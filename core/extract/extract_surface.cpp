@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <map>
 #include <set>
-#include <tuple>
 #include <unordered_map>
 
 #include <tbb/parallel_for.h>
@@ -480,26 +479,10 @@ LatticeSurface extract_manifold_surface(AdaptiveGrid& g, int32_t& label, VolumeC
     }
     stats.dropped_pieces += comps.count() - kept.size();
     if (comps.count() > 1) {
-      // New values by leaf, and by whole block where level 0 is uniform.
-      auto new_value = [&](int32_t v) {
+      g.relabel([&](int32_t v) {
         if (v < comps.first_label) return v;
         return std::find(kept.begin(), kept.end(), v) == kept.end() ? int32_t(grid::kExcluded) : kept.front();
-      };
-      std::vector<std::tuple<int, Coord, int32_t>> changes;
-      std::vector<std::pair<Coord, int32_t>> block_changes;
-      g.for_each_level0_block(
-          [&](const AdaptiveGrid::Block& b, int32_t v) {
-            if (new_value(v) != v) block_changes.emplace_back(b.lo, new_value(v));
-          },
-          [&](const Coord& c, int32_t v) {
-            if (new_value(v) != v) changes.emplace_back(0, c, new_value(v));
-          });
-      g.for_each_fine_leaf([&](int level, const Coord& c, int32_t v) {
-        if (new_value(v) != v) changes.emplace_back(level, c, new_value(v));
       });
-      AdaptiveGrid::Cursor cursor(g);
-      for (const auto& [lo, v] : block_changes) cursor.set_block(lo, v);
-      for (const auto& [level, c, v] : changes) cursor.set(level, c, v);
     }
     label = kept.front();
   }

@@ -340,17 +340,13 @@ FittedSurface fit_to_input(const extract::LatticeSurface& surf, const grid::Adap
   for (; round < max_rounds; ++round) {
     if (progress && progress->cancelled()) throw Error(ErrorKind::Cancelled, "cancelled");
     size_t flagged = size_t(std::count(flag.begin(), flag.end(), 1));
-    if (flagged == 0 && complete) {
-      valid = true;
-      break;
-    }
-    if (flagged == 0) {
+    if (flagged == 0 && !complete) {
       full_check(flag);  // the last full check tested small triangles only: the whole surface now
       flagged = size_t(std::count(flag.begin(), flag.end(), 1));
-      if (flagged == 0) {
-        valid = true;
-        break;
-      }
+    }
+    if (flagged == 0) {
+      valid = true;
+      break;
     }
     if (progress && (round < 10 || round % 10 == 0))
       progress->progress("project", std::min(0.95, 0.1 + round * 0.01),

@@ -442,15 +442,11 @@ bool SurfaceIndex::within(const Vec3& q, double radius) const {
   // come in runs along a surface. (A yes or no does not depend on which triangle says it.)
   thread_local const Impl* last_index = nullptr;
   thread_local uint32_t last_triangle = UINT32_MAX;
-  const Store& store = impl_->store;
-  if (last_index == impl_.get() && last_triangle < store.triangles.size()) {
-    Vec3 nearest;
-    if (squared_distance_to(q, store.triangles[last_triangle], nearest) <= radius * radius) return true;
-  }
-  WithinTraits traits(q, radius, store);
-  impl_->tree.traversal(point(q), traits);
-  if (traits.found) last_index = impl_.get(), last_triangle = traits.triangle;
-  return traits.found;
+  const uint32_t hint = last_index == impl_.get() ? last_triangle : UINT32_MAX;
+  uint32_t found = UINT32_MAX;
+  const bool yes = within(q, radius, &hint, 1, &found);
+  if (found != UINT32_MAX) last_index = impl_.get(), last_triangle = found;
+  return yes;
 }
 
 bool SurfaceIndex::within(const Vec3& q, double radius, const uint32_t* hints, size_t count, uint32_t* found) const {

@@ -7,6 +7,8 @@
 
 #include <algorithm>
 #include <cstdint>
+#include <tuple>
+#include <utility>
 #include <vector>
 
 #include "vdbwrap/mesh.h"
@@ -196,6 +198,31 @@ class AdaptiveGrid {
           if (v != kRefined) f(0, c, v);
         });
     for_each_fine_leaf(f);
+  }
+
+  // Every leaf whose value v changes under new_value(v) takes the new value; a uniform level-0
+  // block changes whole (one tile). (Collected first: changing while iterating a VDB tree
+  // would invalidate the iterator.)
+  template <typename F>
+  void relabel(F&& new_value) {
+    std::vector<std::pair<Coord, int32_t>> blocks;
+    std::vector<std::tuple<int, Coord, int32_t>> cells;
+    auto note = [&](int level, const Coord& c, int32_t v) {
+      if (v == kRefined) return;
+      const int32_t w = new_value(v);
+      if (w != v) cells.emplace_back(level, c, w);
+    };
+    for_each_level0_block(
+        [&](const Block& b, int32_t v) {
+          if (v == kRefined) return;
+          const int32_t w = new_value(v);
+          if (w != v) blocks.emplace_back(b.lo, w);
+        },
+        [&](const Coord& c, int32_t v) { note(0, c, v); });
+    for_each_fine_leaf(note);
+    Cursor cursor(*this);
+    for (const auto& [lo, w] : blocks) cursor.set_block(lo, w);
+    for (const auto& [level, c, w] : cells) cursor.set(level, c, w);
   }
 
   // World position of a fine-lattice node.

@@ -239,22 +239,7 @@ VolumeSelection select_volume(AdaptiveGrid& g, const VolumeRequest& req, const D
   // One label for the whole chosen volume.
   sel.label = chosen.front();
   if (chosen.size() > 1) {
-    auto relabelled = [&](int32_t v) { return v != sel.label && std::find(chosen.begin(), chosen.end(), v) != chosen.end(); };
-    std::vector<std::pair<int, Coord>> relabel;
-    std::vector<Coord> relabel_blocks;  // uniform level-0 blocks: whole
-    g.for_each_level0_block(
-        [&](const AdaptiveGrid::Block& b, int32_t v) {
-          if (relabelled(v)) relabel_blocks.push_back(b.lo);
-        },
-        [&](const Coord& c, int32_t v) {
-          if (relabelled(v)) relabel.emplace_back(0, c);
-        });
-    g.for_each_fine_leaf([&](int level, const Coord& c, int32_t v) {
-      if (relabelled(v)) relabel.emplace_back(level, c);
-    });
-    AdaptiveGrid::Cursor cursor(g);
-    for (const Coord& lo : relabel_blocks) cursor.set_block(lo, sel.label);
-    for (auto& [level, c] : relabel) cursor.set(level, c, sel.label);
+    g.relabel([&](int32_t v) { return std::find(chosen.begin(), chosen.end(), v) != chosen.end() ? sel.label : v; });
   }
 
   // Gap closure, second half: grow the volume back into the narrow cells within reach of a
