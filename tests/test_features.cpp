@@ -1,6 +1,7 @@
 // Sharp features kept (issue 7): feature curves, snapping of convex and concave edges and
 // corners, measured as the distance from points along the input's sharp edges to the wrap.
 #include <gtest/gtest.h>
+#include <tbb/task_arena.h>
 
 #include <cmath>
 #include <cstdio>
@@ -233,8 +234,8 @@ TEST(FeatureInsertion, BuriedIntersectionLinesDoNotPullTheWrapIn) {
   EXPECT_GT(f.nodes_snapped, 0u);
 }
 
-// The visits' probes are made in parallel and made again where an accepted change came
-// within reach: the nodes placed, and the whole wrap, must not depend on the thread count.
+// The points' checks run in parallel and run again where a change made before came within
+// reach: the nodes placed, and the whole wrap, must not depend on the thread count.
 // octagonal_pocket has concave creases the traced chains miss, so nodes are inserted, moved
 // and refused.
 TEST(FeatureInsertion, OneThreadAndTwoPlaceTheSameNodes) {
@@ -252,6 +253,68 @@ TEST(FeatureInsertion, OneThreadAndTwoPlaceTheSameNodes) {
   EXPECT_EQ(fa.inserts_refused, fb.inserts_refused);
   EXPECT_EQ(a.surface.triangles, b.surface.triangles);
   EXPECT_EQ(a.surface.points, b.surface.points);
+}
+
+// A staircase whose valleys a wrap strip bridges with one diagonal: the valleys' points are
+// checked in parallel, cell by cell, and their changes reach into the neighbouring cells
+// (valleys 0.2 apart, moves up to 0.3, cells 0.45 wide). The wrap must be the same on 1 thread
+// as on 2, valid, clear of the input, and on every valley.
+TEST(FeatureInsertion, NeighbouringCreasesGiveTheSameWrapOnOneThreadAndTwo) {
+  const int steps = 8;
+  const double rise = 0.2, off = 0.001;
+  Mesh input;
+  auto quad = [&](const Vec3& a, const Vec3& b) {  // the profile segment ab swept along y
+    const uint32_t i = uint32_t(input.points.size());
+    input.points.insert(input.points.end(), {{a[0], -0.5, a[2]}, {b[0], -0.5, b[2]}, {b[0], 1.5, b[2]}, {a[0], 1.5, a[2]}});
+    input.triangles.push_back({i, i + 1, i + 2});
+    input.triangles.push_back({i, i + 2, i + 3});
+  };
+  std::vector<fit::FeatureCurve> valleys;
+  for (int k = 0; k < steps; ++k) {
+    const double x = rise * k, z = rise * k;
+    quad({x, 0, z}, {x + rise, 0, z});                // tread
+    quad({x + rise, 0, z}, {x + rise, 0, z + rise});  // riser
+    fit::FeatureCurve valley;
+    valley.points = {{x + rise, 0, z}, {x + rise, 1, z}};
+    valleys.push_back(valley);
+  }
+  fit::SurfaceIndex index(input.points, input.triangles);
+  // The strip: the diagonal over the steps' edges, `off` above them, nodes 0.05 apart.
+  fit::FittedSurface strip;
+  const uint32_t across = uint32_t(4 * steps + 1), rows = 11;
+  for (uint32_t r = 0; r < rows; ++r)
+    for (uint32_t j = 0; j < across; ++j) strip.points.push_back({0.05 * j, 0.1 * r, 0.05 * j + off});
+  for (uint32_t r = 0; r + 1 < rows; ++r)
+    for (uint32_t j = 0; j + 1 < across; ++j) {
+      const uint32_t a = r * across + j, b = a + 1, c = a + across, d = b + across;
+      strip.triangles.push_back({a, b, d});
+      strip.triangles.push_back({a, d, c});
+    }
+  strip.snapped.assign(strip.points.size(), 0);
+  strip.cell_size.assign(strip.points.size(), 0.05);
+  const fit::FeatureInsertParams prm = insert_params(0.025, 0.3);
+
+  auto insert_on = [&](int threads) {
+    fit::FittedSurface s = strip;
+    fit::FeatureInsertStats stats;
+    tbb::task_arena(threads).execute([&] { stats = fit::insert_feature_nodes(s, valleys, index, Vec3{0, 0, 0}, prm); });
+    return std::pair{s, stats};
+  };
+  const auto [one, one_stats] = insert_on(1);
+  const auto [two, two_stats] = insert_on(2);
+  EXPECT_EQ(one.points, two.points);
+  EXPECT_EQ(one.triangles, two.triangles);
+  EXPECT_EQ(one.feature_edges, two.feature_edges);
+  EXPECT_EQ(one_stats.nodes_inserted + one_stats.nodes_moved, two_stats.nodes_inserted + two_stats.nodes_moved);
+  EXPECT_GE(one_stats.nodes_inserted + one_stats.nodes_moved, size_t(steps));
+
+  EXPECT_TRUE(check::mesh_self_intersecting_faces(two.points, two.triangles).empty());
+  for (const Tri& t : two.triangles) EXPECT_FALSE(index.touches(two.points[t[0]], two.points[t[1]], two.points[t[2]]));
+  fit::SurfaceIndex wrap(two.points, two.triangles);
+  for (const fit::FeatureCurve& v : valleys) {  // the middle of each valley (its ends are the strip's borders)
+    const Vec3 mid = {v.points[0][0], 0.5, v.points[0][2]};
+    EXPECT_LT(std::sqrt(wrap.squared_distance(mid)), 0.01) << "valley at x = " << mid[0];
+  }
 }
 
 // The CAD-like corpus meshes of the issue: valid, edges far closer than without snapping.

@@ -184,29 +184,43 @@ bool triangles_intersect(const Points& p, const Tri& x, const Tri& y, bool use_p
 
 }  // namespace
 
-bool triangle_pair_intersects(const std::vector<Vec3>& points, const Tri& a, const Tri& b, bool use_proofs_2d) {
-  // Only the six points involved are converted (on the stack: this runs millions of times in a
-  // wrap, and a heap buffer each time showed in profiles); the index map keeps the
-  // shared-vertex logic.
+namespace {
+// The pair test on corners given by `corner(triangle, k)`: only the six points involved are
+// converted (on the stack: this runs millions of times in a wrap, and a heap buffer each time
+// showed in profiles); the index map keeps the shared-vertex logic.
+template <typename Corner>
+bool pair_intersects(const Tri& a, const Tri& b, Corner&& corner, bool use_proofs_2d) {
   std::array<P3, 6> p;
   Tri la, lb;
   std::array<uint32_t, 6> ids;
   size_t count = 0;
-  auto local = [&](uint32_t v) {
+  auto local = [&](uint32_t v, const Vec3& at) {
     for (size_t i = 0; i < count; ++i)
       if (ids[i] == v) return uint32_t(i);
     ids[count] = v;
-    p[count] = to_point(points[v]);
+    p[count] = to_point(at);
     return uint32_t(count++);
   };
-  for (int k = 0; k < 3; ++k) la[k] = local(a[k]);
-  for (int k = 0; k < 3; ++k) lb[k] = local(b[k]);
+  for (int k = 0; k < 3; ++k) la[k] = local(a[k], corner(0, k));
+  for (int k = 0; k < 3; ++k) lb[k] = local(b[k], corner(1, k));
   return triangles_intersect(p, la, lb, use_proofs_2d);
+}
+}  // namespace
+
+bool triangle_pair_intersects(const std::vector<Vec3>& points, const Tri& a, const Tri& b, bool use_proofs_2d) {
+  return pair_intersects(a, b, [&](int t, int k) -> const Vec3& { return points[(t == 0 ? a : b)[k]]; }, use_proofs_2d);
+}
+
+bool triangle_pair_intersects(const Corners& a_at, const Tri& a, const Corners& b_at, const Tri& b, bool use_proofs_2d) {
+  return pair_intersects(a, b, [&](int t, int k) -> const Vec3& { return (t == 0 ? a_at : b_at)[k]; }, use_proofs_2d);
 }
 
 bool triangle_is_degenerate(const std::vector<Vec3>& points, const Tri& t) {
-  return t[0] == t[1] || t[1] == t[2] || t[0] == t[2] ||
-         CGAL::collinear(to_point(points[t[0]]), to_point(points[t[1]]), to_point(points[t[2]]));
+  return triangle_is_degenerate(Corners{points[t[0]], points[t[1]], points[t[2]]}, t);
+}
+
+bool triangle_is_degenerate(const Corners& at, const Tri& t) {
+  return t[0] == t[1] || t[1] == t[2] || t[0] == t[2] || CGAL::collinear(to_point(at[0]), to_point(at[1]), to_point(at[2]));
 }
 
 namespace {

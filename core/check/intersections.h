@@ -1,5 +1,6 @@
 // Intersection tests on triangle sets, on CGAL's exact predicates.
 #pragma once
+#include <array>
 #include <cstdint>
 #include <vector>
 
@@ -30,6 +31,11 @@ std::vector<uint32_t> intersecting_triangles(const std::vector<Vec3>& points, co
 // must be the same).
 bool triangle_pair_intersects(const std::vector<Vec3>& points, const Tri& a, const Tri& b, bool use_proofs_2d = true);
 bool triangle_is_degenerate(const std::vector<Vec3>& points, const Tri& t);
+// The same tests on corners given apart from a point list (a change being weighed before it is
+// made); the indexes still tell which corners two triangles share, and shared ones must be equal.
+using Corners = std::array<Vec3, 3>;
+bool triangle_pair_intersects(const Corners& a_at, const Tri& a, const Corners& b_at, const Tri& b, bool use_proofs_2d = true);
+bool triangle_is_degenerate(const Corners& at, const Tri& t);
 
 struct Segment {
   Vec3 a, b;

@@ -1,5 +1,9 @@
 #include "fit/feature_insert.h"
 
+#include <tbb/blocked_range.h>
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -18,7 +22,73 @@
 namespace vdbwrap::fit {
 namespace {
 
+using check::Corners;
 
+// A curve point to bring the wrap to, and the curve it lies on.
+struct Sample {
+  Vec3 q;
+  uint32_t curve;
+};
+
+// A wrap edge near a curve point: how near, and where along it (0 to 1) the nearest point is.
+struct Candidate {
+  double distance, t;
+  uint32_t a, b;
+};
+
+// What the checks decided for one curve point, on the wrap as it was when they ran.
+struct Plan {
+  enum Kind : uint8_t { kKeep, kMove, kSplit } kind = kKeep;
+  uint32_t node = UINT32_MAX;  // kKeep: the node already at the point, if any; kMove: the node moved
+  uint32_t a = 0, b = 0;       // kSplit: the edge split
+  Vec3 target{0, 0, 0};
+  bool missed = false;   // the wrap was farther than the tolerance
+  bool refused = false;  // missed, and some change that could reach the point was refused
+  Box3 read;             // everything the checks looked at: a change there makes the plan stale
+  Box3 write;            // everything the change alters
+};
+
+// A triangle as a change would make it, and the area vector of the face it comes from.
+struct Change {
+  Tri tri;
+  Corners at;
+  Vec3 was;
+};
+
+// One thread's buffers.
+struct Scratch {
+  std::vector<Candidate> edges;
+  std::vector<uint32_t> seen;
+  uint32_t stamp = 0;
+  std::vector<Box3> writes;
+};
+
+Box3 box_around(const Vec3& q, double r) {
+  Box3 box;
+  box.add(q - Vec3{r, r, r});
+  box.add(q + Vec3{r, r, r});
+  return box;
+}
+void add_box(Box3& to, const Box3& b) {
+  if (!b.empty()) to.add(b.lo), to.add(b.hi);
+}
+bool boxes_overlap(const Box3& a, const Box3& b) {
+  for (int k = 0; k < 3; ++k)
+    if (a.lo[k] > b.hi[k] || a.hi[k] < b.lo[k]) return false;
+  return true;
+}
+Box3 box_of(const Corners& c) {
+  Box3 box;
+  for (const Vec3& p : c) box.add(p);
+  return box;
+}
+// The curve points are grouped by cells of a coarse grid, and the cells by the parities of their
+// coordinates: cells of one class are a cell apart. A round checks, in parallel, a run of points
+// of every cell of a class (read only, on the wrap as it stands; a run stops before a point whose
+// checks would read what a change planned earlier in the run alters), then makes the changes in
+// cell order. A point whose checks read a place that a change made earlier in the round altered
+// is checked again first. So the result is that of visiting the points one by one in that
+// order, whatever the number of threads.
 class Inserter {
  public:
   Inserter(FittedSurface& s, const SurfaceIndex& input, const Vec3& origin, const FeatureInsertParams& prm)
@@ -31,50 +101,165 @@ class Inserter {
     for (const auto& [a, b] : s.feature_edges) edges_.insert({std::min(a, b), std::max(a, b)});
   }
 
-  // One pass over the curves. `retry` has a flag per sample (in curve order): only flagged
-  // samples are visited, and a sample stays flagged only when a reachable change was refused.
-  void run(const std::vector<FeatureCurve>& curves, std::vector<uint8_t>& retry, FeatureInsertStats& stats) {
-    const bool first = retry.empty();
-    size_t index = 0;
-    for (const FeatureCurve& c : curves) {
-      uint32_t previous = UINT32_MAX;  // the last node put on this curve: their edge is a feature edge
+  // The curves' points, `spacing` apart, in curve order; then their cells.
+  void sample(const std::vector<FeatureCurve>& curves) {
+    for (uint32_t ci = 0; ci < curves.size(); ++ci) {
+      const FeatureCurve& c = curves[ci];
       for (size_t i = 0; i + 1 < c.points.size(); ++i) {
         const Vec3 &a = c.points[i], &b = c.points[i + 1];
         const size_t k = std::max<size_t>(1, size_t(std::ceil(norm(b - a) / prm_.spacing)));
-        for (size_t j = (i == 0 ? 0 : 1); j <= k; ++j, ++index) {
-          if (first) retry.push_back(1), seen_.push_back(0);
-          const Vec3 q = world(lerp(a, b, double(j) / double(k)));
-          // A refused point is retried only when the wrap near it changed since: else every
-          // check would give what it gave before.
-          if (!retry[index] || (!first && !changed_near(q, seen_[index]))) {
-            previous = UINT32_MAX;
-            continue;
-          }
-          bool again = false;
-          seen_[index] = clock_;
-          const uint32_t v = visit(q, again, stats);
-          retry[index] = again;
-          if (v == UINT32_MAX) continue;
-          if (previous != UINT32_MAX && previous != v && adjacent(previous, v)) add_feature_edge(previous, v);
-          previous = v;
-        }
+        for (size_t j = (i == 0 ? 0 : 1); j <= k; ++j) samples_.push_back({world(lerp(a, b, double(j) / double(k))), ci});
       }
     }
+    seen_.assign(samples_.size(), 0);
+    group_by_cells();
+  }
+  size_t samples() const { return samples_.size(); }
+
+  // One pass over the curve points. `retry` has a flag per point (in curve order): only flagged
+  // points are visited, and a point stays flagged only when a reachable change was refused.
+  void run(std::vector<uint8_t>& retry, bool first, FeatureInsertStats& stats) {
+    std::vector<uint32_t> result(samples_.size(), UINT32_MAX);  // the node at each point visited
+    std::vector<uint8_t> visited(samples_.size(), 0);
+    for (std::vector<Cell>& cells : classes_) {
+      for (Cell& c : cells) c.next = c.begin;
+      std::vector<Cell*> active;
+      for (Cell& c : cells) active.push_back(&c);
+      while (!active.empty()) {
+        // Each cell's next run of points is checked in parallel with the other cells' (read
+        // only), then the changes are made in cell order.
+        const uint64_t start = clock_;
+        tbb::parallel_for(tbb::blocked_range<size_t>(0, active.size(), 1), [&](const tbb::blocked_range<size_t>& r) {
+          Scratch& scratch = scratch_.local();
+          for (size_t k = r.begin(); k < r.end(); ++k) plan_run(*active[k], retry, first, scratch);
+        });
+        for (Cell* c : active) {
+          for (Step& step : c->steps) {
+            const uint32_t i = step.sample;
+            const Vec3& q = samples_[i].q;
+            if (!step.checked) {
+              // Skipped as unchanged near it when the run was checked: still so?
+              if (!changed_near(q, seen_[i])) continue;
+              step.plan = plan(q, scratch_.local());
+            } else if (changed_in(step.plan.read, start)) {
+              step.plan = plan(q, scratch_.local());  // a change made earlier in this round was in reach
+            }
+            seen_[i] = clock_;
+            visited[i] = 1;
+            result[i] = apply(step.plan, stats);
+            retry[i] = step.plan.refused;
+          }
+          c->steps.clear();
+        }
+        active.erase(std::remove_if(active.begin(), active.end(), [](const Cell* c) { return c->next == c->end; }), active.end());
+      }
+    }
+    link_along_curves(visited, result);
     s_.feature_edges.assign(edges_.begin(), edges_.end());
   }
 
  private:
+  // A point of a run: its plan, or (unchecked) a refused point with no change near it since.
+  struct Step {
+    uint32_t sample;
+    bool checked;
+    Plan plan;
+  };
+  // The points of one cell, in curve order (`order_[begin, end)`), the next to visit, and the
+  // current run's steps.
+  struct Cell {
+    uint32_t begin, end, next;
+    std::vector<Step> steps;
+  };
+
+  // Checks a cell's points from its next one on, on the wrap as it stands, until a point's
+  // checks would read what a change planned earlier in the run writes (that point waits for
+  // the next round) or 64 points were checked.
+  void plan_run(Cell& c, const std::vector<uint8_t>& retry, bool first, Scratch& scratch) const {
+    std::vector<Box3>& writes = scratch.writes;
+    writes.clear();
+    size_t checked = 0;
+    auto overlaps_writes = [&](const Box3& b) {
+      for (const Box3& w : writes)
+        if (boxes_overlap(w, b)) return true;
+      return false;
+    };
+    for (; c.next < c.end && checked < 64; ++c.next) {
+      const uint32_t i = order_[c.next];
+      if (!retry[i]) continue;
+      const Vec3& q = samples_[i].q;
+      // A refused point is retried only when the wrap near it changed since: else every check
+      // would give what it gave before.
+      if (!first && !changed_near(q, seen_[i])) {
+        c.steps.push_back({i, false, Plan{}});  // a change made before it in this round may reach it
+        continue;
+      }
+      if (overlaps_writes(box_around(q, prm_.max_move))) break;
+      Plan pl = plan(q, scratch);
+      if (overlaps_writes(pl.read)) break;
+      ++checked;
+      if (pl.kind != Plan::kKeep) writes.push_back(pl.write);
+      c.steps.push_back({i, true, std::move(pl)});
+    }
+  }
+
+  // Cells a move radius and a half wide: a point's checks and change reach about a move radius
+  // and an edge from it, so the points of cells a cell apart rarely meet.
+  void group_by_cells() {
+    const double inv = 1.0 / (1.5 * std::max(prm_.max_move, 1e-300));
+    struct Entry {
+      int parity;
+      GridKey cell;
+      uint32_t sample;
+    };
+    std::vector<Entry> entries(samples_.size());
+    for (uint32_t i = 0; i < samples_.size(); ++i) {
+      const GridKey k = grid_key(samples_[i].q, inv);
+      entries[i] = {int((k.x & 1) | ((k.y & 1) << 1) | ((k.z & 1) << 2)), k, i};
+    }
+    std::sort(entries.begin(), entries.end(), [](const Entry& x, const Entry& y) {
+      if (x.parity != y.parity) return x.parity < y.parity;
+      if (x.cell.x != y.cell.x) return x.cell.x < y.cell.x;
+      if (x.cell.y != y.cell.y) return x.cell.y < y.cell.y;
+      if (x.cell.z != y.cell.z) return x.cell.z < y.cell.z;
+      return x.sample < y.sample;
+    });
+    order_.resize(entries.size());
+    for (uint32_t k = 0; k < entries.size(); ++k) {
+      order_[k] = entries[k].sample;
+      if (k == 0 || !(entries[k].cell == entries[k - 1].cell)) classes_[size_t(entries[k].parity)].push_back({k, k, k, {}});
+      classes_[size_t(entries[k].parity)].back().end = k + 1;
+    }
+  }
+
+  // Feature edges between the nodes of successive points of a curve, when they are joined.
+  void link_along_curves(const std::vector<uint8_t>& visited, const std::vector<uint32_t>& result) {
+    uint32_t previous = UINT32_MAX;
+    for (size_t i = 0; i < samples_.size(); ++i) {
+      if (i == 0 || samples_[i].curve != samples_[i - 1].curve) previous = UINT32_MAX;
+      if (!visited[i]) {
+        previous = UINT32_MAX;
+        continue;
+      }
+      const uint32_t v = result[i];
+      if (v == UINT32_MAX) continue;
+      if (previous != UINT32_MAX && previous != v && adjacent(previous, v)) add_feature_edge(previous, v);
+      previous = v;
+    }
+  }
+
   // Has any triangle within reach of q changed after time `since`? Reach: the farthest a
   // change can be from q and still alter the checks of a change at q (the move radius plus
   // two edges: the changed triangles and the ones they are tested against).
-  // Change times are kept per cell of the reach's size (for every cell a changed triangle's box
-  // covers): a handful of look-ups, where scanning the triangles in reach was most of the stage
-  // on large inputs. A cell may report a change a little beyond the reach: a wasted retry, never
-  // a missed one.
-  bool changed_near(const Vec3& q, uint64_t since) const {
-    const double r = 1.5 * prm_.max_move;
+  bool changed_near(const Vec3& q, uint64_t since) const { return changed_in(box_around(q, 1.5 * prm_.max_move), since); }
+  // Change times are kept per cell of the move radius's size (for every cell a changed
+  // triangle's box covers): a handful of look-ups, where scanning the triangles in reach was
+  // most of the stage on large inputs. A cell may report a change a little beyond the box: a
+  // wasted retry or check, never a missed one.
+  bool changed_in(const Box3& box, uint64_t since) const {
+    if (clock_ == since) return false;
     bool changed = false;
-    for_change_cells(q - Vec3{r, r, r}, q + Vec3{r, r, r}, [&](const GridKey& k) {
+    for_change_cells(box.lo, box.hi, [&](const GridKey& k) {
       if (changed) return;
       auto it = changed_cells_.find(k);
       changed = it != changed_cells_.end() && it->second > since;
@@ -88,80 +273,74 @@ class Inserter {
       for (int64_t y = a.y; y <= b.y; ++y)
         for (int64_t z = a.z; z <= b.z; ++z) fn(GridKey{x, y, z});
   }
-  // After an accepted change: the clock ticks, and the cells of the changed faces take its time
-  // (and those of the boxes they had before, when they moved: a face leaving a point's reach
-  // changes what a check there sees, as one entering it does).
+  // After a change: the clock ticks, and the cells of the changed faces take its time (and
+  // those of the boxes they had before, when they moved: a face leaving a point's reach changes
+  // what a check there sees, as one entering it does).
   template <typename Faces>
   void mark_changed(const Faces& faces, const std::vector<Box3>& before = {}) {
     ++clock_;
     auto mark = [&](const Box3& box) { for_change_cells(box.lo, box.hi, [&](const GridKey& k) { changed_cells_[k] = clock_; }); };
-    for (uint32_t f : faces) mark(face_box(f));
+    for (uint32_t f : faces) mark(box_of(corners(t_[f])));
     for (const Box3& box : before) mark(box);
-  }
-  Box3 face_box(uint32_t f) const {
-    Box3 box;
-    for (uint32_t v : t_[f]) box.add(p_[v]);
-    return box;
   }
 
   Vec3 world(const Vec3& local) const {
     Vec3 w = local + origin_;
     return prm_.float_coordinates ? round_to_float(w) : w;
   }
+  Corners corners(const Tri& tri) const { return {p_[tri[0]], p_[tri[1]], p_[tri[2]]}; }
 
-  // A wrap edge near a curve point: how near, and where along it (0 to 1) the nearest point is.
-  struct Candidate {
-    double distance, t;
-    uint32_t a, b;
-  };
-  // The wrap's edges within r of q (each once), and the distance from q to the nearest triangle
-  // in reach (infinite when none is).
-  double look_around(const Vec3& q, double r, std::vector<Candidate>& edges) {
-    Box3 box;
-    box.add(q - Vec3{r, r, r});
-    box.add(q + Vec3{r, r, r});
+  // The wrap's edges within r of q (each once), and (when asked) the distance from q to the
+  // nearest triangle in reach (infinite when none is or when not asked).
+  double look_around(const Vec3& q, double r, Scratch& scratch, bool nearest_wanted) const {
     double nearest = std::numeric_limits<double>::infinity();
-    edges.clear();
-    buckets_.for_each_in_box(box, [&](uint32_t f) {
-      if (f >= t_.size()) return;  // a stale entry of an undone split
+    scratch.edges.clear();
+    buckets_.for_each_in_box(box_around(q, r), scratch.seen, scratch.stamp, [&](uint32_t f) {
+      if (f >= t_.size()) return;
       const Tri& tri = t_[f];
-      nearest = std::min(nearest, norm(closest_on_triangle(q, p_[tri[0]], p_[tri[1]], p_[tri[2]]) - q));
+      if (nearest_wanted) nearest = std::min(nearest, norm(closest_on_triangle(q, p_[tri[0]], p_[tri[1]], p_[tri[2]]) - q));
       for (int e = 0; e < 3; ++e) {
         const uint32_t u = tri[e], w = tri[(e + 1) % 3];
         if (u > w) continue;  // each interior edge once (from the face that has it as u < w)
         double t;
         const double dist = norm(closest_on_segment(p_[u], p_[w], q, t) - q);
-        if (dist <= r) edges.push_back({dist, t, u, w});
+        if (dist <= r) scratch.edges.push_back({dist, t, u, w});
       }
     });
     return nearest;
   }
 
-  // Brings the wrap to curve point q when it misses it; returns the node now at q, if any.
-  // `refused`: q was missed and some change that could reach it was refused.
-  uint32_t visit(const Vec3& q, bool& refused, FeatureInsertStats& stats) {
+  // How to bring the wrap to curve point q when it misses it (read only).
+  Plan plan(const Vec3& q, Scratch& scratch) const {
     // The nearest six edges in reach are all that is tried. Looked for within a quarter of the
     // reach first: when six are there, they are the nearest six of the whole reach, and a
     // triangle within the tolerance is there too.
     const double r = prm_.max_move;
-    std::vector<Candidate>& edges = candidates_;
-    double nearest = look_around(q, 0.25 * r, edges);
-    if (edges.size() < 6 && nearest > prm_.tolerance) nearest = look_around(q, r, edges);
-    if (nearest <= prm_.tolerance) {
+    Plan pl;
+    pl.read = box_around(q, r);
+    std::vector<Candidate>& edges = scratch.edges;
+    // Most points are on the wrap already: a triangle within the tolerance, and a node there if
+    // one is, are found in a box of the tolerance's size (a bucket or two).
+    if (look_around(q, prm_.tolerance, scratch, true) <= prm_.tolerance) {
       // Already on the wrap: report the node there, if one is.
       for (const Candidate& c : edges)
         for (uint32_t v : {c.a, c.b})
-          if (norm(p_[v] - q) <= prm_.tolerance) return v;
-      return UINT32_MAX;
+          if (norm(p_[v] - q) <= prm_.tolerance) {
+            pl.node = v;
+            return pl;
+          }
+      return pl;
     }
-    ++stats.samples_missed;
+    // Any triangle within the tolerance was in that box: the wider looks need only the edges.
+    look_around(q, 0.25 * r, scratch, false);
+    if (edges.size() < 6) look_around(q, r, scratch, false);
+    pl.missed = true;
     // The nearest edges first: the nearest may fold where the next one does not.
     std::sort(edges.begin(), edges.end(), [](const Candidate& x, const Candidate& y) {
       return x.distance != y.distance ? x.distance < y.distance : (x.a != y.a ? x.a < y.a : x.b < y.b);
     });
-    const size_t tries = std::min<size_t>(edges.size(), 6);
-    for (size_t k = 0; k < tries; ++k) {
-      const Candidate& c = edges[k];
+    edges.resize(std::min<size_t>(edges.size(), 6));
+    for (const Candidate& c : edges) {
       // The node stops `offset` short of the curve, on the side the wrap came from.
       const Vec3 from = lerp(p_[c.a], p_[c.b], c.t);
       const Vec3 away = from - q;
@@ -169,108 +348,193 @@ class Inserter {
       Vec3 target = d > 0 ? q + away * (std::min(prm_.offset, d) / d) : q;
       // A curve point behind the input (a buried intersection line) is out of reach.
       if (!input_.in_view(from - origin_, q - origin_, prm_.offset)) continue;
-      refused = true;
+      pl.refused = true;
       if (prm_.float_coordinates) target = round_to_float(target);
       // Near an end of the edge, that end goes (unless it is on a curve already); else a split,
       // and failing that the nearer end.
       const uint32_t end = c.t < 0.5 ? c.a : c.b;
       const bool near_end = c.t < 0.25 || c.t > 0.75;
-      if (near_end && !s_.snapped[end] && move(end, target)) {
-        refused = false;
-        ++stats.nodes_moved;
-        return end;
-      }
-      const uint32_t m = split(c.a, c.b, target);
-      if (m != UINT32_MAX) {
-        refused = false;
-        ++stats.nodes_inserted;
-        return m;
-      }
-      if (!near_end && !s_.snapped[end] && move(end, target)) {
-        refused = false;
-        ++stats.nodes_moved;
-        return end;
-      }
+      Plan::Kind kind = Plan::kKeep;
+      if (near_end && !s_.snapped[end] && can_move(end, target, pl.read, scratch))
+        kind = Plan::kMove;
+      else if (can_split(c.a, c.b, target, pl.read, scratch))
+        kind = Plan::kSplit;
+      else if (!near_end && !s_.snapped[end] && can_move(end, target, pl.read, scratch))
+        kind = Plan::kMove;
+      if (kind == Plan::kKeep) continue;
+      pl.kind = kind, pl.refused = false, pl.target = target;
+      pl.node = end, pl.a = c.a, pl.b = c.b;
+      // What changes: the faces of the moved node or split edge, and the new corner.
+      for (uint32_t f : kind == Plan::kMove ? vf_[end] : faces_on(c.a, c.b)) add_box(pl.write, box_of(corners(t_[f])));
+      pl.write.add(target);
+      return pl;
     }
-    if (refused)
-      ++stats.refused;
-    else
-      ++stats.unreachable;
-    return UINT32_MAX;
+    return pl;
   }
 
-  bool move(uint32_t v, const Vec3& to) {
-    const Vec3 from = p_[v];
-    std::vector<Vec3> before;
-    std::vector<Tri> old_faces;
-    std::vector<Box3> old_boxes;
-    for (uint32_t f : vf_[v]) before.push_back(normal_of(t_[f])), old_faces.push_back(t_[f]), old_boxes.push_back(face_box(f));
-    p_[v] = to;
-    for (uint32_t f : vf_[v]) buckets_.update(f);
-    bool ok = !crowded(v);
-    for (size_t k = 0; ok && k < vf_[v].size(); ++k) ok = acceptable(vf_[v][k], before[k]);
-    if (ok) {
-      std::vector<Tri> fresh;
-      for (uint32_t f : vf_[v]) fresh.push_back(t_[f]);
-      // The old faces' deviation is measured with v back where it was.
-      ok = near_enough(fresh, [&] {
-        p_[v] = from;
-        const double d = max_deviation(old_faces);
-        p_[v] = to;
-        return d;
-      });
+  // Makes a planned change; returns the node now at the curve point, if any.
+  uint32_t apply(const Plan& pl, FeatureInsertStats& stats) {
+    if (pl.missed) ++stats.samples_missed;
+    if (pl.kind == Plan::kMove) {
+      ++stats.nodes_moved;
+      std::vector<Box3> before;
+      for (uint32_t f : vf_[pl.node]) before.push_back(box_of(corners(t_[f])));
+      p_[pl.node] = pl.target;
+      for (uint32_t f : vf_[pl.node]) buckets_.update(f);
+      s_.snapped[pl.node] = 1;
+      mark_changed(vf_[pl.node], before);
+      return pl.node;
     }
-    if (!ok) {
-      p_[v] = from;
-      for (uint32_t f : vf_[v]) buckets_.update(f);
-      return false;
+    if (pl.kind == Plan::kSplit) {
+      ++stats.nodes_inserted;
+      return split(pl.a, pl.b, pl.target);
     }
-    s_.snapped[v] = 1;
-    mark_changed(vf_[v], old_boxes);
-    return true;
+    if (pl.missed) ++(pl.refused ? stats.refused : stats.unreachable);
+    return pl.node;
   }
 
-  // Splits edge ab at a new node placed at `at`; the two triangles on the edge become four.
-  uint32_t split(uint32_t a, uint32_t b, const Vec3& at) {
+  // The two faces on edge ab (fewer or more: a border or non-manifold edge).
+  std::vector<uint32_t> faces_on(uint32_t a, uint32_t b) const {
     std::vector<uint32_t> faces;
     for (uint32_t f : vf_[a])
       for (uint32_t v : t_[f])
         if (v == b) faces.push_back(f);
-    if (faces.size() != 2) return UINT32_MAX;  // a border or non-manifold edge: leave it
+    return faces;
+  }
+  // In face (x, y, c) with x-y the edge ab in its own order: (x, m, c) and (m, y, c).
+  static std::pair<Tri, Tri> halves(const Tri& tri, uint32_t a, uint32_t b, uint32_t m) {
+    int e = 0;
+    while (!((tri[e] == a && tri[(e + 1) % 3] == b) || (tri[e] == b && tri[(e + 1) % 3] == a))) ++e;
+    const uint32_t x = tri[e], y = tri[(e + 1) % 3], c = tri[(e + 2) % 3];
+    return {Tri{x, m, c}, Tri{m, y, c}};
+  }
+
+  // Would moving node v to `to` keep the wrap valid and near the input?
+  bool can_move(uint32_t v, const Vec3& to, Box3& read, Scratch& scratch) const {
+    const std::vector<uint32_t>& faces = vf_[v];
+    auto at = [&](const Tri& tri) {
+      Corners c = corners(tri);
+      for (int k = 0; k < 3; ++k)
+        if (tri[k] == v) c[k] = to;
+      return c;
+    };
+    std::vector<Change> changes;
+    for (uint32_t f : faces) {
+      const Corners old = corners(t_[f]);
+      add_box(read, box_of(old));
+      changes.push_back({t_[f], at(t_[f]), area_vector(old[0], old[1], old[2])});
+    }
+    if (crowded(v, to, read, scratch)) return false;
+    if (!acceptable(changes, [&](uint32_t g) { return std::find(faces.begin(), faces.end(), g) != faces.end(); }, read, scratch))
+      return false;
+    return near_enough(changes, [&] {
+      double d = 0;
+      for (uint32_t f : faces) d = std::max(d, deviation(corners(t_[f])));
+      return d;
+    });
+  }
+
+  // Would splitting edge ab at a new node placed at `at` keep the wrap valid and near the input?
+  bool can_split(uint32_t a, uint32_t b, const Vec3& at, Box3& read, Scratch& scratch) const {
+    const std::vector<uint32_t> faces = faces_on(a, b);
+    if (faces.size() != 2) return false;  // a border or non-manifold edge: leave it
+    const uint32_t m = uint32_t(p_.size());  // the index the new node would get
+    auto place = [&](const Tri& tri) {
+      Corners c;
+      for (int k = 0; k < 3; ++k) c[k] = tri[k] == m ? at : p_[tri[k]];
+      return c;
+    };
+    std::vector<Change> changes;
+    for (uint32_t f : faces) {
+      const Corners old = corners(t_[f]);
+      add_box(read, box_of(old));
+      const Vec3 was = area_vector(old[0], old[1], old[2]);
+      const auto [h0, h1] = halves(t_[f], a, b, m);
+      changes.push_back({h0, place(h0), was});
+      changes.push_back({h1, place(h1), was});
+    }
+    if (crowded(m, at, read, scratch)) return false;
+    if (!acceptable(changes, [&](uint32_t g) { return g == faces[0] || g == faces[1]; }, read, scratch)) return false;
+    return near_enough(changes, [&] { return std::max(deviation(corners(t_[faces[0]])), deviation(corners(t_[faces[1]]))); });
+  }
+
+  // How far a triangle strays from the input: the largest distance of its centroid and edge
+  // midpoints (a node on a curve must not leave its triangles hanging away from the input).
+  static std::array<Vec3, 4> probes(const Corners& c) {
+    return {(c[0] + c[1] + c[2]) * (1.0 / 3.0), (c[0] + c[1]) * 0.5, (c[1] + c[2]) * 0.5, (c[2] + c[0]) * 0.5};
+  }
+  double deviation(const Corners& c) const {
+    double d2 = 0;
+    for (const Vec3& q : probes(c)) d2 = std::max(d2, input_.squared_distance(q - origin_));
+    return std::sqrt(d2);
+  }
+  // New triangles within max_deviation of the input (cheap sphere tests), or else no farther
+  // than the ones they replace (exact distances, only then: they cost most of the stage).
+  template <typename OldDeviation>
+  bool near_enough(const std::vector<Change>& fresh, OldDeviation&& old_deviation) const {
+    bool within = prm_.max_deviation > 0;
+    for (const Change& ch : fresh)
+      for (const Vec3& q : probes(ch.at))
+        if (within && !input_.within(q - origin_, prm_.max_deviation)) within = false;
+    if (within) return true;
+    double d = 0;
+    for (const Change& ch : fresh) d = std::max(d, deviation(ch.at));
+    return d <= std::max(prm_.max_deviation, old_deviation());
+  }
+
+  // Changed triangles: none degenerate, flipped against the face it came from, or touching the
+  // input, and none crossing another triangle (of the change, or of the wrap outside it:
+  // `replaced(g)` tells the wrap's faces the change replaces).
+  template <typename Replaced>
+  bool acceptable(const std::vector<Change>& changes, Replaced&& replaced, Box3& read, Scratch& scratch) const {
+    // One triangle at a time, cheapest test first: most refusals come early.
+    for (size_t i = 0; i < changes.size(); ++i) {
+      const Change& ch = changes[i];
+      const Vec3 n = area_vector(ch.at[0], ch.at[1], ch.at[2]);
+      if (norm(n) < prm_.min_area2 || check::triangle_is_degenerate(ch.at, ch.tri) || dot(n, ch.was) <= 0) return false;
+      if (input_.touches(ch.at[0] - origin_, ch.at[1] - origin_, ch.at[2] - origin_)) return false;
+      for (size_t j = 0; j < i; ++j)
+        if (check::triangle_pair_intersects(ch.at, ch.tri, changes[j].at, changes[j].tri)) return false;
+      const Box3 box = box_of(ch.at);
+      add_box(read, box);
+      bool hit = false;
+      buckets_.for_each_in_box(box, scratch.seen, scratch.stamp, [&](uint32_t g) {
+        if (hit || g >= t_.size() || replaced(g)) return;
+        hit = check::triangle_pair_intersects(ch.at, ch.tri, corners(t_[g]), t_[g]);
+      });
+      if (hit) return false;
+    }
+    return true;
+  }
+
+  // Is another node within min_separation of `at` (where node v would be)?
+  bool crowded(uint32_t v, const Vec3& at, Box3& read, Scratch& scratch) const {
+    const double sep = prm_.min_separation;
+    const Box3 box = box_around(at, sep);
+    add_box(read, box);
+    bool close = false;
+    buckets_.for_each_in_box(box, scratch.seen, scratch.stamp, [&](uint32_t f) {
+      if (close || f >= t_.size()) return;
+      for (uint32_t w : t_[f])
+        if (w != v && norm2(p_[w] - at) < sep * sep) close = true;
+    });
+    return close;
+  }
+
+  // Splits edge ab at a new node placed at `at`; the two triangles on the edge become four.
+  uint32_t split(uint32_t a, uint32_t b, const Vec3& at) {
+    const std::vector<uint32_t> faces = faces_on(a, b);
     const uint32_t m = uint32_t(p_.size());
     p_.push_back(at);
     vf_.emplace_back();
-    const Tri old0 = t_[faces[0]], old1 = t_[faces[1]];
-    const Vec3 n0 = normal_of(old0), n1 = normal_of(old1);
-    // In each face (x, y, c) with x-y the edge in its own order: (x, m, c) and (m, y, c).
-    auto halves = [&](const Tri& tri) {
-      int e = 0;
-      while (!((tri[e] == a && tri[(e + 1) % 3] == b) || (tri[e] == b && tri[(e + 1) % 3] == a))) ++e;
-      const uint32_t x = tri[e], y = tri[(e + 1) % 3], c = tri[(e + 2) % 3];
-      return std::pair<Tri, Tri>{Tri{x, m, c}, Tri{m, y, c}};
-    };
-    const auto [h00, h01] = halves(old0);
-    const auto [h10, h11] = halves(old1);
+    const auto [h00, h01] = halves(t_[faces[0]], a, b, m);
+    const auto [h10, h11] = halves(t_[faces[1]], a, b, m);
     const uint32_t f2 = uint32_t(t_.size()), f3 = f2 + 1;
     t_[faces[0]] = h00;
     t_[faces[1]] = h10;
     t_.push_back(h01);
     t_.push_back(h11);
     for (uint32_t f : {faces[0], faces[1], f2, f3}) buckets_.update(f);
-    const bool ok = !crowded(m) && acceptable(faces[0], n0) && acceptable(f2, n0) && acceptable(faces[1], n1) &&
-                    acceptable(f3, n1) &&
-                    near_enough({t_[faces[0]], t_[f2], t_[faces[1]], t_[f3]}, [&] { return max_deviation({old0, old1}); });
-    if (!ok) {
-      t_[faces[0]] = old0;
-      t_[faces[1]] = old1;
-      t_.pop_back();
-      t_.pop_back();
-      p_.pop_back();
-      vf_.pop_back();
-      buckets_.update(faces[0]);
-      buckets_.update(faces[1]);
-      return UINT32_MAX;
-    }
     // Incidences: m is in all four; y of each face moved to its new half; c is in both halves.
     vf_[m] = {faces[0], faces[1], f2, f3};
     for (const auto& [face, half] : {std::pair{faces[0], f2}, std::pair{faces[1], f3}}) {
@@ -284,61 +548,6 @@ class Inserter {
     s_.cell_size.push_back(std::min(s_.cell_size[a], s_.cell_size[b]));
     if (edges_.erase({std::min(a, b), std::max(a, b)})) add_feature_edge(a, m), add_feature_edge(m, b);
     return m;
-  }
-
-  Vec3 normal_of(const Tri& tri) const { return area_vector(p_[tri[0]], p_[tri[1]], p_[tri[2]]); }
-
-  // How far triangles stray from the input: the largest distance of their centroids and edge
-  // midpoints (a node on a curve must not leave its triangles hanging away from the input).
-  std::array<Vec3, 4> probes(const Tri& tri) const {
-    const Vec3 &a = p_[tri[0]], &b = p_[tri[1]], &c = p_[tri[2]];
-    return {(a + b + c) * (1.0 / 3.0), (a + b) * 0.5, (b + c) * 0.5, (c + a) * 0.5};
-  }
-  double max_deviation(const std::vector<Tri>& tris) const {
-    double d2 = 0;
-    for (const Tri& tri : tris)
-      for (const Vec3& q : probes(tri)) d2 = std::max(d2, input_.squared_distance(q - origin_));
-    return std::sqrt(d2);
-  }
-  // New triangles within max_deviation of the input (cheap sphere tests), or else no farther
-  // than the ones they replace (exact distances, only then: they cost most of the stage).
-  template <typename OldDeviation>
-  bool near_enough(const std::vector<Tri>& fresh, OldDeviation&& old_deviation) const {
-    bool within = prm_.max_deviation > 0;
-    for (const Tri& tri : fresh)
-      for (const Vec3& q : probes(tri))
-        if (within && !input_.within(q - origin_, prm_.max_deviation)) within = false;
-    if (within) return true;
-    return max_deviation(fresh) <= std::max(prm_.max_deviation, old_deviation());
-  }
-
-  // A changed triangle: not degenerate, not flipped against the face it came from, clear of the
-  // input, and crossing no other triangle.
-  bool acceptable(uint32_t f, const Vec3& was) {
-    const Tri& tri = t_[f];
-    const Vec3 n = normal_of(tri);
-    if (norm(n) < prm_.min_area2 || check::triangle_is_degenerate(p_, tri) || dot(n, was) <= 0) return false;
-    if (input_.touches(p_[tri[0]] - origin_, p_[tri[1]] - origin_, p_[tri[2]] - origin_)) return false;
-    bool hit = false;
-    buckets_.for_each_candidate(f, [&](uint32_t g) {
-      if (hit || g >= t_.size()) return;
-      hit = check::triangle_pair_intersects(p_, tri, t_[g]);
-    });
-    return !hit;
-  }
-
-  bool crowded(uint32_t v) {
-    const double sep = prm_.min_separation;
-    Box3 box;
-    box.add(p_[v] - Vec3{sep, sep, sep});
-    box.add(p_[v] + Vec3{sep, sep, sep});
-    bool close = false;
-    buckets_.for_each_in_box(box, [&](uint32_t f) {
-      if (close || f >= t_.size()) return;
-      for (uint32_t w : t_[f])
-        if (w != v && norm2(p_[w] - p_[v]) < sep * sep) close = true;
-    });
-    return close;
   }
 
   bool adjacent(uint32_t a, uint32_t b) const {
@@ -358,9 +567,12 @@ class Inserter {
   TriangleBuckets buckets_;
   std::vector<std::vector<uint32_t>> vf_;
   std::set<std::pair<uint32_t, uint32_t>> edges_;
-  std::vector<Candidate> candidates_;
-  // Change times: a counter that ticks with every accepted change, the time each cell last
-  // saw a change, and the time each curve point was last visited.
+  std::vector<Sample> samples_;
+  std::vector<uint32_t> order_;               // points by cell
+  std::array<std::vector<Cell>, 8> classes_;  // cells by parity class
+  tbb::enumerable_thread_specific<Scratch> scratch_;
+  // Change times: a counter that ticks with every change made, the time each cell last saw a
+  // change, and the time each curve point was last checked.
   double inv_change_cell_;
   uint64_t clock_ = 0;
   std::unordered_map<GridKey, uint64_t, GridKeyHash> changed_cells_;
@@ -374,14 +586,15 @@ FeatureInsertStats insert_feature_nodes(FittedSurface& surface, const std::vecto
   FeatureInsertStats stats;
   if (curves.empty() || surface.triangles.empty() || !(params.spacing > 0)) return stats;
   Inserter inserter(surface, input, origin, params);
+  inserter.sample(curves);
   // More passes while they place nodes: the nodes of one pass give the points it refused new
   // edges to split. The missed count is the first pass's; a refused point is retried only
   // when the wrap near it changed.
-  std::vector<uint8_t> retry;
-  inserter.run(curves, retry, stats);
+  std::vector<uint8_t> retry(inserter.samples(), 1);
+  inserter.run(retry, true, stats);
   for (int pass = 1; pass < 4; ++pass) {
     FeatureInsertStats more;
-    inserter.run(curves, retry, more);
+    inserter.run(retry, false, more);
     stats.nodes_inserted += more.nodes_inserted;
     stats.nodes_moved += more.nodes_moved;
     if (more.nodes_inserted + more.nodes_moved == 0) break;
