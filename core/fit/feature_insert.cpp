@@ -386,8 +386,9 @@ class Inserter {
       return pl.node;
     }
     if (pl.kind == Plan::kSplit) {
-      ++stats.nodes_inserted;
-      return split(pl.a, pl.b, pl.target);
+      const uint32_t m = split(pl.a, pl.b, pl.target);
+      if (m != UINT32_MAX) ++stats.nodes_inserted;
+      return m;
     }
     if (pl.missed) ++(pl.refused ? stats.refused : stats.unreachable);
     return pl.node;
@@ -524,6 +525,7 @@ class Inserter {
   // Splits edge ab at a new node placed at `at`; the two triangles on the edge become four.
   uint32_t split(uint32_t a, uint32_t b, const Vec3& at) {
     const std::vector<uint32_t> faces = faces_on(a, b);
+    if (faces.size() != 2) return UINT32_MAX;  // not what was checked: never split blind
     const uint32_t m = uint32_t(p_.size());
     p_.push_back(at);
     vf_.emplace_back();
