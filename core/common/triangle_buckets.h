@@ -51,11 +51,7 @@ class TriangleBuckets {
       for (uint32_t g : it->second) {
         if (seen[g] == stamp) continue;
         seen[g] = stamp;
-        const Box3& o = boxes_[g];
-        if (o.lo[0] > b.hi[0] || o.hi[0] < b.lo[0] || o.lo[1] > b.hi[1] || o.hi[1] < b.lo[1] || o.lo[2] > b.hi[2] ||
-            o.hi[2] < b.lo[2])
-          continue;
-        fn(g);
+        if (boxes_[g].overlaps(b)) fn(g);
       }
     });
   }

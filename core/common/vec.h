@@ -35,7 +35,15 @@ struct Box3 {
       hi[k] = p[k] > hi[k] ? p[k] : hi[k];
     }
   }
+  void add(const Box3& b) {
+    if (!b.empty()) add(b.lo), add(b.hi);
+  }
   bool empty() const { return lo[0] > hi[0]; }
+  bool overlaps(const Box3& b) const {
+    for (int k = 0; k < 3; ++k)
+      if (lo[k] > b.hi[k] || b.lo[k] > hi[k]) return false;
+    return true;
+  }
   Vec3 center() const { return (lo + hi) * 0.5; }
   double diagonal() const { return empty() ? 0 : norm(hi - lo); }
 };

@@ -69,19 +69,12 @@ Box3 box_around(const Vec3& q, double r) {
   box.add(q + Vec3{r, r, r});
   return box;
 }
-void add_box(Box3& to, const Box3& b) {
-  if (!b.empty()) to.add(b.lo), to.add(b.hi);
-}
-bool boxes_overlap(const Box3& a, const Box3& b) {
-  for (int k = 0; k < 3; ++k)
-    if (a.lo[k] > b.hi[k] || a.hi[k] < b.lo[k]) return false;
-  return true;
-}
 Box3 box_of(const Corners& c) {
   Box3 box;
   for (const Vec3& p : c) box.add(p);
   return box;
 }
+
 // The curve points are grouped by cells of a coarse grid, and the cells by the parities of their
 // coordinates: cells of one class are a cell apart. A round checks, in parallel, a run of points
 // of every cell of a class (read only, on the wrap as it stands; a run stops before a point whose
@@ -181,7 +174,7 @@ class Inserter {
     size_t checked = 0;
     auto overlaps_writes = [&](const Box3& b) {
       for (const Box3& w : writes)
-        if (boxes_overlap(w, b)) return true;
+        if (w.overlaps(b)) return true;
       return false;
     };
     for (; c.next < c.end && checked < 64; ++c.next) {
@@ -296,7 +289,6 @@ class Inserter {
     double nearest = std::numeric_limits<double>::infinity();
     scratch.edges.clear();
     buckets_.for_each_in_box(box_around(q, r), scratch.seen, scratch.stamp, [&](uint32_t f) {
-      if (f >= t_.size()) return;
       const Tri& tri = t_[f];
       if (nearest_wanted) nearest = std::min(nearest, norm(closest_on_triangle(q, p_[tri[0]], p_[tri[1]], p_[tri[2]]) - q));
       for (int e = 0; e < 3; ++e) {
@@ -365,7 +357,7 @@ class Inserter {
       pl.kind = kind, pl.refused = false, pl.target = target;
       pl.node = end, pl.a = c.a, pl.b = c.b;
       // What changes: the faces of the moved node or split edge, and the new corner.
-      for (uint32_t f : kind == Plan::kMove ? vf_[end] : faces_on(c.a, c.b)) add_box(pl.write, box_of(corners(t_[f])));
+      for (uint32_t f : kind == Plan::kMove ? vf_[end] : faces_on(c.a, c.b)) pl.write.add(box_of(corners(t_[f])));
       pl.write.add(target);
       return pl;
     }
@@ -422,7 +414,7 @@ class Inserter {
     std::vector<Change> changes;
     for (uint32_t f : faces) {
       const Corners old = corners(t_[f]);
-      add_box(read, box_of(old));
+      read.add(box_of(old));
       changes.push_back({t_[f], at(t_[f]), area_vector(old[0], old[1], old[2])});
     }
     if (crowded(v, to, read, scratch)) return false;
@@ -448,7 +440,7 @@ class Inserter {
     std::vector<Change> changes;
     for (uint32_t f : faces) {
       const Corners old = corners(t_[f]);
-      add_box(read, box_of(old));
+      read.add(box_of(old));
       const Vec3 was = area_vector(old[0], old[1], old[2]);
       const auto [h0, h1] = halves(t_[f], a, b, m);
       changes.push_back({h0, place(h0), was});
@@ -497,10 +489,10 @@ class Inserter {
       for (size_t j = 0; j < i; ++j)
         if (check::triangle_pair_intersects(ch.at, ch.tri, changes[j].at, changes[j].tri)) return false;
       const Box3 box = box_of(ch.at);
-      add_box(read, box);
+      read.add(box);
       bool hit = false;
       buckets_.for_each_in_box(box, scratch.seen, scratch.stamp, [&](uint32_t g) {
-        if (hit || g >= t_.size() || replaced(g)) return;
+        if (hit || replaced(g)) return;
         hit = check::triangle_pair_intersects(ch.at, ch.tri, corners(t_[g]), t_[g]);
       });
       if (hit) return false;
@@ -512,10 +504,10 @@ class Inserter {
   bool crowded(uint32_t v, const Vec3& at, Box3& read, Scratch& scratch) const {
     const double sep = prm_.min_separation;
     const Box3 box = box_around(at, sep);
-    add_box(read, box);
+    read.add(box);
     bool close = false;
     buckets_.for_each_in_box(box, scratch.seen, scratch.stamp, [&](uint32_t f) {
-      if (close || f >= t_.size()) return;
+      if (close) return;
       for (uint32_t w : t_[f])
         if (w != v && norm2(p_[w] - at) < sep * sep) close = true;
     });

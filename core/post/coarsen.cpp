@@ -322,7 +322,7 @@ class Coarsener {
       if (other[0] == u || other[1] == u || other[2] == u) return;  // replaced or removed
       const Box3& box = buckets_.box(g);
       for (size_t i = 0; i < out.fresh.size() && !hit; ++i)
-        hit = overlap(boxes[i], box) && check::triangle_pair_intersects(p_, out.fresh[i], other);
+        hit = boxes[i].overlaps(box) && check::triangle_pair_intersects(p_, out.fresh[i], other);
     });
     if (hit) return false;
     out.u = u, out.v = v, out.ok = true;
@@ -341,7 +341,7 @@ class Coarsener {
         for (uint32_t g : it->second) {
           if (hit || !alive_[g] || made_in_[g] != batch_id_) continue;
           const Tri& other = t_[g];
-          if (other[0] == pl.u || other[1] == pl.u || other[2] == pl.u || !overlap(b, box_of(other))) continue;
+          if (other[0] == pl.u || other[1] == pl.u || other[2] == pl.u || !b.overlaps(box_of(other))) continue;
           hit = check::triangle_pair_intersects(p_, n, other);
         }
       });
@@ -383,11 +383,6 @@ class Coarsener {
     for (uint32_t w : neighbours(pl.v)) push(std::min(pl.v, w), std::max(pl.v, w));
   }
 
-  static bool overlap(const Box3& a, const Box3& b) {
-    for (int k = 0; k < 3; ++k)
-      if (a.lo[k] > b.hi[k] || b.lo[k] > a.hi[k]) return false;
-    return true;
-  }
   Box3 box_of(const Tri& t) const {
     Box3 b;
     for (uint32_t w : t) b.add(p_[w]);
