@@ -38,7 +38,6 @@ class Coarsener {
         buckets_(p, t, std::max(params.max_edge, 1e-300)) {
     alive_.assign(t.size(), 1);
     vertex_alive_.assign(p.size(), 1);
-    stamp_.assign(p.size(), 0);
     vf_.resize(p.size());
     ring_claim_.assign(p.size(), 0);
     end_claim_.assign(p.size(), 0);
@@ -99,7 +98,8 @@ class Coarsener {
       deferred.clear();
       while (!queue_.empty() && batch.size() < kBatch && deferred.size() < 4 * kBatch) {
         const Entry e = queue_.pop();
-        if (!vertex_alive_[e.a] || !vertex_alive_[e.b] || stamp_[e.a] != e.sa || stamp_[e.b] != e.sb) continue;
+        // Points never move, so an edge whose ends are both alive is still there and as long.
+        if (!vertex_alive_[e.a] || !vertex_alive_[e.b]) continue;
         // Compatible with the batch when neither end is in a claimed ring and no claimed end
         // is in this ring.
         bool free = ring_claim_[e.a] != batch_id_ && ring_claim_[e.b] != batch_id_;
@@ -150,10 +150,10 @@ class Coarsener {
   static constexpr size_t kBatch = 512;
   struct Entry {
     double length2;
-    uint32_t a, b, sa, sb;
+    uint32_t a, b;
     // Shortest first; ties in a fixed order, so that the order does not depend on the queue.
     bool operator<(const Entry& o) const {
-      return length2 != o.length2 ? length2 < o.length2 : a != o.a ? a < o.a : b != o.b ? b < o.b : sa != o.sa ? sa < o.sa : sb < o.sb;
+      return length2 != o.length2 ? length2 < o.length2 : a != o.a ? a < o.a : b < o.b;
     }
   };
   // Shortest edge first. Most entries are known when a pass starts (its edges) or are put back
@@ -213,7 +213,7 @@ class Coarsener {
   };
   // Edge a-b as a queue entry; false when it is already too long to collapse.
   bool entry_of(uint32_t a, uint32_t b, Entry& e) const {
-    e = {norm2(p_[a] - p_[b]), a, b, stamp_[a], stamp_[b]};
+    e = {norm2(p_[a] - p_[b]), a, b};
     return e.length2 <= prm_.max_edge * prm_.max_edge;
   }
   void push(uint32_t a, uint32_t b) {  // an edge a collapse changed
@@ -380,6 +380,15 @@ class Coarsener {
   }
 
   void apply(const Plan& pl) {
+    // The edges the collapse makes, v to u's neighbours that were not v's (all but the two
+    // across the removed faces), join the queue. v's other edges keep their length: they
+    // are checked again in the next pass when their neighbourhood changed after a refusal.
+    // (Queueing all of v's edges again made most entries stale before they were popped, and
+    // checked the same edges again after every collapse near them.)
+    std::array<uint32_t, 2> across{UINT32_MAX, UINT32_MAX};
+    for (size_t k = 0; k < 2; ++k)
+      for (uint32_t w : t_[pl.shared[k]])
+        if (w != pl.u && w != pl.v) across[k] = w;
     for (uint32_t f : pl.shared) {
       alive_[f] = 0;
       for (uint32_t w : t_[f]) {
@@ -398,9 +407,13 @@ class Coarsener {
       for (uint32_t w : t_[f]) changed_in_[w] = batch_id_;
     vf_[pl.u].clear();
     vertex_alive_[pl.u] = 0;
-    // Only v's edges changed length; the others are re-checked whenever they come up.
-    ++stamp_[pl.v];
-    for (uint32_t w : neighbours(pl.v)) push(std::min(pl.v, w), std::max(pl.v, w));
+    std::vector<uint32_t> made;
+    for (const Tri& n : pl.fresh)
+      for (uint32_t w : n)
+        if (w != pl.v && w != across[0] && w != across[1]) made.push_back(w);
+    std::sort(made.begin(), made.end());
+    made.erase(std::unique(made.begin(), made.end()), made.end());
+    for (uint32_t w : made) push(std::min(pl.v, w), std::max(pl.v, w));
   }
 
   // Must edge a-b be checked again in the next pass? Only when a vertex whose faces its checks
@@ -460,7 +473,6 @@ class Coarsener {
   CoarsenParams prm_;
   TriangleBuckets buckets_;
   std::vector<uint8_t> alive_, vertex_alive_;
-  std::vector<uint32_t> stamp_;
   // The batch whose ring / whose edge ends hold a vertex, the batch that rewrote a triangle,
   // the batch that last changed a vertex's faces.
   std::vector<uint32_t> ring_claim_, end_claim_, made_in_, changed_in_;
