@@ -40,7 +40,6 @@ class Coarsener {
     vertex_alive_.assign(p.size(), 1);
     vf_.resize(p.size());
     ring_claim_.assign(p.size(), 0);
-    end_claim_.assign(p.size(), 0);
     changed_in_.assign(p.size(), 0);
     made_in_.assign(t.size(), 0);
     witness_ = std::make_unique<std::atomic<uint32_t>[]>(p.size());
@@ -100,19 +99,15 @@ class Coarsener {
         const Entry e = queue_.pop();
         // Points never move, so an edge whose ends are both alive is still there and as long.
         if (!vertex_alive_[e.a] || !vertex_alive_[e.b]) continue;
-        // Compatible with the batch when neither end is in a claimed ring and no claimed end
-        // is in this ring.
-        bool free = ring_claim_[e.a] != batch_id_ && ring_claim_[e.b] != batch_id_;
-        if (free) {
-          closed_ring(e.a, e.b, ring);
-          for (uint32_t w : ring) free = free && end_claim_[w] != batch_id_;
-        }
-        if (!free) {
+        // Compatible with the batch when neither end is in a claimed ring. (Then no claimed
+        // end is in this ring either: a ring is its ends and their neighbours, and being
+        // neighbours is mutual.)
+        if (ring_claim_[e.a] == batch_id_ || ring_claim_[e.b] == batch_id_) {
           deferred.push_back(e);
           continue;
         }
+        closed_ring(e.a, e.b, ring);
         for (uint32_t w : ring) ring_claim_[w] = batch_id_;
-        end_claim_[e.a] = end_claim_[e.b] = batch_id_;
         batch.push_back(e);
       }
       // Plans keep their buffers from batch to batch (plan() clears them): allocations were a
@@ -473,9 +468,9 @@ class Coarsener {
   CoarsenParams prm_;
   TriangleBuckets buckets_;
   std::vector<uint8_t> alive_, vertex_alive_;
-  // The batch whose ring / whose edge ends hold a vertex, the batch that rewrote a triangle,
-  // the batch that last changed a vertex's faces.
-  std::vector<uint32_t> ring_claim_, end_claim_, made_in_, changed_in_;
+  // The batch whose rings hold a vertex, the batch that rewrote a triangle, the batch that
+  // last changed a vertex's faces.
+  std::vector<uint32_t> ring_claim_, made_in_, changed_in_;
   uint32_t batch_id_ = 0, pass_start_ = 0;  // the first batch of the pass
   struct Refusal {
     uint64_t edge;
