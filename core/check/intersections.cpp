@@ -10,6 +10,7 @@
 #include <CGAL/intersections.h>
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_sort.h>
 
 #include <algorithm>
 #include <cmath>
@@ -261,24 +262,37 @@ void grid_candidate_pairs(std::vector<Box>& boxes, Test&& test) {
   auto index = [&](double x, int axis) { return int64_t(std::floor((x - all.min(axis)) * inv)); };
   auto key = [](int64_t i, int64_t j, int64_t k) { return (uint64_t(i) << 42) | (uint64_t(j) << 21) | uint64_t(k); };
   constexpr int64_t max_cells = 27;  // more, and the triangle goes to the box intersection
-  std::vector<GridEntry> entries;
-  entries.reserve(boxes.size() * 4);
+  auto cell_range = [&](const Box& b, int64_t lo[3], int64_t hi[3]) {
+    for (int a = 0; a < 3; ++a) lo[a] = index(b.min_coord(a), a), hi[a] = index(b.max_coord(a), a);
+    const int64_t cells = (hi[0] - lo[0] + 1) * (hi[1] - lo[1] + 1) * (hi[2] - lo[2] + 1);
+    return cells > max_cells ? 0 : size_t(cells);  // 0: a large box
+  };
+  // The (cell, triangle) entries in parallel: counts, offsets, then each box fills its own
+  // run. The sort's order is total, so the result is the same on any number of threads.
+  std::vector<size_t> offset(boxes.size() + 1, 0);
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, boxes.size(), 4096), [&](const tbb::blocked_range<size_t>& r) {
+    int64_t lo[3], hi[3];
+    for (size_t n = r.begin(); n != r.end(); ++n) offset[n + 1] = cell_range(boxes[n], lo, hi);
+  });
   std::vector<Box> large;
   std::vector<uint8_t> is_large(boxes.size(), 0);
   for (size_t n = 0; n < boxes.size(); ++n) {
-    const Box& b = boxes[n];
-    int64_t lo[3], hi[3];
-    for (int a = 0; a < 3; ++a) lo[a] = index(b.min_coord(a), a), hi[a] = index(b.max_coord(a), a);
-    if ((hi[0] - lo[0] + 1) * (hi[1] - lo[1] + 1) * (hi[2] - lo[2] + 1) > max_cells) {
-      large.push_back(b);
-      is_large[n] = 1;
-      continue;
-    }
-    for (int64_t i = lo[0]; i <= hi[0]; ++i)
-      for (int64_t j = lo[1]; j <= hi[1]; ++j)
-        for (int64_t k = lo[2]; k <= hi[2]; ++k) entries.push_back({key(i, j, k), uint32_t(n)});
+    if (offset[n + 1] == 0) large.push_back(boxes[n]), is_large[n] = 1;
+    offset[n + 1] += offset[n];
   }
-  std::sort(entries.begin(), entries.end(), [](const GridEntry& x, const GridEntry& y) { return x.cell != y.cell ? x.cell < y.cell : x.triangle < y.triangle; });
+  std::vector<GridEntry> entries(offset.back());
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, boxes.size(), 4096), [&](const tbb::blocked_range<size_t>& r) {
+    int64_t lo[3], hi[3];
+    for (size_t n = r.begin(); n != r.end(); ++n) {
+      if (is_large[n]) continue;
+      cell_range(boxes[n], lo, hi);
+      size_t e = offset[n];
+      for (int64_t i = lo[0]; i <= hi[0]; ++i)
+        for (int64_t j = lo[1]; j <= hi[1]; ++j)
+          for (int64_t k = lo[2]; k <= hi[2]; ++k) entries[e++] = {key(i, j, k), uint32_t(n)};
+    }
+  });
+  tbb::parallel_sort(entries.begin(), entries.end(), [](const GridEntry& x, const GridEntry& y) { return x.cell != y.cell ? x.cell < y.cell : x.triangle < y.triangle; });
   std::vector<size_t> starts;
   for (size_t e = 0; e < entries.size(); ++e)
     if (e == 0 || entries[e].cell != entries[e - 1].cell) starts.push_back(e);
@@ -453,17 +467,20 @@ bool clearly_beside(const std::vector<Vec3>& points, const PlaneBound& plane, co
 
 std::vector<TrianglePair> find_intersecting_pairs(const std::vector<Vec3>& points, const std::vector<Tri>& triangles) {
   std::vector<P3> p(points.size());
-  for (size_t i = 0; i < points.size(); ++i) p[i] = to_point(points[i]);
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, points.size(), 8192), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t i = r.begin(); i != r.end(); ++i) p[i] = to_point(points[i]);
+  });
+  std::vector<uint8_t> usable(triangles.size(), 0);
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, triangles.size(), 4096), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t t = r.begin(); t != r.end(); ++t) usable[t] = !is_degenerate(p, triangles[t]);
+  });
   std::vector<Box> boxes;
   boxes.reserve(triangles.size());
-  std::vector<uint8_t> usable(triangles.size(), 0);
-  for (size_t t = 0; t < triangles.size(); ++t) {
-    const Tri& tri = triangles[t];
-    if (is_degenerate(p, tri)) continue;
-    auto bb = p[tri[0]].bbox() + p[tri[1]].bbox() + p[tri[2]].bbox();
-    boxes.emplace_back(bb, t);
-    usable[t] = 1;
-  }
+  for (size_t t = 0; t < triangles.size(); ++t)
+    if (usable[t]) {
+      const Tri& tri = triangles[t];
+      boxes.emplace_back(p[tri[0]].bbox() + p[tri[1]].bbox() + p[tri[2]].bbox(), t);
+    }
   const std::vector<uint8_t> fan = unfolded_fan_vertices(p, triangles, usable);
   const std::vector<PlaneBound> planes = plane_bounds(points, triangles, usable);
   // Exact tests inside the (parallel) candidate callback: fans and long thin CAD triangles give
@@ -489,8 +506,12 @@ std::vector<TrianglePair> find_intersecting_pairs(const std::vector<Vec3>& point
 std::vector<uint32_t> intersecting_triangles(const std::vector<Vec3>& points, const std::vector<Tri>& triangles) {
   std::vector<uint32_t> out;
   for (const TrianglePair& p : find_intersecting_pairs(points, triangles)) out.push_back(p.a), out.push_back(p.b);
+  std::vector<uint8_t> degenerate(triangles.size(), 0);
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, triangles.size(), 4096), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t f = r.begin(); f != r.end(); ++f) degenerate[f] = triangle_is_degenerate(points, triangles[f]);
+  });
   for (uint32_t f = 0; f < triangles.size(); ++f)
-    if (triangle_is_degenerate(points, triangles[f])) out.push_back(f);
+    if (degenerate[f]) out.push_back(f);
   std::sort(out.begin(), out.end());
   out.erase(std::unique(out.begin(), out.end()), out.end());
   return out;
