@@ -7,6 +7,8 @@
 #include <queue>
 #include <unordered_map>
 
+#include <tbb/parallel_for.h>
+
 #include "common/closest_point.h"
 #include "common/grid_key.h"
 #include "common/vec.h"
@@ -16,6 +18,13 @@ namespace {
 
 using Key = GridKey;
 using KeyHash = GridKeyHash;
+
+// A node near a piece: the scan's cell number, the node, its distance to the piece.
+struct Candidate {
+  uint32_t cell, node;
+  double distance;
+  bool operator<(const Candidate& o) const { return cell != o.cell ? cell < o.cell : node < o.node; }
+};
 
 // A piece of a curve with arc-length parameters at its points.
 struct Piece {
@@ -154,6 +163,7 @@ std::vector<std::pair<uint32_t, uint32_t>> snap_to_curves(const std::vector<Feat
   const double inv = 1.0 / radius;
   auto key = [&](const Vec3& p) { return grid_key(p, inv); };
   std::unordered_map<Key, std::vector<uint32_t>, KeyHash> buckets;
+  const std::vector<Vec3> first_target = target;  // the targets the buckets were built on
   for (uint32_t i = 0; i < n; ++i) {
     Key kt = key(target[i]), kl = key(lattice[i]);
     buckets[kt].push_back(i);
@@ -184,30 +194,81 @@ std::vector<std::pair<uint32_t, uint32_t>> snap_to_curves(const std::vector<Feat
 
   // The path of wrap nodes hugging one piece, from `carry` (the previous piece's end node)
   // when it lies near, among the nodes within `r` of the piece; empty when there is none.
-  auto find_path = [&](const Piece& piece, double r, uint32_t carry) {
-    // The region: nodes within r of the piece, by the nearer of the projected and the lattice
-    // position (smoothing rounds a concave corner away from its crease, the lattice node
-    // stays close to it).
+  // The region of a piece: nodes within r of it, by the nearer of the projected and the
+  // lattice position (smoothing rounds a concave corner away from its crease, the lattice
+  // node stays close to it). Scanned cell by cell (cells numbered in scan order), each cell's
+  // nodes in increasing order, so a region is listed in (cell, node) order.
+  auto for_region_cells = [&](const Piece& piece, double r, auto&& fn) {
     Box3 box;
     for (const Vec3& q : piece.points) box.add(q);
     const Key lo = key(box.lo - Vec3{r, r, r}), hi = key(box.hi + Vec3{r, r, r});
-    std::vector<uint32_t> region;
+    uint32_t cell = 0;
     for (int64_t x = lo.x; x <= hi.x; ++x)
       for (int64_t y = lo.y; y <= hi.y; ++y)
-        for (int64_t z = lo.z; z <= hi.z; ++z) {
-          auto it = buckets.find({x, y, z});
-          if (it == buckets.end()) continue;
-          for (uint32_t v : it->second) {
-            double d, dl, at;
-            piece.closest(target[v], d, at);
-            piece.closest(lattice[v], dl, at);
-            d = std::min(d, dl);
-            if (d <= r && curve_distance[v] < 0) {
-              curve_distance[v] = d;
-              region.push_back(v);
-            }
-          }
+        for (int64_t z = lo.z; z <= hi.z; ++z) fn(cell++, Key{x, y, z});
+  };
+  auto distance_to = [&](const Piece& piece, uint32_t v) {
+    double d, dl, at;
+    piece.closest(target[v], d, at);
+    piece.closest(lattice[v], dl, at);
+    return std::min(d, dl);
+  };
+  auto scan_region = [&](const Piece& piece, double r) {
+    std::vector<Candidate> out;
+    for_region_cells(piece, r, [&](uint32_t cell, const Key& k) {
+      auto it = buckets.find(k);
+      if (it == buckets.end()) return;
+      for (uint32_t v : it->second) {
+        const double d = distance_to(piece, v);
+        if (d <= r) out.push_back({cell, v, d});
+      }
+    });
+    return out;
+  };
+  // Corner nodes by the cells they were bucketed in, to find them where they are now.
+  std::unordered_map<Key, std::vector<uint32_t>, KeyHash> corner_cells;
+  auto mark_corner_node = [&](uint32_t v, const Vec3& first_target) {
+    if (is_corner_node[v]) return;
+    is_corner_node[v] = 1;
+    const Key kt = key(first_target), kl = key(lattice[v]);
+    corner_cells[kt].push_back(v);
+    if (!(kl == kt)) corner_cells[kl].push_back(v);
+  };
+  // The region as a scan on the wrap as it stands would list it, from candidates found before
+  // any node moved. Only snapped nodes moved since: those off corners are never on a path
+  // (nor are they anything else's start or end), and corner nodes are found again by their
+  // cells, at their present distance.
+  auto region_from = [&](const Piece& piece, double r, const std::vector<Candidate>& before) {
+    std::vector<Candidate> corners;
+    if (!corner_cells.empty())
+      for_region_cells(piece, r, [&](uint32_t cell, const Key& k) {
+        auto it = corner_cells.find(k);
+        if (it == corner_cells.end()) return;
+        for (uint32_t v : it->second) {
+          const double d = distance_to(piece, v);
+          if (d <= r) corners.push_back({cell, v, d});
         }
+      });
+    std::sort(corners.begin(), corners.end());
+    std::vector<Candidate> out;
+    out.reserve(before.size() + corners.size());
+    size_t j = 0;
+    for (const Candidate& c : before) {
+      if (snapped[c.node]) continue;
+      for (; j < corners.size() && corners[j] < c; ++j) out.push_back(corners[j]);
+      out.push_back(c);
+    }
+    out.insert(out.end(), corners.begin() + j, corners.end());
+    return out;
+  };
+
+  auto find_path = [&](const Piece& piece, double r, uint32_t carry, const std::vector<Candidate>* before) {
+    std::vector<uint32_t> region;
+    for (const Candidate& c : before ? region_from(piece, r, *before) : scan_region(piece, r))
+      if (curve_distance[c.node] < 0) {
+        curve_distance[c.node] = c.distance;
+        region.push_back(c.node);
+      }
     std::vector<uint32_t> path;
     auto passable = [&](uint32_t v) { return !snapped[v] || is_corner_node[v]; };
     // The region can hold several sheets of the wrap (both sides of a thin wall, a patch
@@ -308,19 +369,38 @@ std::vector<std::pair<uint32_t, uint32_t>> snap_to_curves(const std::vector<Feat
     return path;
   };
 
+  // The candidates of every piece at once, in parallel, before any node moves: measuring
+  // every node near a piece was most of the tracing, which follows the curves one by one.
+  std::vector<std::vector<Piece>> pieces_of(curves.size());
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, curves.size(), 16), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t c = r.begin(); c != r.end(); ++c) pieces_of[c] = split_into_pieces(curves[c], piece_length);
+  });
+  std::vector<std::pair<uint32_t, uint32_t>> piece_ids;  // (curve, piece)
+  for (uint32_t c = 0; c < curves.size(); ++c)
+    for (uint32_t k = 0; k < pieces_of[c].size(); ++k) piece_ids.push_back({c, k});
+  std::vector<std::vector<Candidate>> candidates(piece_ids.size());
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, piece_ids.size(), 8), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t i = r.begin(); i != r.end(); ++i)
+      candidates[i] = scan_region(pieces_of[piece_ids[i].first][piece_ids[i].second], radius);
+  });
+
   stats.curves = curves.size();
-  for (const FeatureCurve& c : curves) {
+  size_t piece_id = 0;
+  for (size_t ci = 0; ci < curves.size(); ++ci) {
+    const FeatureCurve& c = curves[ci];
     stats.corners += (c.start_corner ? 1 : 0) + (c.end_corner ? 1 : 0);
-    auto pieces = split_into_pieces(c, piece_length);
+    const std::vector<Piece>& pieces = pieces_of[ci];
     size_t captured = 0;
     uint32_t carry = UINT32_MAX;  // end node of the previous piece
     for (size_t pi = 0; pi < pieces.size(); ++pi) {
       const Piece& piece = pieces[pi];
+      std::vector<Candidate> before;
+      before.swap(candidates[piece_id++]);  // freed as the pieces are traced
       ++stats.pieces;
       // Where the wrap is coarse or split into sheets the band may hold no path: a wider one
       // is tried before the piece is given up.
-      std::vector<uint32_t> path = find_path(piece, radius, carry);
-      if (path.empty()) path = find_path(piece, 2 * radius, carry);
+      std::vector<uint32_t> path = find_path(piece, radius, carry, &before);
+      if (path.empty()) path = find_path(piece, 2 * radius, carry, nullptr);
       if (path.empty()) {
         carry = UINT32_MAX;
         continue;
@@ -358,8 +438,8 @@ std::vector<std::pair<uint32_t, uint32_t>> snap_to_curves(const std::vector<Feat
       }
       for (size_t k = 0; k + 1 < path.size(); ++k)
         if (on[k] && on[k + 1]) traced.emplace_back(path[k], path[k + 1]);
-      if (piece.start_corner && on[0]) corner_node[corner_key(piece.points.front())] = path.front(), is_corner_node[path.front()] = 1;
-      if (piece.end_corner && on.back()) corner_node[corner_key(piece.points.back())] = path.back(), is_corner_node[path.back()] = 1;
+      if (piece.start_corner && on[0]) corner_node[corner_key(piece.points.front())] = path.front(), mark_corner_node(path.front(), first_target[path.front()]);
+      if (piece.end_corner && on.back()) corner_node[corner_key(piece.points.back())] = path.back(), mark_corner_node(path.back(), first_target[path.back()]);
       ++stats.pieces_traced;
       ++captured;
       carry = path.back();
