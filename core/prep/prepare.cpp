@@ -157,6 +157,23 @@ size_t orient_pieces(const std::vector<Vec3>& points, std::vector<Tri>& triangle
       if (t[e] == a && t[(e + 1) % 3] == b) return true;
     return false;
   };
+  // Per triangle side, in parallel (the edge lookups were most of the walk): the triangle
+  // across it when the edge has exactly two, and whether that one runs the edge the same way.
+  constexpr uint32_t none = UINT32_MAX;
+  std::vector<uint32_t> across(3 * triangles.size(), none);
+  std::vector<uint8_t> same_way(3 * triangles.size(), 0);
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, triangles.size(), 4096), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t t = r.begin(); t != r.end(); ++t)
+      for (int e = 0; e < 3; ++e) {
+        const uint32_t a = triangles[t][e], b = triangles[t][(e + 1) % 3];
+        const size_t edge = edge_tris.find(edge_key(a, b));
+        if (edge_tris.size(edge) != 2) continue;
+        const uint32_t* nb = edge_tris.begin(edge);
+        const uint32_t n = nb[0] == t ? nb[1] : nb[0];
+        across[3 * t + e] = n;
+        same_way[3 * t + e] = has_directed(triangles[n], a, b) ? 1 : 0;
+      }
+  });
 
   std::vector<int32_t> piece(triangles.size(), -1);
   std::vector<uint8_t> flip(triangles.size(), 0);
@@ -167,19 +184,16 @@ size_t orient_pieces(const std::vector<Vec3>& points, std::vector<Tri>& triangle
     piece[seed] = pieces;
     queue.assign(1, seed);
     for (size_t q = 0; q < queue.size(); ++q) {
-      uint32_t t = queue[q];
-      Tri cur = triangles[t];
-      if (flip[t]) std::swap(cur[1], cur[2]);
-      for (int e = 0; e < 3; ++e) {
-        uint32_t a = cur[e], b = cur[(e + 1) % 3];
-        const size_t edge = edge_tris.find(edge_key(a, b));
-        if (edge_tris.size(edge) != 2) continue;
-        const uint32_t* nb = edge_tris.begin(edge);
-        uint32_t n = nb[0] == t ? nb[1] : nb[0];
-        if (piece[n] >= 0) continue;
+      const uint32_t t = queue[q];
+      // A flipped triangle runs its sides backwards, last first.
+      static constexpr int forward[3] = {0, 1, 2}, backward[3] = {2, 1, 0};
+      for (int e : flip[t] ? backward : forward) {
+        const uint32_t n = across[3 * t + e];
+        if (n == none || piece[n] >= 0) continue;
         piece[n] = pieces;
-        // neighbour must contain b->a; if it contains a->b it disagrees and is flipped
-        flip[n] = has_directed(triangles[n], a, b) ? 1 : 0;
+        // The neighbour must run the edge the other way from t as t now stands; if it runs
+        // it the same way it disagrees and is flipped.
+        flip[n] = same_way[3 * t + e] ^ flip[t];
         queue.push_back(n);
       }
     }
