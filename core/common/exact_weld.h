@@ -4,6 +4,7 @@
 // serial bulk of diagnosing and welding such inputs.
 #pragma once
 #include <cstdint>
+#include <algorithm>
 #include <cstring>
 #include <utility>
 #include <vector>
@@ -38,36 +39,46 @@ inline std::vector<uint32_t> exact_weld(const std::vector<Vec3>& points, std::ve
   tbb::parallel_sort(keys.begin(), keys.end());
   // first[i]: the first point equal to point i (itself when none is before it). Within a run
   // of one hash the points come in input order; runs are short (a point's copies, and the rare
-  // collision), so each is compared with the earlier firsts of its run.
+  // collision), so each is compared with the earlier firsts of its run. Runs are independent:
+  // the sorted keys are cut into slices at run starts, one task each.
   std::vector<uint32_t> first(n);
-  std::vector<uint32_t> firsts;
-  for (size_t s = 0; s < n;) {
-    size_t e = s + 1;
-    while (e < n && keys[e].first == keys[s].first) ++e;
-    firsts.clear();
-    for (size_t k = s; k < e; ++k) {
-      const uint32_t i = keys[k].second;
-      uint32_t match = i;
-      for (uint32_t f : firsts)
-        if (points[f] == points[i]) {
-          match = f;
-          break;
+  auto run_start_at_or_after = [&](size_t k) {
+    while (k > 0 && k < n && keys[k].first == keys[k - 1].first) ++k;
+    return k;
+  };
+  const size_t slices = std::max<size_t>(1, n / 65536);
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, slices, 1), [&](const tbb::blocked_range<size_t>& r) {
+    std::vector<uint32_t> firsts;
+    for (size_t slice = r.begin(); slice != r.end(); ++slice) {
+      const size_t end = run_start_at_or_after(n * (slice + 1) / slices);
+      for (size_t s = run_start_at_or_after(n * slice / slices); s < end;) {
+        size_t e = s + 1;
+        while (e < n && keys[e].first == keys[s].first) ++e;
+        firsts.clear();
+        for (size_t k = s; k < e; ++k) {
+          const uint32_t i = keys[k].second;
+          uint32_t match = i;
+          for (uint32_t f : firsts)
+            if (points[f] == points[i]) {
+              match = f;
+              break;
+            }
+          if (match == i) firsts.push_back(i);
+          first[i] = match;
         }
-      if (match == i) firsts.push_back(i);
-      first[i] = match;
+        s = e;
+      }
     }
-    s = e;
-  }
+  });
+  // The firsts numbered in input order, then every copy takes its first's number.
   std::vector<uint32_t> remap(n);
   unique.clear();
-  for (size_t i = 0; i < n; ++i) {
-    if (first[i] == i) {
-      remap[i] = uint32_t(unique.size());
-      unique.push_back(points[i]);
-    } else {
-      remap[i] = remap[first[i]];  // first[i] < i: already numbered
-    }
-  }
+  for (size_t i = 0; i < n; ++i)
+    if (first[i] == i) remap[i] = uint32_t(unique.size()), unique.push_back(points[i]);
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 8192), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t i = r.begin(); i != r.end(); ++i)
+      if (first[i] != i) remap[i] = remap[first[i]];
+  });
   return remap;
 }
 
