@@ -213,11 +213,13 @@ std::vector<std::pair<uint32_t, uint32_t>> snap_to_curves(const std::vector<Feat
     piece.closest(lattice[v], dl, at);
     return std::min(d, dl);
   };
-  auto scan_region = [&](const Piece& piece, double r) {
+  // The nodes of `cells` (buckets of nodes) within r of the piece, in scan order.
+  using NodeCells = std::unordered_map<Key, std::vector<uint32_t>, KeyHash>;
+  auto nodes_near = [&](const Piece& piece, double r, const NodeCells& cells) {
     std::vector<Candidate> out;
     for_region_cells(piece, r, [&](uint32_t cell, const Key& k) {
-      auto it = buckets.find(k);
-      if (it == buckets.end()) return;
+      auto it = cells.find(k);
+      if (it == cells.end()) return;
       for (uint32_t v : it->second) {
         const double d = distance_to(piece, v);
         if (d <= r) out.push_back({cell, v, d});
@@ -226,7 +228,7 @@ std::vector<std::pair<uint32_t, uint32_t>> snap_to_curves(const std::vector<Feat
     return out;
   };
   // Corner nodes by the cells they were bucketed in, to find them where they are now.
-  std::unordered_map<Key, std::vector<uint32_t>, KeyHash> corner_cells;
+  NodeCells corner_cells;
   auto mark_corner_node = [&](uint32_t v, const Vec3& first_target) {
     if (is_corner_node[v]) return;
     is_corner_node[v] = 1;
@@ -240,16 +242,8 @@ std::vector<std::pair<uint32_t, uint32_t>> snap_to_curves(const std::vector<Feat
   // cells, at their present distance.
   auto region_from = [&](const Piece& piece, double r, const std::vector<Candidate>& before) {
     std::vector<Candidate> corners;
-    if (!corner_cells.empty())
-      for_region_cells(piece, r, [&](uint32_t cell, const Key& k) {
-        auto it = corner_cells.find(k);
-        if (it == corner_cells.end()) return;
-        for (uint32_t v : it->second) {
-          const double d = distance_to(piece, v);
-          if (d <= r) corners.push_back({cell, v, d});
-        }
-      });
-    std::sort(corners.begin(), corners.end());
+    if (!corner_cells.empty()) corners = nodes_near(piece, r, corner_cells);
+    std::sort(corners.begin(), corners.end());  // a cell's corner nodes were listed as marked
     std::vector<Candidate> out;
     out.reserve(before.size() + corners.size());
     size_t j = 0;
@@ -264,7 +258,7 @@ std::vector<std::pair<uint32_t, uint32_t>> snap_to_curves(const std::vector<Feat
 
   auto find_path = [&](const Piece& piece, double r, uint32_t carry, const std::vector<Candidate>* before) {
     std::vector<uint32_t> region;
-    for (const Candidate& c : before ? region_from(piece, r, *before) : scan_region(piece, r))
+    for (const Candidate& c : before ? region_from(piece, r, *before) : nodes_near(piece, r, buckets))
       if (curve_distance[c.node] < 0) {
         curve_distance[c.node] = c.distance;
         region.push_back(c.node);
@@ -381,7 +375,7 @@ std::vector<std::pair<uint32_t, uint32_t>> snap_to_curves(const std::vector<Feat
   std::vector<std::vector<Candidate>> candidates(piece_ids.size());
   tbb::parallel_for(tbb::blocked_range<size_t>(0, piece_ids.size(), 8), [&](const tbb::blocked_range<size_t>& r) {
     for (size_t i = r.begin(); i != r.end(); ++i)
-      candidates[i] = scan_region(pieces_of[piece_ids[i].first][piece_ids[i].second], radius);
+      candidates[i] = nodes_near(pieces_of[piece_ids[i].first][piece_ids[i].second], radius, buckets);
   });
 
   stats.curves = curves.size();
