@@ -1,5 +1,6 @@
 // One of the few translation units that include CGAL's heavy headers.
 #include "check/intersections.h"
+#include "common/fill_vector.h"
 #include "common/vec.h"
 
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
@@ -280,7 +281,7 @@ void grid_candidate_pairs(std::vector<Box>& boxes, Test&& test) {
     if (offset[n + 1] == 0) large.push_back(boxes[n]), is_large[n] = 1;
     offset[n + 1] += offset[n];
   }
-  std::vector<GridEntry> entries(offset.back());
+  FillVector<GridEntry> entries(offset.back());  // each box fills its own run
   tbb::parallel_for(tbb::blocked_range<size_t>(0, boxes.size(), 4096), [&](const tbb::blocked_range<size_t>& r) {
     int64_t lo[3], hi[3];
     for (size_t n = r.begin(); n != r.end(); ++n) {

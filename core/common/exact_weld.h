@@ -12,6 +12,7 @@
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_sort.h>
 
+#include "common/fill_vector.h"
 #include "vdbwrap/mesh.h"
 
 namespace vdbwrap {
@@ -32,7 +33,12 @@ inline uint64_t point_hash(const Vec3& p) {
 // compare with == (a point with a NaN coordinate equals nothing, not even itself).
 inline std::vector<uint32_t> exact_weld(const std::vector<Vec3>& points, std::vector<Vec3>& unique) {
   const size_t n = points.size();
-  std::vector<std::pair<uint64_t, uint32_t>> keys(n);
+  struct Key {
+    uint64_t hash;
+    uint32_t point;
+    bool operator<(const Key& o) const { return hash != o.hash ? hash < o.hash : point < o.point; }
+  };
+  FillVector<Key> keys(n);
   tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 8192), [&](const tbb::blocked_range<size_t>& r) {
     for (size_t i = r.begin(); i != r.end(); ++i) keys[i] = {point_hash(points[i]), uint32_t(i)};
   });
@@ -41,9 +47,9 @@ inline std::vector<uint32_t> exact_weld(const std::vector<Vec3>& points, std::ve
   // of one hash the points come in input order; runs are short (a point's copies, and the rare
   // collision), so each is compared with the earlier firsts of its run. Runs are independent:
   // the sorted keys are cut into slices at run starts, one task each.
-  std::vector<uint32_t> first(n);
+  FillVector<uint32_t> first(n);  // every entry written below (each point is in one run)
   auto run_start_at_or_after = [&](size_t k) {
-    while (k > 0 && k < n && keys[k].first == keys[k - 1].first) ++k;
+    while (k > 0 && k < n && keys[k].hash == keys[k - 1].hash) ++k;
     return k;
   };
   const size_t slices = std::max<size_t>(1, n / 65536);
@@ -53,10 +59,10 @@ inline std::vector<uint32_t> exact_weld(const std::vector<Vec3>& points, std::ve
       const size_t end = run_start_at_or_after(n * (slice + 1) / slices);
       for (size_t s = run_start_at_or_after(n * slice / slices); s < end;) {
         size_t e = s + 1;
-        while (e < n && keys[e].first == keys[s].first) ++e;
+        while (e < n && keys[e].hash == keys[s].hash) ++e;
         firsts.clear();
         for (size_t k = s; k < e; ++k) {
-          const uint32_t i = keys[k].second;
+          const uint32_t i = keys[k].point;
           uint32_t match = i;
           for (uint32_t f : firsts)
             if (points[f] == points[i]) {

@@ -11,6 +11,7 @@
 #include "check/intersections.h"
 #include "common/edge_key.h"
 #include "common/exact_weld.h"
+#include "common/fill_vector.h"
 #include "common/grid_key.h"
 #include "common/vec.h"
 #include "vdbwrap/errors.h"
@@ -34,7 +35,12 @@ struct EdgeTriangles {
 };
 
 EdgeTriangles edge_triangles(const std::vector<Tri>& triangles) {
-  std::vector<std::pair<uint64_t, uint32_t>> uses(triangles.size() * 3);
+  struct Use {
+    uint64_t edge;
+    uint32_t triangle;
+    bool operator<(const Use& o) const { return edge != o.edge ? edge < o.edge : triangle < o.triangle; }
+  };
+  FillVector<Use> uses(triangles.size() * 3);
   tbb::parallel_for(tbb::blocked_range<size_t>(0, triangles.size(), 4096), [&](const tbb::blocked_range<size_t>& r) {
     for (size_t t = r.begin(); t != r.end(); ++t)
       for (int e = 0; e < 3; ++e) uses[3 * t + e] = {edge_key(triangles[t][e], triangles[t][(e + 1) % 3]), uint32_t(t)};
@@ -43,11 +49,11 @@ EdgeTriangles edge_triangles(const std::vector<Tri>& triangles) {
   EdgeTriangles out;
   out.tris.resize(uses.size());
   for (size_t i = 0; i < uses.size(); ++i) {
-    if (i == 0 || uses[i].first != uses[i - 1].first) {
-      out.keys.push_back(uses[i].first);
+    if (i == 0 || uses[i].edge != uses[i - 1].edge) {
+      out.keys.push_back(uses[i].edge);
       out.start.push_back(uint32_t(i));
     }
-    out.tris[i] = uses[i].second;
+    out.tris[i] = uses[i].triangle;
   }
   out.start.push_back(uint32_t(uses.size()));
   return out;
@@ -71,7 +77,7 @@ std::vector<uint8_t> crowded_points(const std::vector<Vec3>& points, double tole
       return key.x != o.key.x ? key.x < o.key.x : key.y != o.key.y ? key.y < o.key.y : key.z != o.key.z ? key.z < o.key.z : point < o.point;
     }
   };
-  std::vector<Entry> entries(n);
+  FillVector<Entry> entries(n);
   tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 8192), [&](const tbb::blocked_range<size_t>& r) {
     for (size_t i = r.begin(); i != r.end(); ++i) entries[i] = {grid_key(points[i], inv), uint32_t(i)};
   });
