@@ -2,10 +2,13 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <map>
 #include <random>
 
 #include "check/intersections.h"
+#include "common/exact_weld.h"
 #include "common/vec.h"
 #include "prep/prepare.h"
 #include "test_meshes.h"
@@ -65,6 +68,31 @@ TEST(Weld, CopiesAndClustersWeldLikeTheOrderedGreedyPass) {
   // most three per chain.
   EXPECT_GE(welded.size(), 3001u);
   EXPECT_LE(welded.size(), 3001u + 2 * (3000 / 11 + 1));
+}
+
+// Enough points for the exact weld's matching to be cut into many slices, copies spread far
+// apart in the input, +0 beside -0: the same numbering as a map filled point by point.
+TEST(ExactWeld, ManySlicesNumberPointsLikeAMapFilledInOrder) {
+  std::mt19937 rng(5);
+  std::uniform_int_distribution<int> grid(-40, 40);
+  std::vector<Vec3> pts;
+  for (int i = 0; i < 400000; ++i) {
+    Vec3 p{grid(rng) * 0.25, grid(rng) * 0.25, grid(rng) * 0.25};  // about 530k cells: many copies
+    if (i % 97 == 0) p[0] = p[0] == 0 ? -0.0 : p[0];
+    pts.push_back(p);
+  }
+  std::vector<Vec3> unique;
+  const std::vector<uint32_t> remap = exact_weld(pts, unique);
+  std::map<std::array<double, 3>, uint32_t> first;  // +0 and -0 compare equal here too
+  std::vector<Vec3> expected;
+  ASSERT_EQ(remap.size(), pts.size());
+  for (size_t i = 0; i < pts.size(); ++i) {
+    auto [it, added] = first.emplace(pts[i], uint32_t(expected.size()));
+    if (added) expected.push_back(pts[i]);
+    ASSERT_EQ(remap[i], it->second) << "point " << i;
+  }
+  EXPECT_EQ(unique, expected);
+  EXPECT_GT(pts.size(), 4 * unique.size() / 3);  // the copies were there to find
 }
 
 TEST(Orient, FlippedTrianglesOfAClosedBoxComeOutConsistentAndOutward) {
