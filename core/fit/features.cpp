@@ -229,10 +229,10 @@ std::vector<std::pair<uint32_t, uint32_t>> snap_to_curves(const std::vector<Feat
   };
   // Corner nodes by the cells they were bucketed in, to find them where they are now.
   NodeCells corner_cells;
-  auto mark_corner_node = [&](uint32_t v, const Vec3& first_target) {
+  auto mark_corner_node = [&](uint32_t v) {
     if (is_corner_node[v]) return;
     is_corner_node[v] = 1;
-    const Key kt = key(first_target), kl = key(lattice[v]);
+    const Key kt = key(first_target[v]), kl = key(lattice[v]);
     corner_cells[kt].push_back(v);
     if (!(kl == kt)) corner_cells[kl].push_back(v);
   };
@@ -432,8 +432,8 @@ std::vector<std::pair<uint32_t, uint32_t>> snap_to_curves(const std::vector<Feat
       }
       for (size_t k = 0; k + 1 < path.size(); ++k)
         if (on[k] && on[k + 1]) traced.emplace_back(path[k], path[k + 1]);
-      if (piece.start_corner && on[0]) corner_node[corner_key(piece.points.front())] = path.front(), mark_corner_node(path.front(), first_target[path.front()]);
-      if (piece.end_corner && on.back()) corner_node[corner_key(piece.points.back())] = path.back(), mark_corner_node(path.back(), first_target[path.back()]);
+      if (piece.start_corner && on[0]) corner_node[corner_key(piece.points.front())] = path.front(), mark_corner_node(path.front());
+      if (piece.end_corner && on.back()) corner_node[corner_key(piece.points.back())] = path.back(), mark_corner_node(path.back());
       ++stats.pieces_traced;
       ++captured;
       carry = path.back();

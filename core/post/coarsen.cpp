@@ -402,7 +402,8 @@ class Coarsener {
       for (uint32_t w : t_[f]) changed_in_[w] = batch_id_;
     vf_[pl.u].clear();
     vertex_alive_[pl.u] = 0;
-    std::vector<uint32_t> made;
+    std::vector<uint32_t>& made = made_edges_;
+    made.clear();
     for (const Tri& n : pl.fresh)
       for (uint32_t w : n)
         if (w != pl.v && w != across[0] && w != across[1]) made.push_back(w);
@@ -479,6 +480,7 @@ class Coarsener {
     bool operator<(const Refusal& o) const { return edge != o.edge ? edge < o.edge : batch < o.batch; }
   };
   std::vector<Refusal> refusals_;  // this pass's
+  std::vector<uint32_t> made_edges_;  // apply()'s scratch: the other ends of the edges a collapse makes
   std::unordered_map<GridKey, std::vector<uint32_t>, GridKeyHash> batch_made_;  // the batch's new triangles
   struct Marks {  // per thread: bucket marks and plan()'s scratch lists
     std::vector<uint32_t> seen;
