@@ -1,5 +1,6 @@
 // One of the few translation units that include CGAL's heavy headers.
 #include "check/intersections.h"
+#include "common/edge_triangles.h"
 #include "common/fill_vector.h"
 #include "common/vec.h"
 
@@ -234,18 +235,34 @@ namespace {
 // tree (measured: 1.7 s against 0.3 s for 260k wrap triangles). A pair is tested only in the
 // cell holding the low corner of the two boxes' overlap, so once. Triangles spanning many cells
 // go to CGAL's box intersection instead.
-struct GridEntry {
-  uint64_t cell;
-  uint32_t triangle;
+// A box as the pair search keeps it: plain doubles, so that millions of them are filled in
+// parallel without constructing CGAL boxes (each takes a number from a shared counter).
+struct Bounds {
+  double lo[3], hi[3];
+  double min_coord(int axis) const { return lo[axis]; }
+  double max_coord(int axis) const { return hi[axis]; }
+  CGAL::Bbox_3 bbox() const { return CGAL::Bbox_3(lo[0], lo[1], lo[2], hi[0], hi[1], hi[2]); }
+  bool overlaps(const Bounds& o) const {
+    return lo[0] <= o.hi[0] && o.lo[0] <= hi[0] && lo[1] <= o.hi[1] && o.lo[1] <= hi[1] && lo[2] <= o.hi[2] && o.lo[2] <= hi[2];
+  }
+  static Bounds of(const CGAL::Bbox_3& b) { return {{b.xmin(), b.ymin(), b.zmin()}, {b.xmax(), b.ymax(), b.zmax()}}; }
 };
 
+struct GridEntry {
+  uint64_t cell;
+  uint32_t group;  // boxes of one group are never paired (kNoGroup: paired with all)
+  uint32_t triangle;
+};
+constexpr uint32_t kNoGroup = UINT32_MAX;
+
+// `group` (per box, or empty): pairs within one group are left out (see star_shaped_pieces).
 template <typename Test>
-void grid_candidate_pairs(std::vector<Box>& boxes, Test&& test) {
+void grid_candidate_pairs(const FillVector<Bounds>& boxes, const std::vector<uint32_t>& group, Test&& test) {
   if (boxes.size() < 2) return;
   std::vector<double> extents;
   extents.reserve(boxes.size());
   CGAL::Bbox_3 all;
-  for (const Box& b : boxes) {
+  for (const Bounds& b : boxes) {
     extents.push_back(std::max({b.max_coord(0) - b.min_coord(0), b.max_coord(1) - b.min_coord(1), b.max_coord(2) - b.min_coord(2)}));
     all += b.bbox();
   }
@@ -254,16 +271,18 @@ void grid_candidate_pairs(std::vector<Box>& boxes, Test&& test) {
   const double span = std::max({all.xmax() - all.xmin(), all.ymax() - all.ymin(), all.zmax() - all.zmin()});
   cell = std::max(cell, span / double(1 << 20));  // 21 bits per axis in a cell key
   if (!(cell > 0) || !std::isfinite(cell)) {
-    CGAL::box_self_intersection_d<CGAL::Parallel_if_available_tag>(boxes.begin(), boxes.end(), [&](const Box& a, const Box& b) {
+    std::vector<Box> all_boxes;
+    for (size_t n = 0; n < boxes.size(); ++n) all_boxes.emplace_back(boxes[n].bbox(), n);
+    CGAL::box_self_intersection_d<CGAL::Parallel_if_available_tag>(all_boxes.begin(), all_boxes.end(), [&](const Box& a, const Box& b) {
       test(uint32_t(a.handle()), uint32_t(b.handle()));
     });
     return;
   }
   const double inv = 1.0 / cell;
-  auto index = [&](double x, int axis) { return int64_t(std::floor((x - all.min(axis)) * inv)); };
+  auto index = [&](double x, int axis) { return int64_t((x - all.min(axis)) * inv); };  // >= 0: truncation is floor
   auto key = [](int64_t i, int64_t j, int64_t k) { return (uint64_t(i) << 42) | (uint64_t(j) << 21) | uint64_t(k); };
   constexpr int64_t max_cells = 27;  // more, and the triangle goes to the box intersection
-  auto cell_range = [&](const Box& b, int64_t lo[3], int64_t hi[3]) {
+  auto cell_range = [&](const Bounds& b, int64_t lo[3], int64_t hi[3]) {
     for (int a = 0; a < 3; ++a) lo[a] = index(b.min_coord(a), a), hi[a] = index(b.max_coord(a), a);
     const int64_t cells = (hi[0] - lo[0] + 1) * (hi[1] - lo[1] + 1) * (hi[2] - lo[2] + 1);
     return cells > max_cells ? 0 : size_t(cells);  // 0: a large box
@@ -278,7 +297,7 @@ void grid_candidate_pairs(std::vector<Box>& boxes, Test&& test) {
   std::vector<Box> large;
   std::vector<uint8_t> is_large(boxes.size(), 0);
   for (size_t n = 0; n < boxes.size(); ++n) {
-    if (offset[n + 1] == 0) large.push_back(boxes[n]), is_large[n] = 1;
+    if (offset[n + 1] == 0) large.emplace_back(boxes[n].bbox(), n), is_large[n] = 1;
     offset[n + 1] += offset[n];
   }
   FillVector<GridEntry> entries(offset.back());  // each box fills its own run
@@ -290,10 +309,12 @@ void grid_candidate_pairs(std::vector<Box>& boxes, Test&& test) {
       size_t e = offset[n];
       for (int64_t i = lo[0]; i <= hi[0]; ++i)
         for (int64_t j = lo[1]; j <= hi[1]; ++j)
-          for (int64_t k = lo[2]; k <= hi[2]; ++k) entries[e++] = {key(i, j, k), uint32_t(n)};
+          for (int64_t k = lo[2]; k <= hi[2]; ++k) entries[e++] = {key(i, j, k), group.empty() ? kNoGroup : group[n], uint32_t(n)};
     }
   });
-  tbb::parallel_sort(entries.begin(), entries.end(), [](const GridEntry& x, const GridEntry& y) { return x.cell != y.cell ? x.cell < y.cell : x.triangle < y.triangle; });
+  tbb::parallel_sort(entries.begin(), entries.end(), [](const GridEntry& x, const GridEntry& y) {
+    return x.cell != y.cell ? x.cell < y.cell : x.group != y.group ? x.group < y.group : x.triangle < y.triangle;
+  });
   std::vector<size_t> starts;
   for (size_t e = 0; e < entries.size(); ++e)
     if (e == 0 || entries[e].cell != entries[e - 1].cell) starts.push_back(e);
@@ -301,22 +322,26 @@ void grid_candidate_pairs(std::vector<Box>& boxes, Test&& test) {
   tbb::parallel_for(tbb::blocked_range<size_t>(0, starts.size() - 1, 64), [&](const tbb::blocked_range<size_t>& r) {
     for (size_t c = r.begin(); c != r.end(); ++c) {
       const uint64_t here = entries[starts[c]].cell;
-      for (size_t x = starts[c]; x < starts[c + 1]; ++x)
-        for (size_t y = x + 1; y < starts[c + 1]; ++y) {
-          const Box &a = boxes[entries[x].triangle], &b = boxes[entries[y].triangle];
-          if (!CGAL::do_overlap(a.bbox(), b.bbox())) continue;
+      size_t group_end = starts[c];  // end of x's run of one group in the cell
+      for (size_t x = starts[c]; x < starts[c + 1]; ++x) {
+        if (x == group_end)
+          while (group_end < starts[c + 1] && entries[group_end].group == entries[x].group) ++group_end;
+        for (size_t y = entries[x].group == kNoGroup ? x + 1 : group_end; y < starts[c + 1]; ++y) {
+          const Bounds &a = boxes[entries[x].triangle], &b = boxes[entries[y].triangle];
+          if (!a.overlaps(b)) continue;
           const double cx = std::max(a.min_coord(0), b.min_coord(0)), cy = std::max(a.min_coord(1), b.min_coord(1)),
                        cz = std::max(a.min_coord(2), b.min_coord(2));
           if (key(index(cx, 0), index(cy, 1), index(cz, 2)) != here) continue;  // tested in that cell
-          test(uint32_t(a.handle()), uint32_t(b.handle()));
+          test(entries[x].triangle, entries[y].triangle);
         }
+      }
     }
   });
   if (large.empty()) return;
   std::vector<Box> small;
   small.reserve(boxes.size() - large.size());
   for (size_t n = 0; n < boxes.size(); ++n)
-    if (!is_large[n]) small.push_back(boxes[n]);
+    if (!is_large[n]) small.emplace_back(boxes[n].bbox(), n);
   auto report = [&](const Box& a, const Box& b) { test(uint32_t(a.handle()), uint32_t(b.handle())); };
   // Below this many boxes CGAL's segment tree scans instead of splitting further. Its default
   // (10) splits the long triangles of CAD cylinders, which share their ends' coordinates, over
@@ -327,6 +352,27 @@ void grid_candidate_pairs(std::vector<Box>& boxes, Test&& test) {
   CGAL::box_intersection_d<CGAL::Parallel_if_available_tag>(large.begin(), large.end(), small.begin(), small.end(), report, cutoff);
 }
 
+// The usable triangles around each vertex: star[first[v] .. first[v + 1]).
+struct VertexStars {
+  std::vector<uint32_t> first, star;
+  uint32_t size(size_t v) const { return first[v + 1] - first[v]; }
+};
+
+VertexStars vertex_stars(size_t points, const std::vector<Tri>& triangles, const std::vector<uint8_t>& usable) {
+  VertexStars s;
+  s.first.assign(points + 1, 0);
+  for (size_t t = 0; t < triangles.size(); ++t)
+    if (usable[t])
+      for (uint32_t v : triangles[t]) ++s.first[v + 1];
+  for (size_t v = 0; v < points; ++v) s.first[v + 1] += s.first[v];
+  s.star.resize(s.first.back());
+  std::vector<uint32_t> fill(s.first.begin(), s.first.end() - 1);
+  for (size_t t = 0; t < triangles.size(); ++t)
+    if (usable[t])
+      for (uint32_t v : triangles[t]) s.star[fill[v]++] = uint32_t(t);
+  return s;
+}
+
 // Vertices whose triangles form an unfolded fan: seen along the axis nearest to their common
 // normal, each covers an angular sector at the vertex turning the same way, and sorted by
 // angle the sectors follow one another without overlap, once round. Two such triangles that
@@ -335,21 +381,10 @@ void grid_candidate_pairs(std::vector<Box>& boxes, Test&& test) {
 // spokes whose boxes all overlap: the caps of a 2.4M-triangle assembly gave 576 million such
 // pairs, most of a minute of exact tests. Gaps between sectors (a missing spoke) are allowed;
 // only vertices with many triangles are looked at.
-std::vector<uint8_t> unfolded_fan_vertices(const std::vector<P3>& p, const std::vector<Tri>& triangles,
-                                           const std::vector<uint8_t>& usable) {
+std::vector<uint8_t> unfolded_fan_vertices(const std::vector<P3>& p, const std::vector<Tri>& triangles, const VertexStars& stars) {
   constexpr uint32_t min_fan = 16;
-  std::vector<uint32_t> first(p.size() + 1, 0);
-  for (size_t t = 0; t < triangles.size(); ++t)
-    if (usable[t])
-      for (uint32_t v : triangles[t]) ++first[v + 1];
-  for (size_t v = 0; v < p.size(); ++v) first[v + 1] += first[v];
-  std::vector<uint32_t> star(first.back());
-  {
-    std::vector<uint32_t> fill(first.begin(), first.end() - 1);
-    for (size_t t = 0; t < triangles.size(); ++t)
-      if (usable[t])
-        for (uint32_t v : triangles[t]) star[fill[v]++] = uint32_t(t);
-  }
+  const std::vector<uint32_t>& first = stars.first;
+  const std::vector<uint32_t>& star = stars.star;
   std::vector<uint8_t> fan(p.size(), 0);
   tbb::parallel_for(tbb::blocked_range<size_t>(0, p.size(), 4096), [&](const tbb::blocked_range<size_t>& r) {
     struct Sector {
@@ -411,6 +446,369 @@ std::vector<uint8_t> unfolded_fan_vertices(const std::vector<P3>& p, const std::
     }
   });
   return fan;
+}
+
+// Star-shaped pieces: the triangles of each such piece get its number, the others none. Two
+// triangles of such a piece meet only at their common vertices and edge, so their pairs need
+// no test. A CAD assembly is mostly such pieces (cylinders, pins, boxes, spheres), and their
+// long thin side triangles are what makes the pair search slow: the boxes of a tilted
+// cylinder's sides nearly all overlap, half a billion pairs on the 2.4M assembly.
+//
+// The proof: take a point O (the piece's mean vertex) and project the piece from O onto a
+// sphere around it. If that projection is one-to-one near every point of a closed piece, it
+// is a covering of the sphere, and a connected covering of a sphere is one-to-one: no two
+// points of the piece lie on one ray from O, so no two triangles meet but at what they share.
+// Checked, on the piece with its holes closed (below):
+// - closed and connected: every side of every triangle has exactly one neighbour, which runs
+//   it the other way;
+// - every triangle sees O strictly from the same side (CGAL's exact orientation predicate):
+//   each projects one-to-one, and two triangles across an edge project to opposite sides of
+//   it (their far corners lie on opposite sides of the plane through O and the edge);
+// - around every vertex, the projected triangles turn once round, not twice (a sum of angles
+//   in doubles: it is a whole number of turns, so a loose bound decides).
+// Holes (an STL's dropped triangles) are closed first by a fan around each hole's centroid,
+// for these checks only: if the closed-up piece is one-to-one, so is any part of it. Anything
+// unclear leaves the piece unlabelled, and its pairs are tested as before.
+constexpr uint32_t kNoPiece = kNoGroup;  // pieces are the pair search's groups
+
+// The side of `tri` that runs from a to b, or -1.
+int directed_side(const Tri& tri, uint32_t a, uint32_t b) {
+  for (int e = 0; e < 3; ++e)
+    if (tri[e] == a && tri[(e + 1) % 3] == b) return e;
+  return -1;
+}
+
+// Per triangle side (3 t + e, from corner e to corner e + 1): the triangle across it when the
+// edge has exactly these two usable triangles and they run it opposite ways, and whether it is
+// open (the edge's only usable triangle).
+struct SideLinks {
+  std::vector<uint32_t> across;
+  std::vector<uint8_t> open;
+};
+
+SideLinks side_links(const std::vector<Tri>& triangles, const std::vector<uint8_t>& usable) {
+  const EdgeTriangles edges = edge_triangles(triangles, &usable);
+  SideLinks out{std::vector<uint32_t>(3 * triangles.size(), kNoPiece), std::vector<uint8_t>(3 * triangles.size(), 0)};
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, edges.edges(), 4096), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t i = r.begin(); i != r.end(); ++i) {
+      const uint32_t x = edges.begin(i)[0];
+      uint32_t a = uint32_t(edges.keys[i] >> 32), b = uint32_t(edges.keys[i] & 0xffffffffu);
+      int ex = directed_side(triangles[x], a, b);
+      if (ex < 0) std::swap(a, b), ex = directed_side(triangles[x], a, b);
+      if (ex < 0) continue;  // a repeated corner
+      if (edges.size(i) == 1) {
+        out.open[3 * x + ex] = 1;
+        continue;
+      }
+      if (edges.size(i) != 2) continue;
+      const uint32_t y = edges.begin(i)[1];
+      const int ey = directed_side(triangles[y], b, a);
+      if (ey < 0) continue;  // both run it the same way
+      out.across[3 * x + ex] = y;
+      out.across[3 * y + ey] = x;
+    }
+  });
+  return out;
+}
+
+// The usable triangles with every hole closed by a fan of triangles around its centroid (a
+// new point). A hole is followed side by side, turning round each corner through the
+// triangles there. Holes that cannot be followed (non-manifold edges on the way) stay open.
+struct ClosedUp {
+  std::vector<P3> points;
+  std::vector<Tri> triangles;  // the given ones first, at their own indexes
+  std::vector<uint8_t> usable;
+};
+
+ClosedUp close_holes(const std::vector<P3>& p, const std::vector<Tri>& triangles, const std::vector<uint8_t>& usable) {
+  ClosedUp out{p, triangles, usable};
+  const SideLinks links = side_links(triangles, usable);
+  // The open side after side (t, e), which runs a -> b with a = t[e]: the hole runs b -> a and
+  // goes on from a along the next open side met turning round a.
+  constexpr uint32_t none = UINT32_MAX;
+  auto next_open = [&](uint32_t t, int e) -> uint32_t {
+    const uint32_t a = triangles[t][e];
+    for (int guard = 0; guard < 1 << 20; ++guard) {
+      const int s = (e + 2) % 3;  // t's side that ends at a
+      if (links.open[3 * t + s]) return 3 * t + uint32_t(s);
+      const uint32_t nb = links.across[3 * t + s];
+      if (nb == kNoPiece) return none;
+      e = directed_side(triangles[nb], a, triangles[t][s]);
+      t = nb;
+    }
+    return none;
+  };
+  auto close_with_fan = [&](const uint32_t* corners, size_t count) {
+    if (count < 3) return;
+    double m[3] = {0, 0, 0};
+    for (size_t k = 0; k < count; ++k)
+      for (int i = 0; i < 3; ++i) m[i] += p[corners[k]][i] / double(count);
+    const uint32_t centre = uint32_t(out.points.size());
+    out.points.emplace_back(m[0], m[1], m[2]);
+    for (size_t k = 0; k < count; ++k) {
+      out.triangles.push_back({corners[k], corners[(k + 1) % count], centre});
+      out.usable.push_back(1);
+    }
+  };
+  std::vector<uint8_t> visited(links.open.size(), 0);
+  std::vector<uint32_t> loop;  // a walk round holes: their corners in order
+  std::vector<uint32_t> stack, stack_at(p.size(), none);
+  for (uint32_t start = 0; start < links.open.size(); ++start) {
+    if (!links.open[start] || visited[start]) continue;
+    loop.clear();
+    uint32_t side = start;
+    while (side != none && !visited[side]) {
+      visited[side] = 1;
+      loop.push_back(triangles[side / 3][(side % 3 + 1) % 3]);  // the hole side's first corner, b
+      side = next_open(side / 3, int(side % 3));
+    }
+    if (side != start) continue;  // not followed back round to its start
+    // Where the walk comes back to a corner it passed (a cap's centre between two of its
+    // dropped triangles), the stretch since then is a hole of its own: the walk turns into the
+    // next hole at that corner, because a hole cannot be crossed to find its own other side.
+    for (uint32_t w : loop) {
+      if (stack_at[w] == none) {
+        stack_at[w] = uint32_t(stack.size());
+        stack.push_back(w);
+        continue;
+      }
+      close_with_fan(stack.data() + stack_at[w], stack.size() - stack_at[w]);
+      for (size_t k = stack_at[w] + 1; k < stack.size(); ++k) stack_at[stack[k]] = none;
+      stack.resize(stack_at[w] + 1);
+    }
+    close_with_fan(stack.data(), stack.size());
+    for (uint32_t w : stack) stack_at[w] = none;
+    stack.clear();
+  }
+  return out;
+}
+
+// Seen from `o`, do the triangles around vertex c turn once round it? (Their orientation
+// towards o is checked exactly elsewhere; here only the number of turns.) Each angle must be
+// well clear of 0 and of a half turn, so that its rounding cannot matter; a nearly edge-on
+// view (a flat piece seen from its own plane) gives no answer.
+bool turns_once(const std::vector<P3>& p, const std::vector<Tri>& triangles, const VertexStars& stars, uint32_t c, const P3& o) {
+  const Vec3 w = normalized(Vec3{p[c].x() - o.x(), p[c].y() - o.y(), p[c].z() - o.z()});
+  auto flat = [&](const P3& q) {  // q - c, with its part along the ray from o taken out
+    const Vec3 d{q.x() - p[c].x(), q.y() - p[c].y(), q.z() - p[c].z()};
+    return d - w * dot(d, w);
+  };
+  constexpr double clear = 1e-7;  // sine of the smallest angle trusted
+  double turn = 0;
+  for (uint32_t k = stars.first[c]; k < stars.first[c + 1]; ++k) {
+    const Tri& t = triangles[stars.star[k]];
+    int i = 0;
+    while (t[i] != c) ++i;
+    const Vec3 a = flat(p[t[(i + 1) % 3]]), b = flat(p[t[(i + 2) % 3]]);
+    const double sine = dot(cross(a, b), w), scale = norm(a) * norm(b);
+    if (!(std::fabs(sine) > clear * scale)) return false;
+    turn += std::fabs(std::atan2(sine, dot(a, b)));
+  }
+  return std::fabs(turn - 2 * M_PI) < 1.0;
+}
+
+std::vector<uint32_t> star_shaped_pieces(const std::vector<P3>& given_points, const std::vector<Tri>& given_triangles,
+                                         const std::vector<uint8_t>& given_usable) {
+  const ClosedUp closed = close_holes(given_points, given_triangles, given_usable);
+  const std::vector<P3>& p = closed.points;
+  const std::vector<Tri>& triangles = closed.triangles;
+  const std::vector<uint8_t>& usable = closed.usable;
+  const size_t n = triangles.size();
+  const std::vector<uint32_t> across = side_links(triangles, usable).across;
+  // Pieces: triangles joined across such sides (a serial walk; cheap beside the rest), and
+  // each piece's mean vertex (of its triangles' corners).
+  std::vector<uint32_t> piece(n, kNoPiece);
+  std::vector<uint8_t> ok;  // per piece
+  std::vector<P3> centre;
+  std::vector<uint32_t> queue;
+  for (uint32_t seed = 0; seed < n; ++seed) {
+    if (!usable[seed] || piece[seed] != kNoPiece) continue;
+    const uint32_t id = uint32_t(ok.size());
+    ok.push_back(1);
+    piece[seed] = id;
+    queue.assign(1, seed);
+    double sum[3] = {0, 0, 0};
+    for (size_t q = 0; q < queue.size(); ++q) {
+      for (uint32_t v : triangles[queue[q]])
+        for (int k = 0; k < 3; ++k) sum[k] += p[v][k];
+      for (int e = 0; e < 3; ++e) {
+        const uint32_t nb = across[3 * queue[q] + e];
+        if (nb == kNoPiece) {
+          ok[id] = 0;  // open, non-manifold, inconsistently oriented or beside a degenerate triangle
+        } else if (piece[nb] == kNoPiece) {
+          piece[nb] = id;
+          queue.push_back(nb);
+        }
+      }
+    }
+    const double corners = 3.0 * double(queue.size());
+    centre.emplace_back(sum[0] / corners, sum[1] / corners, sum[2] / corners);
+  }
+  // Triangles: each sees its piece's centre strictly from one side, the same for the piece.
+  std::vector<int8_t> facing(n, 0);
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 4096), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t t = r.begin(); t != r.end(); ++t) {
+      if (piece[t] == kNoPiece || !ok[piece[t]]) continue;
+      const Tri& tri = triangles[t];
+      facing[t] = int8_t(CGAL::orientation(p[tri[0]], p[tri[1]], p[tri[2]], centre[piece[t]]));
+    }
+  });
+  std::vector<int8_t> piece_facing(ok.size(), 0);
+  for (size_t t = 0; t < n; ++t) {
+    const uint32_t id = piece[t];
+    if (id == kNoPiece || !ok[id]) continue;
+    if (facing[t] == 0 || (piece_facing[id] != 0 && facing[t] != piece_facing[id])) ok[id] = 0;
+    piece_facing[id] = facing[t];
+  }
+  // Vertices: all their triangles in one piece, turning once round.
+  const VertexStars stars = vertex_stars(p.size(), triangles, usable);
+  std::vector<uint8_t> vertex_ok(p.size(), 1);
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, p.size(), 4096), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t c = r.begin(); c != r.end(); ++c) {
+      if (stars.size(c) == 0) continue;
+      const uint32_t id = piece[stars.star[stars.first[c]]];
+      if (!ok[id]) continue;
+      bool one_piece = true;
+      for (uint32_t k = stars.first[c]; k < stars.first[c + 1] && one_piece; ++k) one_piece = piece[stars.star[k]] == id;
+      vertex_ok[c] = one_piece && turns_once(p, triangles, stars, uint32_t(c), centre[id]);
+    }
+  });
+  for (size_t c = 0; c < p.size(); ++c)
+    if (!vertex_ok[c])
+      for (uint32_t k = stars.first[c]; k < stars.first[c + 1]; ++k) ok[piece[stars.star[k]]] = 0;
+  piece.resize(given_triangles.size());  // the fans were for the checks only
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, piece.size(), 4096), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t t = r.begin(); t != r.end(); ++t)
+      if (piece[t] != kNoPiece && !ok[piece[t]]) piece[t] = kNoPiece;
+  });
+  return piece;
+}
+
+// Long triangles cut into slabs for the pair search. A CAD cylinder's side triangle runs its
+// whole length and is a thousandth as wide; tilted, its box holds a large part of every
+// neighbouring part, and it met millions of their triangles there. Cut across its longest axis
+// into slabs about a grid cell thick, each slab's part of it has a box of about a cell, and
+// the search meets only what is near it. A pair of triangles is then met once per pair of
+// their boxes that overlap; it is tested at the first such pair (met_earlier).
+struct SlabBoxes {
+  FillVector<Bounds> boxes;
+  std::vector<uint32_t> owner;  // triangle of each box
+  std::vector<uint32_t> first;  // boxes of triangle t: first[t] .. first[t + 1] (none if unusable)
+
+  uint32_t count(uint32_t t) const { return first[t + 1] - first[t]; }
+};
+
+CGAL::Bbox_3 triangle_box(const std::vector<P3>& p, const Tri& t) { return p[t[0]].bbox() + p[t[1]].bbox() + p[t[2]].bbox(); }
+int longest_axis(const CGAL::Bbox_3& b) {
+  int axis = 0;
+  for (int k = 1; k < 3; ++k)
+    if (b.max(k) - b.min(k) > b.max(axis) - b.min(axis)) axis = k;
+  return axis;
+}
+
+// The box of the part of triangle v with coordinate `axis` in [s0, s1], widened by `pad` so
+// that rounding leaves none of it out: the corners inside the slab and where the sides cross
+// its two planes.
+CGAL::Bbox_3 slab_part_box(const std::array<const P3*, 3>& v, int axis, double s0, double s1, double pad) {
+  double lo[3] = {HUGE_VAL, HUGE_VAL, HUGE_VAL}, hi[3] = {-HUGE_VAL, -HUGE_VAL, -HUGE_VAL};
+  auto add = [&](double x, double y, double z) {
+    const double q[3] = {x, y, z};
+    for (int k = 0; k < 3; ++k) lo[k] = std::min(lo[k], q[k]), hi[k] = std::max(hi[k], q[k]);
+  };
+  for (int e = 0; e < 3; ++e) {
+    const P3 &a = *v[e], &b = *v[(e + 1) % 3];
+    if (a[axis] >= s0 && a[axis] <= s1) add(a.x(), a.y(), a.z());
+    for (double s : {s0, s1})
+      if ((a[axis] - s) * (b[axis] - s) < 0) {
+        const double t = (s - a[axis]) / (b[axis] - a[axis]);
+        add(a.x() + t * (b.x() - a.x()), a.y() + t * (b.y() - a.y()), a.z() + t * (b.z() - a.z()));
+      }
+  }
+  lo[axis] = std::max(lo[axis], s0), hi[axis] = std::min(hi[axis], s1);
+  return CGAL::Bbox_3(lo[0] - pad, lo[1] - pad, lo[2] - pad, hi[0] + pad, hi[1] + pad, hi[2] + pad);
+}
+
+// Slab k of a triangle cut into `count` along the longest axis of its box b: [s0, s1].
+std::pair<double, double> slab_range(const CGAL::Bbox_3& b, int axis, uint32_t k, uint32_t count) {
+  const double width = (b.max(axis) - b.min(axis)) / count;
+  return {k == 0 ? b.min(axis) : b.min(axis) + k * width, k + 1 == count ? b.max(axis) : b.min(axis) + (k + 1) * width};
+}
+
+SlabBoxes slab_boxes(const std::vector<P3>& p, const std::vector<Tri>& triangles, const std::vector<uint8_t>& usable) {
+  const size_t n = triangles.size();
+  SlabBoxes out;
+  out.first.assign(n + 1, 0);
+  std::vector<double> extents(n, -1);
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 4096), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t t = r.begin(); t != r.end(); ++t)
+      if (usable[t]) {
+        const CGAL::Bbox_3 b = triangle_box(p, triangles[t]);
+        extents[t] = b.max(longest_axis(b)) - b.min(longest_axis(b));
+      }
+  });
+  std::vector<double> sizes;
+  for (double e : extents)
+    if (e >= 0) sizes.push_back(e);
+  if (sizes.empty()) return out;
+  std::nth_element(sizes.begin(), sizes.begin() + sizes.size() / 2, sizes.end());
+  // About the grid's cell (grid_candidate_pairs); at most 16 slabs (measured on the 2.4M
+  // assembly: 8, 16 and 32 as fast; more slabs, more boxes to sort).
+  const double slab = 2 * sizes[sizes.size() / 2];
+  constexpr double most_slabs = 16;
+  for (size_t t = 0; t < n; ++t) {
+    const double length = extents[t];
+    const uint32_t slabs = length < 0 ? 0 : slab > 0 && length > 4 * slab ? uint32_t(std::min(most_slabs, std::ceil(length / slab))) : 1;
+    out.first[t + 1] = out.first[t] + slabs;
+  }
+  out.boxes.resize(out.first[n]);  // filled below, in parallel
+  out.owner.resize(out.first[n]);
+  const double eps = std::numeric_limits<double>::epsilon();
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 1024), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t t = r.begin(); t != r.end(); ++t) {
+      const uint32_t count = out.count(uint32_t(t));
+      for (uint32_t k = 0; k < count; ++k) out.owner[out.first[t] + k] = uint32_t(t);
+      if (count == 0) continue;
+      const CGAL::Bbox_3 b = triangle_box(p, triangles[t]);
+      if (count == 1) {
+        out.boxes[out.first[t]] = Bounds::of(b);
+        continue;
+      }
+      const Tri& tri = triangles[t];
+      const std::array<const P3*, 3> v{&p[tri[0]], &p[tri[1]], &p[tri[2]]};
+      const int axis = longest_axis(b);
+      const double magnitude = std::max({std::fabs(b.xmin()), std::fabs(b.xmax()), std::fabs(b.ymin()), std::fabs(b.ymax()),
+                                         std::fabs(b.zmin()), std::fabs(b.zmax())});
+      const double pad = 1e-9 * (b.max(axis) - b.min(axis)) + 64 * eps * magnitude;
+      for (uint32_t k = 0; k < count; ++k) {
+        const auto [s0, s1] = slab_range(b, axis, k, count);
+        out.boxes[out.first[t] + k] = Bounds::of(slab_part_box(v, axis, s0, s1, pad));
+      }
+    }
+  });
+  return out;
+}
+
+// Boxes a of triangle x and b of triangle y overlap: did an earlier pair of their boxes (in the
+// order of (a, b)) overlap too? Then that pair was the one to test. Only boxes that can reach
+// the other triangle along the cut axis are looked at.
+bool met_earlier(const SlabBoxes& s, const std::vector<P3>& p, const std::vector<Tri>& triangles, uint32_t x, uint32_t a,
+                 uint32_t y, uint32_t b) {
+  if (s.count(x) == 1 && s.count(y) == 1) return false;
+  const CGAL::Bbox_3 bx = triangle_box(p, triangles[x]), by = triangle_box(p, triangles[y]);
+  auto reaching = [&](uint32_t t, const CGAL::Bbox_3& own, const CGAL::Bbox_3& other) -> std::pair<uint32_t, uint32_t> {
+    const uint32_t count = s.count(t);
+    if (count == 1) return {s.first[t], s.first[t] + 1};
+    const int axis = longest_axis(own);
+    const double width = (own.max(axis) - own.min(axis)) / count;
+    const double lo = std::floor((other.min(axis) - own.min(axis)) / width) - 1, hi = std::floor((other.max(axis) - own.min(axis)) / width) + 2;
+    return {s.first[t] + uint32_t(std::clamp(lo, 0.0, double(count))), s.first[t] + uint32_t(std::clamp(hi, 0.0, double(count)))};
+  };
+  const auto [x0, x1] = reaching(x, bx, by);
+  const auto [y0, y1] = reaching(y, by, bx);
+  for (uint32_t i = x0; i <= a && i < x1; ++i)
+    for (uint32_t j = y0; j < y1 && (i < a || j < b); ++j)
+      if (s.boxes[i].overlaps(s.boxes[j])) return true;
+  return false;
 }
 
 // A triangle's plane in doubles with a bound on its error, for a cheap first test of the
@@ -475,19 +873,22 @@ std::vector<TrianglePair> find_intersecting_pairs(const std::vector<Vec3>& point
   tbb::parallel_for(tbb::blocked_range<size_t>(0, triangles.size(), 4096), [&](const tbb::blocked_range<size_t>& r) {
     for (size_t t = r.begin(); t != r.end(); ++t) usable[t] = !is_degenerate(p, triangles[t]);
   });
-  std::vector<Box> boxes;
-  boxes.reserve(triangles.size());
-  for (size_t t = 0; t < triangles.size(); ++t)
-    if (usable[t]) {
-      const Tri& tri = triangles[t];
-      boxes.emplace_back(p[tri[0]].bbox() + p[tri[1]].bbox() + p[tri[2]].bbox(), t);
-    }
-  const std::vector<uint8_t> fan = unfolded_fan_vertices(p, triangles, usable);
+  SlabBoxes slabs = slab_boxes(p, triangles, usable);
+  const VertexStars stars = vertex_stars(p.size(), triangles, usable);
+  const std::vector<uint8_t> fan = unfolded_fan_vertices(p, triangles, stars);
+  const std::vector<uint32_t> piece = star_shaped_pieces(p, triangles, usable);
   const std::vector<PlaneBound> planes = plane_bounds(points, triangles, usable);
   // Exact tests inside the (parallel) candidate callback: fans and long thin CAD triangles give
   // hundreds of millions of overlapping boxes, too many to store as candidates first.
   tbb::enumerable_thread_specific<std::vector<TrianglePair>> found;
-  grid_candidate_pairs(boxes, [&](uint32_t x, uint32_t y) {
+  std::vector<uint32_t> box_piece(slabs.boxes.size());
+  for (size_t k = 0; k < box_piece.size(); ++k) box_piece[k] = piece[slabs.owner[k]];
+  grid_candidate_pairs(slabs.boxes, box_piece, [&](uint32_t box_x, uint32_t box_y) {
+    uint32_t x = slabs.owner[box_x], y = slabs.owner[box_y];
+    if (x == y) return;  // two slabs of one triangle
+    if (piece[x] != kNoPiece && piece[x] == piece[y]) return;  // see star_shaped_pieces
+    if (x > y) std::swap(x, y), std::swap(box_x, box_y);
+    if (met_earlier(slabs, p, triangles, x, box_x, y, box_y)) return;
     const Tri &tx = triangles[x], &ty = triangles[y];
     int shared = 0;
     uint32_t common = 0;
@@ -502,6 +903,14 @@ std::vector<TrianglePair> find_intersecting_pairs(const std::vector<Vec3>& point
   for (const auto& local : found) out.insert(out.end(), local.begin(), local.end());
   std::sort(out.begin(), out.end(), [](const TrianglePair& u, const TrianglePair& v) { return u.a != v.a ? u.a < v.a : u.b < v.b; });
   return out;
+}
+
+std::vector<uint32_t> star_shaped_pieces(const std::vector<Vec3>& points, const std::vector<Tri>& triangles) {
+  std::vector<P3> p(points.size());
+  for (size_t i = 0; i < points.size(); ++i) p[i] = to_point(points[i]);
+  std::vector<uint8_t> usable(triangles.size());
+  for (size_t t = 0; t < triangles.size(); ++t) usable[t] = !is_degenerate(p, triangles[t]);
+  return star_shaped_pieces(p, triangles, usable);
 }
 
 std::vector<uint32_t> intersecting_triangles(const std::vector<Vec3>& points, const std::vector<Tri>& triangles) {

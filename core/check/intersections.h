@@ -23,6 +23,12 @@ std::vector<TrianglePair> find_intersecting_pairs(const std::vector<Vec3>& point
 std::vector<TrianglePair> find_intersecting_pairs_with(const std::vector<Vec3>& points, const std::vector<Tri>& triangles,
                                                        const std::vector<uint32_t>& subset);
 
+// Per triangle: the number of the piece it belongs to when that piece is closed (up to holes,
+// which are closed for the check) and star-shaped around its mean vertex, else UINT32_MAX.
+// Two triangles of such a piece meet only at what they share, so the pair search skips their
+// pairs; exposed for tests.
+std::vector<uint32_t> star_shaped_pieces(const std::vector<Vec3>& points, const std::vector<Tri>& triangles);
+
 // Triangles that intersect another or are degenerate, sorted, each once.
 std::vector<uint32_t> intersecting_triangles(const std::vector<Vec3>& points, const std::vector<Tri>& triangles);
 
