@@ -888,7 +888,6 @@ std::vector<TrianglePair> find_intersecting_pairs(const std::vector<Vec3>& point
     if (x == y) return;  // two slabs of one triangle
     if (piece[x] != kNoPiece && piece[x] == piece[y]) return;  // see star_shaped_pieces
     if (x > y) std::swap(x, y), std::swap(box_x, box_y);
-    if (met_earlier(slabs, p, triangles, x, box_x, y, box_y)) return;
     const Tri &tx = triangles[x], &ty = triangles[y];
     int shared = 0;
     uint32_t common = 0;
@@ -897,7 +896,9 @@ std::vector<TrianglePair> find_intersecting_pairs(const std::vector<Vec3>& point
         if (a == b) ++shared, common = a;
     if (shared == 1 && fan[common]) return;  // apart: see unfolded_fan_vertices
     if (shared <= 1 && (clearly_beside(points, planes[x], tx, ty) || clearly_beside(points, planes[y], ty, tx))) return;
-    if (triangles_intersect(p, tx, ty)) found.local().push_back({std::min(x, y), std::max(x, y)});
+    // The cheap proofs above may run once per pair of slabs that meet; the exact test, once.
+    if (met_earlier(slabs, p, triangles, x, box_x, y, box_y)) return;
+    if (triangles_intersect(p, tx, ty)) found.local().push_back({x, y});
   });
   std::vector<TrianglePair> out;
   for (const auto& local : found) out.insert(out.end(), local.begin(), local.end());
