@@ -2,6 +2,7 @@
 // triangulation (fit), final validation and the report.
 #include <tbb/task_arena.h>
 #include <tbb/parallel_for.h>
+#include <tbb/task_group.h>
 
 #include <chrono>
 #include <cmath>
@@ -132,11 +133,25 @@ WrapResult run_pipeline(const Mesh& input, const WrapParams& params, ProgressSin
   report.control_sizes = controls.described;
   check_cancel(progress);
 
+  // The input's nearest-point index (clearance for gap closure and leaks, then projection) is
+  // built while the grid is refined: its tree build is serial (CGAL's), seconds on millions of
+  // triangles, and the refinement leaves a core idle in its own serial steps.
+  std::unique_ptr<fit::SurfaceIndex> index_built;
+  tbb::task_group index_task;
+  index_task.run([&] { index_built = std::make_unique<fit::SurfaceIndex>(prepared.mesh.points, prepared.mesh.triangles); });
   grid::RefineResult refined;
-  {
+  try {
     StageTimer timer("refine", report.stages);
     refined = grid::build_refined_grid(prepared, params, base, controls, progress);
+  } catch (...) {
+    index_task.wait();  // it reads the prepared input
+    throw;
   }
+  {
+    StageTimer timer("index", report.stages);  // what is left of the index build after refining
+    index_task.wait();
+  }
+  const fit::SurfaceIndex& index = *index_built;
   report.cells_per_level = refined.touched_per_level;
   if (controls.contact()) {
     report.contact.rules = params.contact_prevention.size();
@@ -153,8 +168,6 @@ WrapResult run_pipeline(const Mesh& input, const WrapParams& params, ProgressSin
   grid::AdaptiveGrid& g = *refined.grid;
   check_cancel(progress);
 
-  // The input's nearest-point index: clearance for gap closure and leaks, then projection.
-  fit::SurfaceIndex index(prepared.mesh.points, prepared.mesh.triangles);
 
   int32_t label;
   std::vector<grid::Coord> anchors;
