@@ -255,7 +255,7 @@ struct GridEntry {
 };
 constexpr uint32_t kNoGroup = UINT32_MAX;
 
-// `group` (per box, or empty): pairs within one group are left out (see star_shaped_pieces).
+// `group` (per box): pairs within one group are left out (see star_shaped_pieces).
 template <typename Test>
 void grid_candidate_pairs(const FillVector<Bounds>& boxes, const std::vector<uint32_t>& group, Test&& test) {
   if (boxes.size() < 2) return;
@@ -309,7 +309,7 @@ void grid_candidate_pairs(const FillVector<Bounds>& boxes, const std::vector<uin
       size_t e = offset[n];
       for (int64_t i = lo[0]; i <= hi[0]; ++i)
         for (int64_t j = lo[1]; j <= hi[1]; ++j)
-          for (int64_t k = lo[2]; k <= hi[2]; ++k) entries[e++] = {key(i, j, k), group.empty() ? kNoGroup : group[n], uint32_t(n)};
+          for (int64_t k = lo[2]; k <= hi[2]; ++k) entries[e++] = {key(i, j, k), group[n], uint32_t(n)};
     }
   });
   tbb::parallel_sort(entries.begin(), entries.end(), [](const GridEntry& x, const GridEntry& y) {
@@ -471,13 +471,6 @@ std::vector<uint8_t> unfolded_fan_vertices(const std::vector<P3>& p, const std::
 // unclear leaves the piece unlabelled, and its pairs are tested as before.
 constexpr uint32_t kNoPiece = kNoGroup;  // pieces are the pair search's groups
 
-// The side of `tri` that runs from a to b, or -1.
-int directed_side(const Tri& tri, uint32_t a, uint32_t b) {
-  for (int e = 0; e < 3; ++e)
-    if (tri[e] == a && tri[(e + 1) % 3] == b) return e;
-  return -1;
-}
-
 // Per triangle side (3 t + e, from corner e to corner e + 1): the triangle across it when the
 // edge has exactly these two usable triangles and they run it opposite ways, and whether it is
 // open (the edge's only usable triangle).
@@ -514,15 +507,18 @@ SideLinks side_links(const std::vector<Tri>& triangles, const std::vector<uint8_
 // The usable triangles with every hole closed by a fan of triangles around its centroid (a
 // new point). A hole is followed side by side, turning round each corner through the
 // triangles there. Holes that cannot be followed (non-manifold edges on the way) stay open.
+// Their side links follow from the walk: a fan triangle's first side lies across the open
+// side it closes, its other two across its neighbours in the fan (no second edge sort).
 struct ClosedUp {
   std::vector<P3> points;
   std::vector<Tri> triangles;  // the given ones first, at their own indexes
   std::vector<uint8_t> usable;
+  std::vector<uint32_t> across;  // as SideLinks::across, for all of them
 };
 
 ClosedUp close_holes(const std::vector<P3>& p, const std::vector<Tri>& triangles, const std::vector<uint8_t>& usable) {
-  ClosedUp out{p, triangles, usable};
-  const SideLinks links = side_links(triangles, usable);
+  ClosedUp out{p, triangles, usable, {}};
+  SideLinks links = side_links(triangles, usable);
   // The open side after side (t, e), which runs a -> b with a = t[e]: the hole runs b -> a and
   // goes on from a along the next open side met turning round a.
   constexpr uint32_t none = UINT32_MAX;
@@ -538,48 +534,60 @@ ClosedUp close_holes(const std::vector<P3>& p, const std::vector<Tri>& triangles
     }
     return none;
   };
-  auto close_with_fan = [&](const uint32_t* corners, size_t count) {
+  // A hole side: its first corner, and the open triangle side it runs back along.
+  struct HoleSide {
+    uint32_t corner, open_side;
+  };
+  std::vector<uint32_t>& across = links.across;  // grows with the fans
+  auto close_with_fan = [&](const HoleSide* sides, size_t count) {
     if (count < 3) return;
     double m[3] = {0, 0, 0};
     for (size_t k = 0; k < count; ++k)
-      for (int i = 0; i < 3; ++i) m[i] += p[corners[k]][i] / double(count);
+      for (int i = 0; i < 3; ++i) m[i] += p[sides[k].corner][i] / double(count);
     const uint32_t centre = uint32_t(out.points.size());
     out.points.emplace_back(m[0], m[1], m[2]);
+    const uint32_t first = uint32_t(out.triangles.size());
     for (size_t k = 0; k < count; ++k) {
-      out.triangles.push_back({corners[k], corners[(k + 1) % count], centre});
+      const uint32_t f = first + uint32_t(k), next = first + uint32_t((k + 1) % count), prev = first + uint32_t((k + count - 1) % count);
+      out.triangles.push_back({sides[k].corner, sides[(k + 1) % count].corner, centre});
       out.usable.push_back(1);
+      across.insert(across.end(), {sides[k].open_side / 3, next, prev});
+      across[sides[k].open_side] = f;
     }
   };
   std::vector<uint8_t> visited(links.open.size(), 0);
-  std::vector<uint32_t> loop;  // a walk round holes: their corners in order
-  std::vector<uint32_t> stack, stack_at(p.size(), none);
+  std::vector<HoleSide> loop, stack;  // a walk round holes, in order
+  std::vector<uint32_t> stack_at(p.size(), none);
   for (uint32_t start = 0; start < links.open.size(); ++start) {
     if (!links.open[start] || visited[start]) continue;
     loop.clear();
     uint32_t side = start;
     while (side != none && !visited[side]) {
       visited[side] = 1;
-      loop.push_back(triangles[side / 3][(side % 3 + 1) % 3]);  // the hole side's first corner, b
+      loop.push_back({triangles[side / 3][(side % 3 + 1) % 3], side});  // the hole side's first corner, b
       side = next_open(side / 3, int(side % 3));
     }
     if (side != start) continue;  // not followed back round to its start
     // Where the walk comes back to a corner it passed (a cap's centre between two of its
     // dropped triangles), the stretch since then is a hole of its own: the walk turns into the
     // next hole at that corner, because a hole cannot be crossed to find its own other side.
-    for (uint32_t w : loop) {
+    for (const HoleSide& h : loop) {
+      const uint32_t w = h.corner;
       if (stack_at[w] == none) {
         stack_at[w] = uint32_t(stack.size());
-        stack.push_back(w);
+        stack.push_back(h);
         continue;
       }
       close_with_fan(stack.data() + stack_at[w], stack.size() - stack_at[w]);
-      for (size_t k = stack_at[w] + 1; k < stack.size(); ++k) stack_at[stack[k]] = none;
-      stack.resize(stack_at[w] + 1);
+      for (size_t k = stack_at[w] + 1; k < stack.size(); ++k) stack_at[stack[k].corner] = none;
+      stack.resize(stack_at[w]);
+      stack.push_back(h);  // w goes on, now with the side leaving it
     }
     close_with_fan(stack.data(), stack.size());
-    for (uint32_t w : stack) stack_at[w] = none;
+    for (const HoleSide& h : stack) stack_at[h.corner] = none;
     stack.clear();
   }
+  out.across = std::move(across);
   return out;
 }
 
@@ -614,7 +622,7 @@ std::vector<uint32_t> star_shaped_pieces(const std::vector<P3>& given_points, co
   const std::vector<Tri>& triangles = closed.triangles;
   const std::vector<uint8_t>& usable = closed.usable;
   const size_t n = triangles.size();
-  const std::vector<uint32_t> across = side_links(triangles, usable).across;
+  const std::vector<uint32_t>& across = closed.across;
   // Pieces: triangles joined across such sides (a serial walk; cheap beside the rest), and
   // each piece's mean vertex (of its triangles' corners).
   std::vector<uint32_t> piece(n, kNoPiece);

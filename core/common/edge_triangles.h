@@ -58,4 +58,11 @@ inline EdgeTriangles edge_triangles(const std::vector<Tri>& triangles, const std
   return out;
 }
 
+// The side of `tri` that runs from a to b (corner e to corner e + 1), or -1.
+inline int directed_side(const Tri& tri, uint32_t a, uint32_t b) {
+  for (int e = 0; e < 3; ++e)
+    if (tri[e] == a && tri[(e + 1) % 3] == b) return e;
+  return -1;
+}
+
 }  // namespace vdbwrap

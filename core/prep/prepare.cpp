@@ -115,11 +115,6 @@ size_t orient_pieces(const std::vector<Vec3>& points, std::vector<Tri>& triangle
   // directions; a breadth-first walk flips neighbours that disagree.
   const EdgeTriangles edge_tris = edge_triangles(triangles);
 
-  auto has_directed = [](const Tri& t, uint32_t a, uint32_t b) {
-    for (int e = 0; e < 3; ++e)
-      if (t[e] == a && t[(e + 1) % 3] == b) return true;
-    return false;
-  };
   // Per triangle side, in parallel (the edge lookups were most of the walk): the triangle
   // across it when the edge has exactly two, and whether that one runs the edge the same way.
   constexpr uint32_t none = UINT32_MAX;
@@ -134,7 +129,7 @@ size_t orient_pieces(const std::vector<Vec3>& points, std::vector<Tri>& triangle
         const uint32_t* nb = edge_tris.begin(edge);
         const uint32_t n = nb[0] == t ? nb[1] : nb[0];
         across[3 * t + e] = n;
-        same_way[3 * t + e] = has_directed(triangles[n], a, b) ? 1 : 0;
+        same_way[3 * t + e] = directed_side(triangles[n], a, b) >= 0 ? 1 : 0;
       }
   });
 
