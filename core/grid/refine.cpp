@@ -8,6 +8,7 @@
 #include <cmath>
 #include <unordered_map>
 
+#include "common/fill_vector.h"
 #include "common/grid_key.h"
 #include "common/vec.h"
 #include "vdbwrap/errors.h"
@@ -20,6 +21,19 @@ struct CellTris {
   Coord c;
   std::vector<uint32_t> tris;
 };
+
+// A level-0 cell the input meets and the triangle that meets it. The cell's coordinates (at
+// least -1, below 2^20) are packed into one key, so that the sort by (cell, triangle) compares
+// two integers: it orders the cells as Coord's x, y, z order does.
+struct CellHit {
+  uint64_t cell;
+  uint32_t triangle;
+  bool operator<(const CellHit& o) const { return cell != o.cell ? cell < o.cell : triangle < o.triangle; }
+};
+uint64_t pack_cell(int x, int y, int z) { return uint64_t(x + 1) << 42 | uint64_t(y + 1) << 21 | uint64_t(z + 1); }
+Coord unpack_cell(uint64_t key) {
+  return Coord(int(key >> 42) - 1, int((key >> 21) & 0x1fffff) - 1, int(key & 0x1fffff) - 1);
+}
 
 struct FeatureSegments {
   // per triangle: indices into segments (feature edges and intersection segments it carries)
@@ -63,10 +77,10 @@ namespace {
 // parts near a cell quickly.
 class ContactBuckets {
  public:
-  ContactBuckets(const std::vector<std::pair<Coord, uint32_t>>& hits, const prep::PreparedInput& in,
-                 const SizeControls& sc) {
-    for (const auto& [c, t] : hits)
-      if (sc.part_in_contact_rule[size_t(in.mesh.part_of(t))]) cells_[key(c)].push_back(t);
+  template <typename Hits>
+  ContactBuckets(const Hits& hits, const prep::PreparedInput& in, const SizeControls& sc) {
+    for (const CellHit& hit : hits)
+      if (sc.part_in_contact_rule[size_t(in.mesh.part_of(hit.triangle))]) cells_[key(unpack_cell(hit.cell))].push_back(hit.triangle);
   }
 
   // True when the cell [lo, lo+h]^3, grown by h on every side, meets a triangle of a part
@@ -128,7 +142,7 @@ RefineResult build_refined_grid(const prep::PreparedInput& in, const WrapParams&
   const double margin_fraction = 1e-3;
 
   // Level 0: every triangle against the cells of its bounding box, in parallel.
-  tbb::enumerable_thread_specific<std::vector<std::pair<Coord, uint32_t>>> hits_tls;
+  tbb::enumerable_thread_specific<std::vector<CellHit>> hits_tls;
   const double h0 = base;
   tbb::parallel_for(tbb::blocked_range<size_t>(0, tris.size(), 512), [&](const tbb::blocked_range<size_t>& r) {
     auto& hits = hits_tls.local();
@@ -142,21 +156,27 @@ RefineResult build_refined_grid(const prep::PreparedInput& in, const WrapParams&
         hi[k] = int(std::floor((tb.hi[k] - origin[k]) / h0 + margin_fraction));
       }
       for_cells_overlapping(a, b, c, origin, h0, h0 * (0.5 + margin_fraction), lo, hi,
-                            [&](int x, int y, int z) { hits.emplace_back(Coord(x, y, z), uint32_t(t)); });
+                            [&](int x, int y, int z) { hits.push_back({pack_cell(x, y, z), uint32_t(t)}); });
     }
   });
-  std::vector<std::pair<Coord, uint32_t>> hits;
-  for (auto& h : hits_tls) hits.insert(hits.end(), h.begin(), h.end());
-  tbb::parallel_sort(hits.begin(), hits.end(), [](const auto& u, const auto& v) {
-    return u.first != v.first ? u.first < v.first : u.second < v.second;
+  // Gathered in parallel: tens of millions of hits on a 2M-triangle assembly, and a serial
+  // copy of them was seconds.
+  std::vector<std::vector<CellHit>*> parts;
+  std::vector<size_t> offsets{0};
+  for (auto& h : hits_tls) parts.push_back(&h), offsets.push_back(offsets.back() + h.size());
+  FillVector<CellHit> hits(offsets.back());
+  tbb::parallel_for(size_t(0), parts.size(), [&](size_t i) {
+    std::copy(parts[i]->begin(), parts[i]->end(), hits.begin() + offsets[i]);
+    std::vector<CellHit>().swap(*parts[i]);
   });
+  tbb::parallel_sort(hits.begin(), hits.end());
   std::unique_ptr<ContactBuckets> contact;
   if (sc.contact()) contact = std::make_unique<ContactBuckets>(hits, in, sc);
   std::vector<CellTris> level_cells;
   for (size_t i = 0; i < hits.size();) {
-    CellTris ct{hits[i].first, {}};
+    CellTris ct{unpack_cell(hits[i].cell), {}};
     size_t j = i;
-    for (; j < hits.size() && hits[j].first == hits[i].first; ++j) ct.tris.push_back(hits[j].second);
+    for (; j < hits.size() && hits[j].cell == hits[i].cell; ++j) ct.tris.push_back(hits[j].triangle);
     level_cells.push_back(std::move(ct));
     i = j;
   }
