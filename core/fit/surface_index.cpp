@@ -16,6 +16,7 @@
 
 #include "common/box_overlap.h"
 #include "common/closest_point.h"
+#include "common/thread_blocks.h"
 #include "common/vec.h"
 
 namespace vdbwrap::fit {
@@ -340,7 +341,7 @@ SurfaceIndex::SurfaceIndex(const std::vector<Vec3>& points, const std::vector<Tr
     uint64_t cell;
     uint32_t triangle;
   };
-  tbb::enumerable_thread_specific<std::vector<Entry>> entries;
+  ThreadBlocks<Entry> entries;
   tbb::enumerable_thread_specific<std::vector<std::pair<uint32_t, CGAL::Bbox_3>>> parts;
   tbb::parallel_for(tbb::blocked_range<uint32_t>(0, uint32_t(triangles.size()), 1024), [&](const tbb::blocked_range<uint32_t>& r) {
     std::vector<uint64_t> cells;
@@ -366,8 +367,7 @@ SurfaceIndex::SurfaceIndex(const std::vector<Vec3>& points, const std::vector<Tr
       for (uint64_t key : cells) my_entries.push_back({key, f});
     }
   });
-  std::vector<Entry> cut;
-  for (auto& local : entries) cut.insert(cut.end(), local.begin(), local.end()), std::vector<Entry>().swap(local);
+  FillVector<Entry> cut = gather(entries);
   tbb::parallel_sort(cut.begin(), cut.end(), [](const Entry& x, const Entry& y) { return x.cell != y.cell ? x.cell < y.cell : x.triangle < y.triangle; });
   std::vector<std::pair<uint32_t, CGAL::Bbox_3>> large;
   for (auto& local : parts) large.insert(large.end(), local.begin(), local.end());

@@ -8,8 +8,8 @@
 #include <cmath>
 #include <unordered_map>
 
-#include "common/fill_vector.h"
 #include "common/grid_key.h"
+#include "common/thread_blocks.h"
 #include "common/vec.h"
 #include "vdbwrap/errors.h"
 
@@ -142,10 +142,10 @@ RefineResult build_refined_grid(const prep::PreparedInput& in, const WrapParams&
   const double margin_fraction = 1e-3;
 
   // Level 0: every triangle against the cells of its bounding box, in parallel.
-  tbb::enumerable_thread_specific<std::vector<CellHit>> hits_tls;
+  ThreadBlocks<CellHit> hits_tls;
   const double h0 = base;
   tbb::parallel_for(tbb::blocked_range<size_t>(0, tris.size(), 512), [&](const tbb::blocked_range<size_t>& r) {
-    auto& hits = hits_tls.local();
+    Blocks<CellHit>& hits = hits_tls.local();
     for (size_t t = r.begin(); t != r.end(); ++t) {
       const Vec3 &a = pts[tris[t][0]], &b = pts[tris[t][1]], &c = pts[tris[t][2]];
       Box3 tb;
@@ -159,16 +159,8 @@ RefineResult build_refined_grid(const prep::PreparedInput& in, const WrapParams&
                             [&](int x, int y, int z) { hits.push_back({pack_cell(x, y, z), uint32_t(t)}); });
     }
   });
-  // Gathered in parallel: tens of millions of hits on a 2M-triangle assembly, and a serial
-  // copy of them was seconds.
-  std::vector<std::vector<CellHit>*> parts;
-  std::vector<size_t> offsets{0};
-  for (auto& h : hits_tls) parts.push_back(&h), offsets.push_back(offsets.back() + h.size());
-  FillVector<CellHit> hits(offsets.back());
-  tbb::parallel_for(size_t(0), parts.size(), [&](size_t i) {
-    std::copy(parts[i]->begin(), parts[i]->end(), hits.begin() + offsets[i]);
-    std::vector<CellHit>().swap(*parts[i]);
-  });
+  // Tens of millions of hits on a 2M-triangle assembly: gathered and sorted in parallel.
+  FillVector<CellHit> hits = gather(hits_tls);
   tbb::parallel_sort(hits.begin(), hits.end());
   std::unique_ptr<ContactBuckets> contact;
   if (sc.contact()) contact = std::make_unique<ContactBuckets>(hits, in, sc);
