@@ -168,7 +168,6 @@ WrapResult run_pipeline(const Mesh& input, const WrapParams& params, ProgressSin
   grid::AdaptiveGrid& g = *refined.grid;
   check_cancel(progress);
 
-
   int32_t label;
   std::vector<grid::Coord> anchors;
   {

@@ -870,17 +870,29 @@ bool clearly_beside(const std::vector<Vec3>& points, const PlaneBound& plane, co
   return side != 0;
 }
 
+// The points as CGAL points, and which triangles are not degenerate (the others take part in
+// no pair).
+struct ExactInput {
+  std::vector<P3> p;
+  std::vector<uint8_t> usable;
+};
+ExactInput exact_input(const std::vector<Vec3>& points, const std::vector<Tri>& triangles) {
+  ExactInput in{std::vector<P3>(points.size()), std::vector<uint8_t>(triangles.size(), 0)};
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, points.size(), 8192), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t i = r.begin(); i != r.end(); ++i) in.p[i] = to_point(points[i]);
+  });
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, triangles.size(), 4096), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t t = r.begin(); t != r.end(); ++t) in.usable[t] = !is_degenerate(in.p, triangles[t]);
+  });
+  return in;
+}
+
 }  // namespace
 
 std::vector<TrianglePair> find_intersecting_pairs(const std::vector<Vec3>& points, const std::vector<Tri>& triangles) {
-  std::vector<P3> p(points.size());
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, points.size(), 8192), [&](const tbb::blocked_range<size_t>& r) {
-    for (size_t i = r.begin(); i != r.end(); ++i) p[i] = to_point(points[i]);
-  });
-  std::vector<uint8_t> usable(triangles.size(), 0);
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, triangles.size(), 4096), [&](const tbb::blocked_range<size_t>& r) {
-    for (size_t t = r.begin(); t != r.end(); ++t) usable[t] = !is_degenerate(p, triangles[t]);
-  });
+  const ExactInput in = exact_input(points, triangles);
+  const std::vector<P3>& p = in.p;
+  const std::vector<uint8_t>& usable = in.usable;
   SlabBoxes slabs = slab_boxes(p, triangles, usable);
   const VertexStars stars = vertex_stars(p.size(), triangles, usable);
   const std::vector<uint8_t> fan = unfolded_fan_vertices(p, triangles, stars);
@@ -915,11 +927,8 @@ std::vector<TrianglePair> find_intersecting_pairs(const std::vector<Vec3>& point
 }
 
 std::vector<uint32_t> star_shaped_pieces(const std::vector<Vec3>& points, const std::vector<Tri>& triangles) {
-  std::vector<P3> p(points.size());
-  for (size_t i = 0; i < points.size(); ++i) p[i] = to_point(points[i]);
-  std::vector<uint8_t> usable(triangles.size());
-  for (size_t t = 0; t < triangles.size(); ++t) usable[t] = !is_degenerate(p, triangles[t]);
-  return star_shaped_pieces(p, triangles, usable);
+  const ExactInput in = exact_input(points, triangles);
+  return star_shaped_pieces(in.p, triangles, in.usable);
 }
 
 std::vector<uint32_t> intersecting_triangles(const std::vector<Vec3>& points, const std::vector<Tri>& triangles) {
