@@ -10,6 +10,7 @@
 #include "check/intersections.h"
 #include "common/float_round.h"
 #include "common/grid_key.h"
+#include "common/sorted_point_grid.h"
 #include "common/triangle_buckets.h"
 #include "common/vec.h"
 #include "vdbwrap/errors.h"
@@ -35,38 +36,41 @@ std::vector<uint32_t> invalid_triangles(const std::vector<Vec3>& points, const s
 namespace {
 
 // Nodes closer than min_separation to another node: coincident or nearly coincident
-// vertices break meshers and hide intersections, so they count as invalid. A hash grid with
-// cells of min_separation, updated as nodes move (stale entries are harmless: distances are
-// measured on current positions).
-class NodeBuckets {
+// vertices break meshers and hide intersections, so they count as invalid. The nodes'
+// starting positions sit in a sorted grid (built in parallel); the few that move later go
+// to a small hash grid as well (stale entries in either are harmless: distances are measured
+// on current positions).
+class NodeProximity {
  public:
-  NodeBuckets(const std::vector<Vec3>& p, double min_separation) : p_(p), sep2_(min_separation * min_separation), inv_(1.0 / min_separation) {
-    cells_.reserve(p.size());
-    for (uint32_t i = 0; i < p.size(); ++i) update(i);
-  }
+  NodeProximity(const std::vector<Vec3>& p, double min_separation)
+      : p_(p), sep_(min_separation), sep2_(min_separation * min_separation), start_(p, 1024 * min_separation) {}
   void update(uint32_t i) {
-    auto& list = cells_[key(p_[i])];
+    auto& list = moved_[grid_key(p_[i], start_.inverse_cell())];
     if (std::find(list.begin(), list.end(), i) == list.end()) list.push_back(i);
   }
   bool crowded(uint32_t i) const {
-    Key k = key(p_[i]);
-    for (int dx = -1; dx <= 1; ++dx)
-      for (int dy = -1; dy <= 1; ++dy)
-        for (int dz = -1; dz <= 1; ++dz) {
-          auto it = cells_.find({k.x + dx, k.y + dy, k.z + dz});
-          if (it == cells_.end()) continue;
+    const Vec3& q = p_[i];
+    auto near = [&](uint32_t j) { return j != i && norm2(q - p_[j]) < sep2_; };
+    if (start_.any_near(q, sep_, near)) return true;
+    if (moved_.empty()) return false;
+    const double r = 2 * sep_, inv = start_.inverse_cell();
+    const GridKey lo = grid_key(q - Vec3{r, r, r}, inv), hi = grid_key(q + Vec3{r, r, r}, inv);
+    for (int64_t x = lo.x; x <= hi.x; ++x)
+      for (int64_t y = lo.y; y <= hi.y; ++y)
+        for (int64_t z = lo.z; z <= hi.z; ++z) {
+          auto it = moved_.find({x, y, z});
+          if (it == moved_.end()) continue;
           for (uint32_t j : it->second)
-            if (j != i && norm2(p_[i] - p_[j]) < sep2_) return true;
+            if (near(j)) return true;
         }
     return false;
   }
 
  private:
-  using Key = GridKey;
-  Key key(const Vec3& q) const { return grid_key(q, inv_); }
   const std::vector<Vec3>& p_;
-  double sep2_, inv_;
-  std::unordered_map<Key, std::vector<uint32_t>, GridKeyHash> cells_;
+  double sep_, sep2_;
+  SortedPointGrid start_;
+  std::unordered_map<GridKey, std::vector<uint32_t>, GridKeyHash> moved_;
 };
 
 // Diagonal (0-2 or 1-3) of a quad whose midpoint lies nearer the input: the split that
@@ -291,7 +295,7 @@ FittedSurface fit_to_input(const extract::LatticeSurface& surf, const grid::Adap
     for (uint32_t v : tri)
       if (!free_can_move || !snapped[v]) flag[v] = 1;
   };
-  NodeBuckets nodes(p, 1e-3 * hf);
+  NodeProximity nodes(p, 1e-3 * hf);
   // A full check that came back complete (intersections tested too, not only small triangles)
   // and clean stays true while the local checks below keep it so: they test every triangle
   // around every moved node against all others, and nothing else moves. So the loop needs

@@ -14,6 +14,7 @@
 #include "common/exact_weld.h"
 #include "common/fill_vector.h"
 #include "common/grid_key.h"
+#include "common/sorted_point_grid.h"
 #include "common/vec.h"
 #include "vdbwrap/errors.h"
 
@@ -26,35 +27,13 @@ namespace {
 // ones need the ordered pass below: on most inputs none.
 std::vector<uint8_t> crowded_points(const std::vector<Vec3>& points, double tolerance) {
   const size_t n = points.size();
-  const double inv = 1.0 / (1024 * tolerance), reach = 2 * tolerance, tol2 = tolerance * tolerance;
-  struct Entry {
-    GridKey key;
-    uint32_t point;
-    bool operator<(const Entry& o) const {
-      return key.x != o.key.x ? key.x < o.key.x : key.y != o.key.y ? key.y < o.key.y : key.z != o.key.z ? key.z < o.key.z : point < o.point;
-    }
-  };
-  FillVector<Entry> entries(n);
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 8192), [&](const tbb::blocked_range<size_t>& r) {
-    for (size_t i = r.begin(); i != r.end(); ++i) entries[i] = {grid_key(points[i], inv), uint32_t(i)};
-  });
-  tbb::parallel_sort(entries.begin(), entries.end());
+  const double tol2 = tolerance * tolerance;
+  const SortedPointGrid grid(points, 1024 * tolerance);
   std::vector<uint8_t> crowded(n, 0);
   tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 4096), [&](const tbb::blocked_range<size_t>& r) {
     for (size_t i = r.begin(); i != r.end(); ++i) {
       const Vec3& p = points[i];
-      // Cells the tolerance box around p reaches (widened: a rounding never hides a match).
-      const GridKey lo = grid_key(p - Vec3{reach, reach, reach}, inv), hi = grid_key(p + Vec3{reach, reach, reach}, inv);
-      bool found = false;
-      for (int64_t x = lo.x; x <= hi.x && !found; ++x)
-        for (int64_t y = lo.y; y <= hi.y && !found; ++y)
-          for (int64_t z = lo.z; z <= hi.z && !found; ++z) {
-            const GridKey k{x, y, z};
-            auto it = std::lower_bound(entries.begin(), entries.end(), Entry{k, 0});
-            for (; it != entries.end() && it->key == k && !found; ++it)
-              found = it->point != i && norm2(points[it->point] - p) <= tol2;
-          }
-      crowded[i] = found ? 1 : 0;
+      crowded[i] = grid.any_near(p, tolerance, [&](uint32_t j) { return j != i && norm2(points[j] - p) <= tol2; }) ? 1 : 0;
     }
   });
   return crowded;
