@@ -159,7 +159,7 @@ FittedSurface fit_to_input(const extract::LatticeSurface& surf, const grid::Adap
   // The nearest input point of `from`, `offset` off the input on node i's side (the side
   // its lattice node is on, judged against the plane of the triangle hit: smoothing may
   // have carried `from` across a thin sheet).
-  auto project_on_side = [&](size_t i, const Vec3& from, const Vec3& lattice_foot, double lattice_distance) {
+  auto project_on_side = [&](size_t i, const Vec3& from) {
     auto hit = input.closest(from);
     const double lattice_side = dot(lattice[i] - hit.point, hit.normal);
     const Vec3 fallback = lattice_side >= 0 ? hit.normal : hit.normal * -1.0;
@@ -167,19 +167,23 @@ FittedSurface fit_to_input(const extract::LatticeSurface& surf, const grid::Adap
     double d = norm(away);
     const bool same_side = (dot(away, hit.normal) >= 0) == (lattice_side >= 0);
     Vec3 dir = (d > 1e-3 * offset && same_side) ? away * (1.0 / d) : fallback;
-    if (norm2(dir) == 0) dir = (lattice[i] - lattice_foot) * (1.0 / lattice_distance);
+    if (norm2(dir) == 0) {  // a degenerate input triangle: away from the input's point nearest the lattice node
+      const auto foot = input.closest(lattice[i]);
+      dir = (lattice[i] - foot.point) * (1.0 / std::sqrt(foot.squared_distance));
+    }
     Vec3 t = hit.point + dir * offset;
     if (norm(t - lattice[i]) > 3.0 * g.base_size()) t = lattice[i];  // a wild move: keep it off
     return t;
   };
-  std::vector<Vec3> target(n), lattice_foot(n);
-  std::vector<double> lattice_distance(n);
+  // A lattice node within the offset of the input stays where it is. (Asked as "is the input
+  // that near?", which is cheap for so small a radius: the nearest point itself is needed only
+  // for the others, from their smoothed positions.)
+  std::vector<Vec3> target(n);
+  std::vector<uint8_t> on_input(n);
   tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 256), [&](const tbb::blocked_range<size_t>& r) {
     for (size_t i = r.begin(); i != r.end(); ++i) {
-      auto side_hit = input.closest(lattice[i]);
-      lattice_foot[i] = side_hit.point;
-      lattice_distance[i] = std::sqrt(side_hit.squared_distance);
-      target[i] = lattice_distance[i] <= offset ? lattice[i] : project_on_side(i, smoothed[i], lattice_foot[i], lattice_distance[i]);
+      on_input[i] = input.within(lattice[i], offset);
+      target[i] = on_input[i] ? lattice[i] : project_on_side(i, smoothed[i]);
     }
   });
   if (progress && progress->cancelled()) throw Error(ErrorKind::Cancelled, "cancelled");
@@ -219,7 +223,7 @@ FittedSurface fit_to_input(const extract::LatticeSurface& surf, const grid::Adap
     }
     std::vector<uint32_t> relaxed;
     for (uint32_t i = 0; i < n; ++i)
-      if (relax[i] && lattice_distance[i] > offset) relaxed.push_back(i);
+      if (relax[i] && !on_input[i]) relaxed.push_back(i);
     for (int it = 0; it < 4; ++it) {
       std::vector<Vec3> moved(relaxed.size());
       tbb::parallel_for(tbb::blocked_range<size_t>(0, relaxed.size(), 256), [&](const tbb::blocked_range<size_t>& r) {
@@ -228,7 +232,7 @@ FittedSurface fit_to_input(const extract::LatticeSurface& surf, const grid::Adap
           Vec3 avg{0, 0, 0};
           for (uint32_t j : neighbours[i]) avg = avg + target[j];
           avg = avg * (1.0 / double(std::max<size_t>(1, neighbours[i].size())));
-          moved[k] = project_on_side(i, avg, lattice_foot[i], lattice_distance[i]);
+          moved[k] = project_on_side(i, avg);
         }
       });
       for (size_t k = 0; k < relaxed.size(); ++k) target[relaxed[k]] = moved[k];

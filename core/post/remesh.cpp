@@ -46,6 +46,7 @@ struct Region {
   Substrate substrate;
   double cell = 0;                     // smallest cell size at its nodes
   double old_far = -1;                 // farthest sample of the replaced surface from the input (once known)
+  std::vector<Vec3> old_feet;          // the input points nearest those samples (known with old_far)
   RegionFill on_input, by_ears;
 };
 
@@ -445,7 +446,11 @@ class Remesher {
     for (uint32_t f : reg.triangles) old_tris.push_back(s_.triangles[f]);
     if (reg.old_far < 0) {  // the same for both fills: the first one to get here measures it
       reg.old_far = 0;
-      for (const Vec3& q : samples_of(s_.points, old_tris)) reg.old_far = std::max(reg.old_far, input_distance(q));
+      for (const Vec3& q : samples_of(s_.points, old_tris)) {
+        const fit::SurfaceIndex::Hit hit = ref_.input->closest(q - ref_.origin);
+        reg.old_far = std::max(reg.old_far, std::sqrt(hit.squared_distance));
+        reg.old_feet.push_back(hit.point + ref_.origin);
+      }
     }
     const double bound = std::max(prm_.max_deviation, reg.old_far);
     for (const Vec3& q : samples_of(points, tris))
@@ -465,8 +470,7 @@ class Remesher {
     const double eps = 1e-9 * std::max(box.diagonal(), pr.target);
     // Input points: the feet of points on the old surface, and the corners and edges of the
     // input under it (ridges and tips are where a rebuild cuts corners).
-    std::vector<Vec3> near_input;
-    for (const Vec3& q : samples_of(s_.points, old_tris)) near_input.push_back(ref_.input->closest(q - ref_.origin).point + ref_.origin);
+    std::vector<Vec3> near_input = reg.old_feet;
     Box3 reach = box;
     for (int k = 0; k < 3; ++k) reach.lo[k] -= pr.target, reach.hi[k] += pr.target;
     auto inside = [&](const Vec3& q) {
