@@ -275,6 +275,7 @@ WrapResult run_pipeline(const Mesh& input, const WrapParams& params, ProgressSin
   quality_ref.feature_samples = post::sample_sharp_edges(prepared, 1e-3 * prepared.diagonal);
   quality_ref.finest_size = report.finest_size;
   quality_ref.thresholds = params.quality;
+  post::NormalDeviationMemo deviation_memo;  // the final analysis re-measures only what changed
   const double repair_bound = 0.5 * base;  // the intersection repair moves nothing farther than half a base cell
   auto repair_if_intersecting = [&]() {
     const post::WrapRepairOutcome r = post::repair_intersections(surface, repair_bound, params.float_coordinates, progress);
@@ -288,7 +289,7 @@ WrapResult run_pipeline(const Mesh& input, const WrapParams& params, ProgressSin
     StageTimer timer("remesh", report.stages);
     if (progress) progress->progress("remesh", 0.0, "quality analysis of " + std::to_string(surface.triangles.size()) + " triangles");
     std::vector<uint8_t> flags;
-    report.quality.before = post::analyse_quality(surface.points, surface.triangles, surface.cell_size, quality_ref, &flags);
+    report.quality.before = post::analyse_quality(surface.points, surface.triangles, surface.cell_size, quality_ref, &flags, nullptr, &deviation_memo);
     if (params.remesh) {
       post::RemeshParams rp;
       // Rebuilds are held to the coarsening's tolerance (its default when coarsening is off).
@@ -365,7 +366,7 @@ WrapResult run_pipeline(const Mesh& input, const WrapParams& params, ProgressSin
   }
   {
     StageTimer timer("quality", report.stages);
-    report.quality.after = post::analyse_quality(surface.points, surface.triangles, surface.cell_size, quality_ref, nullptr, &crossing);
+    report.quality.after = post::analyse_quality(surface.points, surface.triangles, surface.cell_size, quality_ref, nullptr, &crossing, &deviation_memo);
   }
 
   if (params.compute_distances) {

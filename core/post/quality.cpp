@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 
 #include "check/intersections.h"
 #include "common/edge_key.h"
@@ -78,9 +79,33 @@ double normal_deviation_deg(const Vec3& a, const Vec3& b, const Vec3& c, double 
   return best;
 }
 
+NormalDeviationMemo::Key NormalDeviationMemo::key(const Vec3& a, const Vec3& b, const Vec3& c, double cell) {
+  Key k;
+  const double values[10] = {a[0], a[1], a[2], b[0], b[1], b[2], c[0], c[1], c[2], cell};
+  std::memcpy(k.data(), values, sizeof values);
+  return k;
+}
+
+size_t NormalDeviationMemo::KeyHash::operator()(const Key& k) const {
+  uint64_t h = 0x9e3779b97f4a7c15ULL;
+  for (uint64_t x : k) h = (h ^ x) * 0xff51afd7ed558ccdULL, h ^= h >> 32;
+  return size_t(h);
+}
+
+bool NormalDeviationMemo::find(const Vec3& a, const Vec3& b, const Vec3& c, double cell, double& deviation) const {
+  const auto it = known_.find(key(a, b, c, cell));
+  if (it == known_.end()) return false;
+  deviation = it->second;
+  return true;
+}
+
+void NormalDeviationMemo::add(const Vec3& a, const Vec3& b, const Vec3& c, double cell, double deviation) {
+  known_.emplace(key(a, b, c, cell), deviation);
+}
+
 QualityCounts analyse_quality(const std::vector<Vec3>& p, const std::vector<Tri>& tris, const std::vector<double>& cell_size,
                               const QualityReference& ref, std::vector<uint8_t>* flags_out,
-                              const std::vector<uint32_t>* intersecting) {
+                              const std::vector<uint32_t>* intersecting, NormalDeviationMemo* memo) {
   const QualityThresholds& t = ref.thresholds;
   QualityCounts q;
   q.triangles = tris.size();
@@ -112,11 +137,20 @@ QualityCounts analyse_quality(const std::vector<Vec3>& p, const std::vector<Tri>
         if (len > t.long_edge * std::max(cell_size[u], cell_size[v])) flags[f] |= kLongEdge;
       }
       if (ref.input) {
-        deviation[f] = normal_deviation_deg(a, b, c, cell, ref);
+        if (!memo || !memo->find(a, b, c, cell, deviation[f])) deviation[f] = normal_deviation_deg(a, b, c, cell, ref);
         if (deviation[f] > t.normal_deviation_deg) flags[f] |= kNormalDeviation;
       }
     }
   });
+
+  if (memo && ref.input) {
+    memo->reserve(tris.size());
+    for (uint32_t f = 0; f < tris.size(); ++f) {
+      const Tri& tri = tris[f];
+      const double cell = std::min({cell_size[tri[0]], cell_size[tri[1]], cell_size[tri[2]]});
+      memo->add(p[tri[0]], p[tri[1]], p[tri[2]], cell, deviation[f]);
+    }
+  }
 
   // Edges are counted once each (an edge defect flags both its triangles).
   std::vector<std::pair<uint64_t, uint8_t>> edges;

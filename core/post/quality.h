@@ -3,7 +3,9 @@
 // uncharacteristic length for the local cell size, or approximate the input poorly (normal
 // off the input's, sharp edges of the input lost), and counts each kind.
 #pragma once
+#include <array>
 #include <cstdint>
+#include <unordered_map>
 #include <vector>
 
 #include "fit/surface_index.h"
@@ -50,11 +52,32 @@ uint8_t shape_flags(const Vec3& a, const Vec3& b, const Vec3& c, double cell, co
 // compare with).
 double normal_deviation_deg(const Vec3& a, const Vec3& b, const Vec3& c, double cell, const QualityReference& ref);
 
+// Normal deviations measured before, by triangle: its corners in order and its cell size,
+// compared bit for bit (the value is a function of these alone). The final analysis of a wrap
+// meets mostly triangles the first one measured, and asks the input only about the others
+// (its nearest-point queries were most of that analysis).
+class NormalDeviationMemo {
+ public:
+  bool find(const Vec3& a, const Vec3& b, const Vec3& c, double cell, double& deviation) const;
+  void add(const Vec3& a, const Vec3& b, const Vec3& c, double cell, double deviation);
+  void reserve(size_t n) { known_.reserve(n); }
+
+ private:
+  using Key = std::array<uint64_t, 10>;
+  struct KeyHash {
+    size_t operator()(const Key& k) const;
+  };
+  static Key key(const Vec3& a, const Vec3& b, const Vec3& c, double cell);
+  std::unordered_map<Key, double, KeyHash> known_;
+};
+
 // Flags every triangle (flags: one byte per triangle, DefectFlag bits; an edge defect flags
 // both its triangles) and counts the defects. cell_size: per point. Intersections are found
-// with exact predicates unless `intersecting` gives them (sorted triangle ids).
+// with exact predicates unless `intersecting` gives them (sorted triangle ids). A memo, when
+// given, answers the normal deviations it knows and learns the others.
 QualityCounts analyse_quality(const std::vector<Vec3>& points, const std::vector<Tri>& triangles,
                               const std::vector<double>& cell_size, const QualityReference& ref,
-                              std::vector<uint8_t>* flags = nullptr, const std::vector<uint32_t>* intersecting = nullptr);
+                              std::vector<uint8_t>* flags = nullptr, const std::vector<uint32_t>* intersecting = nullptr,
+                              NormalDeviationMemo* memo = nullptr);
 
 }  // namespace vdbwrap::post
