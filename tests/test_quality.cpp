@@ -354,6 +354,35 @@ TEST(RegionFill, RefusesAContourThatFoldsOverItselfInItsPlane) {
   EXPECT_FALSE(fill_by_ear_clipping(pr).ok);
 }
 
+TEST(Quality, DeviationMemoAnswersKnownTrianglesAndMeasuresChangedOnes) {
+  const Mesh cube = box_mesh({0, 0, 0}, {1, 1, 1});
+  auto setup = setup_for(cube, 0.05);
+  PostSurface s = post_surface(cube_with_slivers(), 0.05);
+  const QualityCounts plain = analyse_quality(s.points, s.triangles, s.cell_size, setup->ref);
+  NormalDeviationMemo memo;
+  const QualityCounts first = analyse_quality(s.points, s.triangles, s.cell_size, setup->ref, nullptr, nullptr, &memo);
+  EXPECT_EQ(first.normal_deviation, plain.normal_deviation);
+  EXPECT_EQ(first.max_normal_deviation_deg, plain.max_normal_deviation_deg);
+
+  // A node lifted off the top face: its triangles are new to the memo and measured again.
+  const Tri& lifted_tri = s.triangles[0];
+  s.points[lifted_tri[0]][2] += 0.02;
+  const QualityCounts moved_plain = analyse_quality(s.points, s.triangles, s.cell_size, setup->ref);
+  const QualityCounts moved_memo = analyse_quality(s.points, s.triangles, s.cell_size, setup->ref, nullptr, nullptr, &memo);
+  EXPECT_GT(moved_plain.max_normal_deviation_deg, plain.max_normal_deviation_deg);
+  EXPECT_EQ(moved_memo.normal_deviation, moved_plain.normal_deviation);
+  EXPECT_EQ(moved_memo.max_normal_deviation_deg, moved_plain.max_normal_deviation_deg);
+
+  // What the memo holds is what the analysis takes: a planted value shows up in the counts.
+  NormalDeviationMemo planted;
+  const Tri& t = s.triangles[5];
+  const double cell = std::min({s.cell_size[t[0]], s.cell_size[t[1]], s.cell_size[t[2]]});
+  planted.add(s.points[t[0]], s.points[t[1]], s.points[t[2]], cell, 89.0);
+  const QualityCounts with_planted = analyse_quality(s.points, s.triangles, s.cell_size, setup->ref, nullptr, nullptr, &planted);
+  EXPECT_EQ(with_planted.max_normal_deviation_deg, 89.0);
+  EXPECT_EQ(with_planted.normal_deviation, moved_plain.normal_deviation + 1);
+}
+
 // ---- remeshing of bad regions -------------------------------------------------------------
 
 TEST(Remesh, RebuildsSliversOnAClosedSurface) {
