@@ -193,11 +193,12 @@ TEST(Intersections, FansMeetOnlyAtTheirCentreUnlessTheyOverlapOrFold) {
   EXPECT_FALSE(check::triangle_pair_intersects(p, {0, 1, 2}, {0, 3, 4}));
 }
 
-// The pair search buckets triangles on a grid sized by the typical triangle and sends the
-// ones spanning many cells to CGAL's box intersection. Against every pair tested directly, on
-// a soup of small triangles, long slivers, large triangles and a flat fan (many in one cell),
-// with shared vertices and exact touches on cell boundaries: the same pairs, each once.
-TEST(Intersections, PairSearchFindsEveryPairOnce) {
+// The pair search buckets triangles on a grid sized by the typical triangle; the ones spanning
+// many cells are tested against all boxes directly when they are few, else they go to CGAL's
+// box intersection. Against every pair tested directly, on a soup of small triangles, long
+// slivers, large triangles (few, and many) and a flat fan (many in one cell), with shared
+// vertices and exact touches on cell boundaries: the same pairs, each once.
+static void expect_pair_search_finds_every_pair_once(int long_ones) {
   std::mt19937 rng(11);
   std::uniform_real_distribution<double> u(0.0, 1.0);
   Mesh m;
@@ -210,7 +211,7 @@ TEST(Intersections, PairSearchFindsEveryPairOnce) {
     const Vec3 o{std::round(u(rng) * 100) / 100, std::round(u(rng) * 100) / 100, std::round(u(rng) * 100) / 100};
     add(o, o + Vec3{0.02, 0, 0}, o + Vec3{0, 0.01 * std::round(u(rng) * 2 + 1), 0.01 * std::round(u(rng) * 2)});
   }
-  for (int k = 0; k < 30; ++k) {  // slivers and large ones
+  for (int k = 0; k < long_ones; ++k) {  // slivers and large ones
     const Vec3 a{u(rng), u(rng), u(rng)}, b{u(rng), u(rng), u(rng)};
     add(a, b, a + Vec3{0.003, 0.002 * u(rng), 0.001});
     add(a, b, Vec3{u(rng), u(rng), u(rng)});
@@ -226,11 +227,14 @@ TEST(Intersections, PairSearchFindsEveryPairOnce) {
       if (!check::triangle_is_degenerate(m.points, m.triangles[b]) && check::triangle_pair_intersects(m.points, m.triangles[a], m.triangles[b]))
         expected.push_back({a, b});
   }
-  ASSERT_GT(expected.size(), 100u);
+  ASSERT_GT(expected.size(), 20u);
   std::vector<std::pair<uint32_t, uint32_t>> found;
   for (const auto& p : check::find_intersecting_pairs(m.points, m.triangles)) found.push_back({p.a, p.b});
   EXPECT_EQ(found, expected);
 }
+
+TEST(Intersections, PairSearchFindsEveryPairOnceAmongFewLargeTriangles) { expect_pair_search_finds_every_pair_once(4); }
+TEST(Intersections, PairSearchFindsEveryPairOnceAmongManyLargeTriangles) { expect_pair_search_finds_every_pair_once(200); }
 
 // Pieces proved closed and star-shaped skip their own pairs, and long triangles are cut into
 // slabs for the search. On tilted CAD cylinders crossing each other (one with two dropped
