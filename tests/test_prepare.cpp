@@ -9,6 +9,7 @@
 
 #include "check/intersections.h"
 #include "common/exact_weld.h"
+#include "common/sorted_point_grid.h"
 #include "common/vec.h"
 #include "prep/prepare.h"
 #include "test_meshes.h"
@@ -72,6 +73,33 @@ TEST(Weld, CopiesAndClustersWeldLikeTheOrderedGreedyPass) {
 
 // Enough points for the exact weld's matching to be cut into many slices, copies spread far
 // apart in the input, +0 beside -0: the same numbering as a map filled point by point.
+// The sorted point grid's "any point this close?" against every pair measured directly:
+// clusters of points a little closer and a little farther apart than the distance asked,
+// some straddling cell boundaries (cells of 1, points near integer coordinates), and negative
+// coordinates.
+TEST(SortedPointGrid, FindsEveryPointWithinTheDistance) {
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> u(-3.0, 3.0), jitter(-0.002, 0.002);
+  std::vector<Vec3> points;
+  for (int k = 0; k < 400; ++k) {
+    const Vec3 centre{std::round(u(rng)) + jitter(rng), std::round(u(rng)) + jitter(rng), u(rng)};
+    points.push_back(centre);
+    if (k % 3 == 0) points.push_back(centre + Vec3{jitter(rng), jitter(rng), jitter(rng)});
+  }
+  const double within = 0.002;
+  const SortedPointGrid grid(points, 1.0);
+  size_t crowded = 0;
+  for (uint32_t i = 0; i < points.size(); ++i) {
+    bool expected = false;
+    for (uint32_t j = 0; j < points.size(); ++j) expected |= j != i && norm(points[j] - points[i]) <= within;
+    const bool found = grid.any_near(points[i], within, [&](uint32_t j) { return j != i && norm(points[j] - points[i]) <= within; });
+    EXPECT_EQ(found, expected) << "point " << i;
+    crowded += found ? 1 : 0;
+  }
+  EXPECT_GT(crowded, 20u);
+  EXPECT_LT(crowded, points.size() / 2);
+}
+
 TEST(ExactWeld, ManySlicesNumberPointsLikeAMapFilledInOrder) {
   std::mt19937 rng(5);
   std::uniform_int_distribution<int> grid(-40, 40);

@@ -18,6 +18,20 @@
 
 namespace vdbwrap {
 
+// Calls visit(key) for every cell (of side 1 / inv_cell) that the box of half-width `reach`
+// around q reaches, the box widened by its own width so that a rounding in the cell keys
+// never hides one. Stops at the first visit that returns true, and returns whether one did.
+template <typename Visit>
+bool any_cell_near(const Vec3& q, double reach, double inv_cell, Visit&& visit) {
+  const double r = 2 * reach;
+  const GridKey lo = grid_key(q - Vec3{r, r, r}, inv_cell), hi = grid_key(q + Vec3{r, r, r}, inv_cell);
+  for (int64_t x = lo.x; x <= hi.x; ++x)
+    for (int64_t y = lo.y; y <= hi.y; ++y)
+      for (int64_t z = lo.z; z <= hi.z; ++z)
+        if (visit(GridKey{x, y, z})) return true;
+  return false;
+}
+
 class SortedPointGrid {
  public:
   // `cell` should be much wider than the distances asked about, so that most queries look in
@@ -31,22 +45,16 @@ class SortedPointGrid {
 
   double inverse_cell() const { return inv_; }
 
-  // Calls visit(j) for the points j of every cell the box of half-width `reach` around q
-  // reaches (a superset of the points within `reach`; the box is widened by its own width, so
-  // a rounding in the cell keys never hides one). Stops at the first visit that returns true,
-  // and returns whether one did.
+  // Calls visit(j) for the points j of every cell any_cell_near(q, reach) visits (a superset
+  // of the points within `reach`). Stops at the first visit that returns true, and returns
+  // whether one did.
   template <typename Visit>
   bool any_near(const Vec3& q, double reach, Visit&& visit) const {
-    const double r = 2 * reach;
-    const GridKey lo = grid_key(q - Vec3{r, r, r}, inv_), hi = grid_key(q + Vec3{r, r, r}, inv_);
-    for (int64_t x = lo.x; x <= hi.x; ++x)
-      for (int64_t y = lo.y; y <= hi.y; ++y)
-        for (int64_t z = lo.z; z <= hi.z; ++z) {
-          const GridKey k{x, y, z};
-          for (auto it = std::lower_bound(entries_.begin(), entries_.end(), Entry{k, 0}); it != entries_.end() && it->key == k; ++it)
-            if (visit(it->point)) return true;
-        }
-    return false;
+    return any_cell_near(q, reach, inv_, [&](const GridKey& k) {
+      for (auto it = std::lower_bound(entries_.begin(), entries_.end(), Entry{k, 0}); it != entries_.end() && it->key == k; ++it)
+        if (visit(it->point)) return true;
+      return false;
+    });
   }
 
  private:

@@ -53,17 +53,10 @@ class NodeProximity {
     auto near = [&](uint32_t j) { return j != i && norm2(q - p_[j]) < sep2_; };
     if (start_.any_near(q, sep_, near)) return true;
     if (moved_.empty()) return false;
-    const double r = 2 * sep_, inv = start_.inverse_cell();
-    const GridKey lo = grid_key(q - Vec3{r, r, r}, inv), hi = grid_key(q + Vec3{r, r, r}, inv);
-    for (int64_t x = lo.x; x <= hi.x; ++x)
-      for (int64_t y = lo.y; y <= hi.y; ++y)
-        for (int64_t z = lo.z; z <= hi.z; ++z) {
-          auto it = moved_.find({x, y, z});
-          if (it == moved_.end()) continue;
-          for (uint32_t j : it->second)
-            if (near(j)) return true;
-        }
-    return false;
+    return any_cell_near(q, sep_, start_.inverse_cell(), [&](const GridKey& k) {
+      auto it = moved_.find(k);
+      return it != moved_.end() && std::any_of(it->second.begin(), it->second.end(), near);
+    });
   }
 
  private:
