@@ -14,7 +14,6 @@
 #include "common/fill_vector.h"
 #include "common/grid_key.h"
 #include "common/vec.h"
-#include "vdbwrap/mesh.h"
 
 namespace vdbwrap {
 

@@ -123,6 +123,7 @@ QualityCounts analyse_quality(const std::vector<Vec3>& p, const std::vector<Tri>
 
   // Shape, edges and normals, per triangle.
   std::vector<double> min_angle(tris.size(), 180), deviation(tris.size(), -1);
+  std::vector<uint8_t> measured(tris.size(), 0);  // asked of the input here (not known to the memo)
   tbb::parallel_for(tbb::blocked_range<size_t>(0, tris.size(), 512), [&](const tbb::blocked_range<size_t>& r) {
     for (size_t f = r.begin(); f != r.end(); ++f) {
       const Tri& tri = tris[f];
@@ -137,15 +138,15 @@ QualityCounts analyse_quality(const std::vector<Vec3>& p, const std::vector<Tri>
         if (len > t.long_edge * std::max(cell_size[u], cell_size[v])) flags[f] |= kLongEdge;
       }
       if (ref.input) {
-        if (!memo || !memo->find(a, b, c, cell, deviation[f])) deviation[f] = normal_deviation_deg(a, b, c, cell, ref);
+        if (!memo || !memo->find(a, b, c, cell, deviation[f])) deviation[f] = normal_deviation_deg(a, b, c, cell, ref), measured[f] = 1;
         if (deviation[f] > t.normal_deviation_deg) flags[f] |= kNormalDeviation;
       }
     }
   });
 
-  if (memo && ref.input) {
-    memo->reserve(tris.size());
+  if (memo && ref.input) {  // only what it did not know: the final analysis adds the few changed triangles
     for (uint32_t f = 0; f < tris.size(); ++f) {
+      if (!measured[f]) continue;
       const Tri& tri = tris[f];
       const double cell = std::min({cell_size[tri[0]], cell_size[tri[1]], cell_size[tri[2]]});
       memo->add(p[tri[0]], p[tri[1]], p[tri[2]], cell, deviation[f]);

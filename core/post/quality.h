@@ -60,7 +60,6 @@ class NormalDeviationMemo {
  public:
   bool find(const Vec3& a, const Vec3& b, const Vec3& c, double cell, double& deviation) const;
   void add(const Vec3& a, const Vec3& b, const Vec3& c, double cell, double deviation);
-  void reserve(size_t n) { known_.reserve(n); }
 
  private:
   using Key = std::array<uint64_t, 10>;
