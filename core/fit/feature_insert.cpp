@@ -1,6 +1,7 @@
 #include "fit/feature_insert.h"
 
 #include <tbb/blocked_range.h>
+#include <tbb/concurrent_unordered_map.h>
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 
@@ -13,6 +14,7 @@
 #include <unordered_map>
 
 #include "check/intersections.h"
+#include "common/bitwise_key.h"
 #include "common/closest_point.h"
 #include "common/float_round.h"
 #include "common/grid_key.h"
@@ -62,6 +64,20 @@ struct Scratch {
   uint32_t stamp = 0;
   std::vector<Box3> writes;
 };
+
+// A memo of the input's answers, shared by the planning threads: `compute` runs when the key
+// is new (two threads may both run it, with the same value).
+template <typename Map, typename Compute>
+auto remembered(Map& known, const typename Map::key_type& key, Compute&& compute) {
+  const auto it = known.find(key);
+  if (it != known.end()) return it->second;
+  const auto value = compute();
+  known.emplace(key, value);
+  return value;
+}
+BitwiseKey<9> corners_key(const Corners& c) {
+  return bitwise_key<9>({c[0][0], c[0][1], c[0][2], c[1][0], c[1][1], c[1][2], c[2][0], c[2][1], c[2][2]});
+}
 
 Box3 box_around(const Vec3& q, double r) {
   Box3 box;
@@ -339,7 +355,7 @@ class Inserter {
       const double d = norm(away);
       Vec3 target = d > 0 ? q + away * (std::min(prm_.offset, d) / d) : q;
       // A curve point behind the input (a buried intersection line) is out of reach.
-      if (!input_.in_view(from - origin_, q - origin_, prm_.offset)) continue;
+      if (!in_view(from, q)) continue;
       pl.refused = true;
       if (prm_.float_coordinates) target = round_to_float(target);
       // Near an end of the edge, that end goes (unless it is on a curve already); else a split,
@@ -457,9 +473,21 @@ class Inserter {
     return {(c[0] + c[1] + c[2]) * (1.0 / 3.0), (c[0] + c[1]) * 0.5, (c[1] + c[2]) * 0.5, (c[2] + c[0]) * 0.5};
   }
   double deviation(const Corners& c) const {
-    double d2 = 0;
-    for (const Vec3& q : probes(c)) d2 = std::max(d2, input_.squared_distance(q - origin_));
-    return std::sqrt(d2);
+    return remembered(deviation_known_, corners_key(c), [&] {
+      double d2 = 0;
+      for (const Vec3& q : probes(c)) d2 = std::max(d2, input_.squared_distance(q - origin_));
+      return std::sqrt(d2);
+    });
+  }
+  // The input's answers are kept bit for bit by their arguments: a point is planned again each
+  // time the wrap near it changes, and about half of these questions (most of the stage's time)
+  // had been asked before.
+  bool in_view(const Vec3& from, const Vec3& q) const {
+    return remembered(in_view_known_, bitwise_key<6>({from[0], from[1], from[2], q[0], q[1], q[2]}),
+                      [&] { return input_.in_view(from - origin_, q - origin_, prm_.offset); });
+  }
+  bool touches_input(const Corners& c) const {
+    return remembered(touches_known_, corners_key(c), [&] { return input_.touches(c[0] - origin_, c[1] - origin_, c[2] - origin_); });
   }
   // New triangles within max_deviation of the input (cheap sphere tests), or else no farther
   // than the ones they replace (exact distances, only then: they cost most of the stage).
@@ -485,7 +513,7 @@ class Inserter {
       const Change& ch = changes[i];
       const Vec3 n = area_vector(ch.at[0], ch.at[1], ch.at[2]);
       if (norm(n) < prm_.min_area2 || check::triangle_is_degenerate(ch.at, ch.tri) || dot(n, ch.was) <= 0) return false;
-      if (input_.touches(ch.at[0] - origin_, ch.at[1] - origin_, ch.at[2] - origin_)) return false;
+      if (touches_input(ch.at)) return false;
       for (size_t j = 0; j < i; ++j)
         if (check::triangle_pair_intersects(ch.at, ch.tri, changes[j].at, changes[j].tri)) return false;
       const Box3 box = box_of(ch.at);
@@ -556,6 +584,9 @@ class Inserter {
   std::vector<Vec3>& p_;
   std::vector<Tri>& t_;
   const SurfaceIndex& input_;
+  mutable tbb::concurrent_unordered_map<BitwiseKey<6>, bool, BitwiseKeyHash> in_view_known_;
+  mutable tbb::concurrent_unordered_map<BitwiseKey<9>, bool, BitwiseKeyHash> touches_known_;
+  mutable tbb::concurrent_unordered_map<BitwiseKey<9>, double, BitwiseKeyHash> deviation_known_;
   Vec3 origin_;
   FeatureInsertParams prm_;
   TriangleBuckets buckets_;

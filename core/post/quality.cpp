@@ -4,7 +4,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstring>
 
 #include "check/intersections.h"
 #include "common/edge_key.h"
@@ -80,16 +79,7 @@ double normal_deviation_deg(const Vec3& a, const Vec3& b, const Vec3& c, double 
 }
 
 NormalDeviationMemo::Key NormalDeviationMemo::key(const Vec3& a, const Vec3& b, const Vec3& c, double cell) {
-  Key k;
-  const double values[10] = {a[0], a[1], a[2], b[0], b[1], b[2], c[0], c[1], c[2], cell};
-  std::memcpy(k.data(), values, sizeof values);
-  return k;
-}
-
-size_t NormalDeviationMemo::KeyHash::operator()(const Key& k) const {
-  uint64_t h = 0x9e3779b97f4a7c15ULL;
-  for (uint64_t x : k) h = (h ^ x) * 0xff51afd7ed558ccdULL, h ^= h >> 32;
-  return size_t(h);
+  return bitwise_key<10>({a[0], a[1], a[2], b[0], b[1], b[2], c[0], c[1], c[2], cell});
 }
 
 bool NormalDeviationMemo::find(const Vec3& a, const Vec3& b, const Vec3& c, double cell, double& deviation) const {

@@ -8,6 +8,7 @@
 #include <unordered_map>
 #include <vector>
 
+#include "common/bitwise_key.h"
 #include "fit/surface_index.h"
 #include "prep/prepare.h"
 #include "vdbwrap/wrap.h"
@@ -62,12 +63,9 @@ class NormalDeviationMemo {
   void add(const Vec3& a, const Vec3& b, const Vec3& c, double cell, double deviation);
 
  private:
-  using Key = std::array<uint64_t, 10>;
-  struct KeyHash {
-    size_t operator()(const Key& k) const;
-  };
+  using Key = BitwiseKey<10>;
   static Key key(const Vec3& a, const Vec3& b, const Vec3& c, double cell);
-  std::unordered_map<Key, double, KeyHash> known_;
+  std::unordered_map<Key, double, BitwiseKeyHash> known_;
 };
 
 // Flags every triangle (flags: one byte per triangle, DefectFlag bits; an edge defect flags
