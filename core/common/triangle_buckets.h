@@ -48,10 +48,12 @@ class TriangleBuckets {
     for_cells(b, [&](const Key& k) {
       auto it = cells_.find(k);
       if (it == cells_.end()) return;
+      // The box first: most entries are beside b, and their marks are then never written
+      // (a write to the marks, scattered over the whole surface, missed the cache each time).
       for (uint32_t g : it->second) {
-        if (seen[g] == stamp) continue;
+        if (!boxes_[g].overlaps(b) || seen[g] == stamp) continue;
         seen[g] = stamp;
-        if (boxes_[g].overlaps(b)) fn(g);
+        fn(g);
       }
     });
   }
