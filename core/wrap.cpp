@@ -276,6 +276,9 @@ WrapResult run_pipeline(const Mesh& input, const WrapParams& params, ProgressSin
   quality_ref.finest_size = report.finest_size;
   quality_ref.thresholds = params.quality;
   post::NormalDeviationMemo deviation_memo;  // the final analysis re-measures only what changed
+  // Nearest input points asked again and again by the analysis, the rebuilds and the part labels.
+  auto nearest_memo = std::make_unique<post::NearestMemo>(index);
+  quality_ref.nearest = nearest_memo.get();
   const double repair_bound = 0.5 * base;  // the intersection repair moves nothing farther than half a base cell
   auto repair_if_intersecting = [&]() {
     const post::WrapRepairOutcome r = post::repair_intersections(surface, repair_bound, params.float_coordinates, progress);
@@ -319,12 +322,14 @@ WrapResult run_pipeline(const Mesh& input, const WrapParams& params, ProgressSin
       for (size_t t = r.begin(); t != r.end(); ++t) {
         const Tri& tri = out.triangles[t];
         Vec3 c = (out.points[tri[0]] + out.points[tri[1]] + out.points[tri[2]]) * (1.0 / 3.0) - prepared.origin;
-        out.triangle_part[t] = prepared.mesh.part_of(index.closest(c).triangle);
+        out.triangle_part[t] = prepared.mesh.part_of(quality_ref.closest(c).triangle);
       }
     });
     return out;
   };
   result.surface = label_parts();
+  quality_ref.nearest = nullptr;  // its memory goes; the final analysis has its own memo
+  nearest_memo.reset();
   check_cancel(progress);
 
   std::vector<uint32_t> crossing;  // CGAL's intersecting faces of the final surface

@@ -13,6 +13,7 @@
 #include "common/vec.h"
 #include "fit/surface_index.h"
 #include "io/mesh_io.h"
+#include "post/nearest_memo.h"
 #include "post/quality.h"
 #include "post/region_fill.h"
 #include "post/remesh.h"
@@ -381,6 +382,41 @@ TEST(Quality, DeviationMemoAnswersKnownTrianglesAndMeasuresChangedOnes) {
   const QualityCounts with_planted = analyse_quality(s.points, s.triangles, s.cell_size, setup->ref, nullptr, nullptr, &planted);
   EXPECT_EQ(with_planted.max_normal_deviation_deg, 89.0);
   EXPECT_EQ(with_planted.normal_deviation, moved_plain.normal_deviation + 1);
+}
+
+TEST(Quality, NearestMemoAnswersAsTheIndexDoesWhateverWasAskedBefore) {
+  const Mesh sphere = icosphere_mesh(1.0, 3);
+  const fit::SurfaceIndex index(sphere.points, sphere.triangles);
+  const NearestMemo memo(index);
+  auto same = [](const fit::SurfaceIndex::Hit& a, const fit::SurfaceIndex::Hit& b) {
+    return a.triangle == b.triangle && a.squared_distance == b.squared_distance && a.point == b.point && a.normal == b.normal;
+  };
+  std::vector<Vec3> points;
+  for (int i = 0; i < 200; ++i) {
+    const double u = 0.37 * i, w = 0.11 * i, r = 0.8 + 0.002 * i;  // inside, on and outside the sphere
+    points.push_back({r * std::cos(u) * std::sin(w + 0.3), r * std::sin(u) * std::sin(w + 0.3), r * std::cos(w + 0.3)});
+  }
+  for (int pass = 0; pass < 2; ++pass)  // the second pass answers from the memo
+    for (const Vec3& q : points) {
+      // A radius too small first (a miss is remembered), then larger ones, then all space.
+      for (double radius : {1e-4, 0.05, 0.3}) {
+        fit::SurfaceIndex::Hit from_memo, from_index;
+        const bool found_memo = memo.closest_within(q, radius, from_memo), found_index = index.closest_within(q, radius, from_index);
+        ASSERT_EQ(found_memo, found_index) << "radius " << radius;
+        if (found_index) EXPECT_TRUE(same(from_memo, from_index));
+      }
+      EXPECT_TRUE(same(memo.closest(q), index.closest(q)));
+      EXPECT_EQ(memo.squared_distance(q), index.squared_distance(q));
+    }
+  // Known nearest farther than a later, smaller radius: not found, as with the index.
+  const Vec3 far{0, 0, 1.5};
+  fit::SurfaceIndex::Hit hit;
+  EXPECT_TRUE(memo.closest_within(far, 1.0, hit));
+  EXPECT_FALSE(memo.closest_within(far, 0.1, hit));
+  // No input at all: the index's "none" hit.
+  const fit::SurfaceIndex empty({}, {});
+  const NearestMemo empty_memo(empty);
+  for (int pass = 0; pass < 2; ++pass) EXPECT_EQ(empty_memo.closest(far).triangle, UINT32_MAX);
 }
 
 // ---- remeshing of bad regions -------------------------------------------------------------

@@ -427,14 +427,19 @@ bool SurfaceIndex::closest_within(const Vec3& q, double radius, Hit& hit) const 
   impl_->tree.traversal_with_priority(point(q), traits);
   if (traits.best == UINT32_MAX) return false;
   last_closest_index = impl_.get(), last_closest_triangle = traits.best;
-  hit.point = traits.best_point;
-  hit.triangle = traits.best;
-  hit.squared_distance = traits.best_d2;
-  const Triangle& t = store.triangles[traits.best];
+  hit = hit_on(q, traits.best);  // the traversal's point and distance, computed the same way
+  return true;
+}
+
+SurfaceIndex::Hit SurfaceIndex::hit_on(const Vec3& q, uint32_t triangle) const {
+  const Triangle& t = impl_->store.triangles[triangle];
+  Hit hit;
+  hit.triangle = triangle;
+  hit.squared_distance = squared_distance_to(q, t, hit.point);
   K::Vector_3 n = CGAL::cross_product(t.vertex(1) - t.vertex(0), t.vertex(2) - t.vertex(0));
   double len = std::sqrt(n.squared_length());
   hit.normal = len > 0 ? Vec3{n.x() / len, n.y() / len, n.z() / len} : Vec3{0, 0, 0};
-  return true;
+  return hit;
 }
 
 bool SurfaceIndex::within(const Vec3& q, double radius) const {

@@ -27,6 +27,8 @@ class SurfaceIndex {
   // when it is not): boxes beyond the radius are never opened, so a far query costs little.
   bool closest_within(const Vec3& query, double radius, Hit& hit) const;
   double squared_distance(const Vec3& query) const { return closest(query).squared_distance; }
+  // The hit on a given triangle: for the nearest triangle, the same hit as closest() gives.
+  Hit hit_on(const Vec3& query, uint32_t triangle) const;
   // Is the input within `radius` of the query? (Much cheaper than closest() for small radii.)
   bool within(const Vec3& query, double radius) const;
   // The same answer, trying `hints` first (input triangles, UINT32_MAX for none): a caller that

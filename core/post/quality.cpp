@@ -23,7 +23,7 @@ double angle_deg(const Vec3& u, const Vec3& w) { return std::atan2(norm(cross(u,
 // below the rim).
 double deviation_at(const Vec3& q, const Vec3& unit_normal, double reach, const QualityReference& ref) {
   fit::SurfaceIndex::Hit hit;
-  if (!ref.input->closest_within(q, reach, hit)) return -1;
+  if (!ref.closest_within(q, reach, hit)) return -1;
   const double d = std::sqrt(hit.squared_distance);
   const Vec3 n = d > 1e-6 * reach ? (q - hit.point) * (1.0 / d) : hit.normal;
   if (norm2(n) == 0) return -1;

@@ -10,6 +10,7 @@
 
 #include "common/bitwise_key.h"
 #include "fit/surface_index.h"
+#include "post/nearest_memo.h"
 #include "prep/prepare.h"
 #include "vdbwrap/wrap.h"
 
@@ -30,6 +31,12 @@ enum DefectFlag : uint8_t {
 // index and the feature samples in the local frame (local = output - origin).
 struct QualityReference {
   const fit::SurfaceIndex* input = nullptr;
+  const NearestMemo* nearest = nullptr;  // optional: answers input's nearest-point queries from a memo
+  // The input's nearest point (local frame), from the memo when there is one.
+  fit::SurfaceIndex::Hit closest(const Vec3& q) const { return nearest ? nearest->closest(q) : input->closest(q); }
+  bool closest_within(const Vec3& q, double radius, fit::SurfaceIndex::Hit& hit) const {
+    return nearest ? nearest->closest_within(q, radius, hit) : input->closest_within(q, radius, hit);
+  }
   Vec3 origin{0, 0, 0};
   std::vector<Vec3> feature_samples;  // along the input's sharp edges
   double finest_size = 0;             // finest cell of the voxel stage

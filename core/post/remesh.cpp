@@ -299,7 +299,7 @@ class Remesher {
     std::vector<uint32_t> hits;
     for (const Tri& t : pr.old_triangles) {
       const Vec3 &a = pr.old_points[t[0]], &b = pr.old_points[t[1]], &c = pr.old_points[t[2]];
-      for (const Vec3& q : {a, (a + b + c) * (1.0 / 3.0), (a + b) * 0.5}) hits.push_back(ref_.input->closest(q - ref_.origin).triangle);
+      for (const Vec3& q : {a, (a + b + c) * (1.0 / 3.0), (a + b) * 0.5}) hits.push_back(ref_.closest(q - ref_.origin).triangle);
     }
     std::sort(hits.begin(), hits.end());
     hits.erase(std::unique(hits.begin(), hits.end()), hits.end());
@@ -441,13 +441,13 @@ class Remesher {
     if (new_short > old_short || new_long > old_long) return out.why = "more edges of uncharacteristic length", out;
 
     // Close to the input: as close as the triangles it replaces, or within the bound.
-    auto input_distance = [&](const Vec3& q) { return std::sqrt(ref_.input->squared_distance(q - ref_.origin)); };
+    auto input_distance = [&](const Vec3& q) { return std::sqrt(ref_.closest(q - ref_.origin).squared_distance); };
     std::vector<Tri> old_tris;
     for (uint32_t f : reg.triangles) old_tris.push_back(s_.triangles[f]);
     if (reg.old_far < 0) {  // the same for both fills: the first one to get here measures it
       reg.old_far = 0;
       for (const Vec3& q : samples_of(s_.points, old_tris)) {
-        const fit::SurfaceIndex::Hit hit = ref_.input->closest(q - ref_.origin);
+        const fit::SurfaceIndex::Hit hit = ref_.closest(q - ref_.origin);
         reg.old_far = std::max(reg.old_far, std::sqrt(hit.squared_distance));
         reg.old_feet.push_back(hit.point + ref_.origin);
       }

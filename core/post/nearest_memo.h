@@ -1,0 +1,35 @@
+// Stage 4 asks the input for the nearest point of the same points again and again: a vertex
+// for each of its triangles when a region's substrate is gathered, the samples of a region in
+// each round that rebuilds it, the quality analysis's probes. The memo keeps each point's
+// nearest input triangle, keyed by the point bit for bit, and rebuilds the hit from it, so an
+// answer from the memo is exactly the index's.
+#pragma once
+#include <cstdint>
+
+#include <tbb/concurrent_unordered_map.h>
+
+#include "common/bitwise_key.h"
+#include "fit/surface_index.h"
+
+namespace vdbwrap::post {
+
+class NearestMemo {
+ public:
+  using Hit = fit::SurfaceIndex::Hit;
+  explicit NearestMemo(const fit::SurfaceIndex& input) : input_(input) {}
+  // As fit::SurfaceIndex's calls of the same names (query points in the index's frame); safe
+  // to call from several threads at once.
+  Hit closest(const Vec3& query) const;
+  bool closest_within(const Vec3& query, double radius, Hit& hit) const;
+  double squared_distance(const Vec3& query) const { return closest(query).squared_distance; }
+
+ private:
+  struct Known {
+    uint32_t triangle;   // the nearest, or UINT32_MAX: none within `none_within`
+    double none_within;
+  };
+  const fit::SurfaceIndex& input_;
+  mutable tbb::concurrent_unordered_map<BitwiseKey<3>, Known, BitwiseKeyHash> known_;
+};
+
+}  // namespace vdbwrap::post
