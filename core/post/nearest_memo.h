@@ -21,7 +21,6 @@ class NearestMemo {
   // to call from several threads at once.
   Hit closest(const Vec3& query) const;
   bool closest_within(const Vec3& query, double radius, Hit& hit) const;
-  double squared_distance(const Vec3& query) const { return closest(query).squared_distance; }
 
  private:
   struct Known {
