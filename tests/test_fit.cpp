@@ -181,6 +181,33 @@ TEST(SurfaceIndex, NearestPointsAreExactOnSliversAndFans) {
   }
 }
 
+// Cells crowded with slivers (the fan's centre, the cylinder's side) are cut into eighths in
+// the index: queries packed around them, where the cut pieces are, must still get the nearest
+// point of the whole set, and "within" must agree with it.
+TEST(SurfaceIndex, NearestPointsAreExactInCrowdedCells) {
+  const Mesh m = sliver_mesh();
+  fit::SurfaceIndex index(m.points, m.triangles);
+  Uniform uniform(777);
+  const int n = 200;
+  for (int k = 0; k < 4000; ++k) {
+    Vec3 q;
+    if (k % 2 == 0) {  // around the fan's centre
+      q = m.points[0] + Vec3{uniform(-0.05, 0.05), uniform(-0.05, 0.05), uniform(-0.05, 0.05)};
+    } else {  // just off the cylinder's side, inside or outside
+      const int i = int(uniform(0, n));
+      const Vec3 on = lerp(m.points[1 + i], m.points[1 + n + i], uniform(0, 1));
+      q = on + Vec3{uniform(-0.01, 0.01), uniform(-0.01, 0.01), uniform(-0.01, 0.01)};
+    }
+    double best = INFINITY;
+    for (const Tri& t : m.triangles) best = std::min(best, norm2(closest_on_triangle(q, m.points[t[0]], m.points[t[1]], m.points[t[2]]) - q));
+    const auto hit = index.closest(q);
+    ASSERT_NEAR(hit.squared_distance, best, 1e-12 * (1 + best)) << "query " << k;
+    const double d = std::sqrt(best);
+    EXPECT_TRUE(index.within(q, d * 1.001 + 1e-12)) << "query " << k;
+    if (d > 1e-6) EXPECT_FALSE(index.within(q, d * 0.999)) << "query " << k;
+  }
+}
+
 // Each query starts from the triangle the thread found last, so answers must not depend on
 // the order of queries: the nearest triangle, the lowest index among equally near ones. On a
 // grid of exactly coplanar triangles, many queries are equally near several triangles.
