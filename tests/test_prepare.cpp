@@ -269,7 +269,8 @@ TEST(Intersections, PairSearchFindsEveryPairOnceAmongManyLargeTriangles) { expec
 // wedges of one cap, whose holes touch at the hub, and a dropped side triangle), an
 // inside-out sphere, a sphere whose pole is pushed through its far side, and a soup of small
 // triangles: the holed cylinders and the spheres that do not fold are proved, the folded one
-// is not, and the pairs found are those of every pair tested directly.
+// is not, and the pairs found are those of every pair tested directly (also when searched as
+// a wrap, where no pieces are looked for).
 TEST(Intersections, StarShapedPiecesSkipTheirOwnPairsAndLoseNone) {
   std::mt19937 rng(5);
   std::uniform_real_distribution<double> u(0.0, 1.0);
@@ -352,6 +353,10 @@ TEST(Intersections, StarShapedPiecesSkipTheirOwnPairsAndLoseNone) {
   ASSERT_GT(expected.size(), 200u);
   std::vector<std::pair<uint32_t, uint32_t>> found;
   for (const auto& p : check::find_intersecting_pairs(m.points, m.triangles)) found.push_back({p.a, p.b});
+  EXPECT_EQ(found, expected);
+  // Searched as a wrap, without looking for star-shaped pieces: the same pairs.
+  found.clear();
+  for (const auto& p : check::find_intersecting_pairs(m.points, m.triangles, check::SoupKind::kWrap)) found.push_back({p.a, p.b});
   EXPECT_EQ(found, expected);
 }
 

@@ -908,14 +908,15 @@ ExactInput exact_input(const std::vector<Vec3>& points, const std::vector<Tri>& 
 
 }  // namespace
 
-std::vector<TrianglePair> find_intersecting_pairs(const std::vector<Vec3>& points, const std::vector<Tri>& triangles) {
+std::vector<TrianglePair> find_intersecting_pairs(const std::vector<Vec3>& points, const std::vector<Tri>& triangles, SoupKind kind) {
   const ExactInput in = exact_input(points, triangles);
   const std::vector<P3>& p = in.p;
   const std::vector<uint8_t>& usable = in.usable;
   SlabBoxes slabs = slab_boxes(p, triangles, usable);
   const VertexStars stars = vertex_stars(p.size(), triangles, usable);
   const std::vector<uint8_t> fan = unfolded_fan_vertices(p, triangles, stars);
-  const std::vector<uint32_t> piece = star_shaped_pieces(p, triangles, usable);
+  const std::vector<uint32_t> piece =
+      kind == SoupKind::kInput ? star_shaped_pieces(p, triangles, usable) : std::vector<uint32_t>(triangles.size(), kNoPiece);
   const std::vector<PlaneBound> planes = plane_bounds(points, triangles, usable);
   // Exact tests inside the (parallel) candidate callback: fans and long thin CAD triangles give
   // hundreds of millions of overlapping boxes, too many to store as candidates first.
@@ -950,9 +951,9 @@ std::vector<uint32_t> star_shaped_pieces(const std::vector<Vec3>& points, const 
   return star_shaped_pieces(in.p, triangles, in.usable);
 }
 
-std::vector<uint32_t> intersecting_triangles(const std::vector<Vec3>& points, const std::vector<Tri>& triangles) {
+std::vector<uint32_t> intersecting_triangles(const std::vector<Vec3>& points, const std::vector<Tri>& triangles, SoupKind kind) {
   std::vector<uint32_t> out;
-  for (const TrianglePair& p : find_intersecting_pairs(points, triangles)) out.push_back(p.a), out.push_back(p.b);
+  for (const TrianglePair& p : find_intersecting_pairs(points, triangles, kind)) out.push_back(p.a), out.push_back(p.b);
   std::vector<uint8_t> degenerate(triangles.size(), 0);
   tbb::parallel_for(tbb::blocked_range<size_t>(0, triangles.size(), 4096), [&](const tbb::blocked_range<size_t>& r) {
     for (size_t f = r.begin(); f != r.end(); ++f) degenerate[f] = triangle_is_degenerate(points, triangles[f]);

@@ -12,10 +12,18 @@ struct TrianglePair {
   uint32_t a, b;
 };
 
+// What a triangle set is, for the pair search's shortcuts (the answers are the same). An
+// input: closed star-shaped parts (convex solids, CAD parts with fan caps) are looked for and
+// their triangles' pairs skipped. A wrap: evenly sized triangles of surfaces that are hardly
+// ever such parts, so the look is skipped; on the 2.85M-triangle wrap of the 2.37M-triangle
+// assembly it took 1.4 s and found none.
+enum class SoupKind { kInput, kWrap };
+
 // Pairs of triangles of an indexed soup that share points other than their common
 // vertices and edge (crossing, overlapping, folded onto each other). Triangles with
 // repeated or collinear vertices are skipped (count those separately).
-std::vector<TrianglePair> find_intersecting_pairs(const std::vector<Vec3>& points, const std::vector<Tri>& triangles);
+std::vector<TrianglePair> find_intersecting_pairs(const std::vector<Vec3>& points, const std::vector<Tri>& triangles,
+                                                  SoupKind kind = SoupKind::kInput);
 
 // Intersecting pairs with at least one triangle in `subset` (the rest of the mesh is only
 // tested against the subset). Same rules as find_intersecting_pairs; degenerate triangles
@@ -30,7 +38,8 @@ std::vector<TrianglePair> find_intersecting_pairs_with(const std::vector<Vec3>& 
 std::vector<uint32_t> star_shaped_pieces(const std::vector<Vec3>& points, const std::vector<Tri>& triangles);
 
 // Triangles that intersect another or are degenerate, sorted, each once.
-std::vector<uint32_t> intersecting_triangles(const std::vector<Vec3>& points, const std::vector<Tri>& triangles);
+std::vector<uint32_t> intersecting_triangles(const std::vector<Vec3>& points, const std::vector<Tri>& triangles,
+                                             SoupKind kind = SoupKind::kInput);
 
 // The exact tests behind the functions above, for one pair / one triangle. use_proofs_2d =
 // false skips the fast proofs in doubles that settle most pairs first (for tests: the answer

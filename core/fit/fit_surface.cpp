@@ -30,7 +30,7 @@ std::vector<uint32_t> invalid_triangles(const std::vector<Vec3>& points, const s
   // Box intersection and exact predicates, with the fast proofs in doubles first: on a
   // lattice surface most candidate pairs are exactly coplanar neighbours, slow for the exact
   // predicates alone. (The final validation still asks CGAL's own self-intersection test.)
-  return check::intersecting_triangles(points, triangles);
+  return check::intersecting_triangles(points, triangles, check::SoupKind::kWrap);
 }
 
 namespace {

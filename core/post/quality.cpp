@@ -106,7 +106,7 @@ QualityCounts analyse_quality(const std::vector<Vec3>& p, const std::vector<Tri>
   if (intersecting) {
     crossing = *intersecting;
   } else {
-    crossing = check::intersecting_triangles(p, tris);
+    crossing = check::intersecting_triangles(p, tris, check::SoupKind::kWrap);
   }
   for (uint32_t f : crossing)
     if (f < flags.size()) flags[f] |= kSelfIntersecting;

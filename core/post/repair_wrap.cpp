@@ -11,7 +11,7 @@ namespace vdbwrap::post {
 
 WrapRepairOutcome repair_intersections(PostSurface& s, double max_deviation, bool float_coordinates, ProgressSink* progress) {
   WrapRepairOutcome out;
-  out.intersecting_before = check::intersecting_triangles(s.points, s.triangles).size();
+  out.intersecting_before = check::intersecting_triangles(s.points, s.triangles, check::SoupKind::kWrap).size();
   if (out.intersecting_before == 0) return out;
   out.ran = true;
   if (progress)
@@ -55,7 +55,7 @@ WrapRepairOutcome repair_intersections(PostSurface& s, double max_deviation, boo
   s = std::move(next);
 
   const RepairReport& r = result.report;
-  out.intersecting_after = check::intersecting_triangles(s.points, s.triangles).size();
+  out.intersecting_after = check::intersecting_triangles(s.points, s.triangles, check::SoupKind::kWrap).size();
   char text[256];
   std::snprintf(text, sizeof text, "%zu regions: %zu fixed by local operations, %zu by refill, %zu left", r.regions_found,
                 r.fixed_by_local, r.fixed_by_refill, r.left_unfixed);
