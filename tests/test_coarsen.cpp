@@ -51,7 +51,8 @@ TEST(Coarsen, FewerTrianglesSameValidityDistanceAndEdges) {
 }
 
 TEST(Coarsen, OneThreadAndTwoGiveTheSameSurface) {
-  // The collapses are checked in parallel batches; the batches depend on the queue alone.
+  // Blocks of the surface coarsen at once, each on its own, and the batches after them depend
+  // on the queue alone.
   WrapParams one, two;
   one.threads = 1;
   two.threads = 2;
@@ -60,4 +61,22 @@ TEST(Coarsen, OneThreadAndTwoGiveTheSameSurface) {
   ASSERT_GT(a.report.triangles_before_coarsening, 2 * a.surface.triangles.size());
   EXPECT_EQ(a.surface.triangles, b.surface.triangles);
   EXPECT_EQ(a.surface.points, b.surface.points);
+}
+
+TEST(Coarsen, OneThreadAndTwoGiveTheSameSurfaceOverManyBlocks) {
+  // A finer wrap: hundreds of blocks, dozens of each colour coarsening at once, so that a
+  // collapse reading or writing anything beyond its block's reach shows as a difference.
+  WrapParams one, two;
+  one.base_size = two.base_size = Length{0.6, true};
+  one.threads = 1;
+  two.threads = 2;
+  one.compute_distances = two.compute_distances = false;
+  one.remesh = two.remesh = false;
+  const Mesh m = sphere_mesh(1.0, 48, 96);
+  WrapResult a = wrap(m, one), b = wrap(m, two);
+  ASSERT_GT(a.report.triangles_before_coarsening, 2 * a.surface.triangles.size());
+  EXPECT_EQ(a.surface.triangles, b.surface.triangles);
+  EXPECT_EQ(a.surface.points, b.surface.points);
+  auto v = valid_closed_surface(b.surface);
+  EXPECT_TRUE(v.ok) << v.why;
 }

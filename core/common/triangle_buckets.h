@@ -1,6 +1,7 @@
 // Triangles bucketed by bounding box on a uniform grid: the neighbours of a few changed
 // triangles, for local intersection checks (projection's validity loop, coarsening).
 #pragma once
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <unordered_map>
@@ -24,6 +25,39 @@ class TriangleBuckets {
   }
   // After triangle f moved, or was appended to the triangle list.
   void update(uint32_t f) { insert(f); }
+  // After triangle f changed: it leaves the cells its new box does not cover, so that every
+  // entry is current. With add_cells false, every cell of the new box must exist already
+  // (see covers): the map is then only read, and threads may move triangles in disjoint
+  // regions at once (a cell holds only triangles whose boxes overlap it, so no thread reads
+  // an entry another one writes).
+  void move(uint32_t f, bool add_cells) {
+    const Box3 old = boxes_[f];
+    Box3 b;
+    for (uint32_t v : tris_[f]) b.add(p_[v]);
+    boxes_[f] = b;
+    int64_t lo[3], hi[3], olo[3], ohi[3];
+    cell_range(b, lo, hi);
+    cell_range(old, olo, ohi);
+    auto inside = [](const Key& k, const int64_t l[3], const int64_t h[3]) {
+      return k.x >= l[0] && k.x <= h[0] && k.y >= l[1] && k.y <= h[1] && k.z >= l[2] && k.z <= h[2];
+    };
+    for_cells(old, [&](const Key& k) {
+      if (inside(k, lo, hi)) return;
+      auto& list = cells_.find(k)->second;
+      auto it = std::find(list.begin(), list.end(), f);
+      *it = list.back(), list.pop_back();
+    });
+    for_cells(b, [&](const Key& k) {
+      if (inside(k, olo, ohi)) return;
+      (add_cells ? cells_[k] : cells_.find(k)->second).push_back(f);
+    });
+  }
+  // Do all cells of box b exist already?
+  bool covers(const Box3& b) const {
+    bool all = true;
+    for_cells(b, [&](const Key& k) { all = all && cells_.count(k) != 0; });
+    return all;
+  }
   // The bounding box of triangle f when it was last inserted or updated.
   const Box3& box(uint32_t f) const { return boxes_[f]; }
   // Triangles whose (bucketed) bounding box overlaps that of triangle f, f excluded.

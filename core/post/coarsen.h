@@ -3,8 +3,10 @@
 // a neighbour, no new positions, so every kept node stays where projection put it) remove
 // them while the surface stays closed, 2-manifold, free of self-intersections and close to
 // the input; nodes snapped onto feature curves go only along straight runs of their chain.
-// Collapses are checked in parallel, in batches of edges whose 1-rings do not touch, and
-// applied in queue order: the result does not depend on the number of threads.
+// Blocks of the surface far enough apart coarsen at once, each on its own; the few edges
+// whose rings leave their block's reach are then checked in parallel, in batches of edges
+// whose 1-rings do not touch, and applied in queue order. The result does not depend on
+// the number of threads.
 #pragma once
 #include <cstdint>
 #include <vector>
