@@ -10,13 +10,12 @@
 #include <limits>
 #include <utility>
 
-#include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
-#include <tbb/parallel_sort.h>
 
 #include "common/box_overlap.h"
 #include "common/closest_point.h"
-#include "common/thread_blocks.h"
+#include "common/fill_vector.h"
+#include "common/radix_sort.h"
 #include "common/vec.h"
 
 namespace vdbwrap::fit {
@@ -140,14 +139,23 @@ void add_parts(const Vec3& a, const Vec3& b, const Vec3& c, double size, int dep
 struct CellGrid {
   Vec3 origin;
   double cell;
+  // Cells from -1 (a test's padding reaches below the origin) to past the far side, numbered
+  // densely, i first, then j, then k: the numbers order cells as (i, j, k) does and need only
+  // as many bits as there are cells, so that a radix sort of (cell, triangle) takes few passes.
+  uint64_t nj = 0, nk = 0, count = 0;
+  CellGrid(const Vec3& low, const Vec3& high, double size) : origin(low), cell(size) {
+    uint64_t n[3];
+    for (int a = 0; a < 3; ++a) n[a] = uint64_t(std::floor((high[a] - low[a]) / cell)) + 3;
+    nj = n[1], nk = n[2], count = n[0] * n[1] * n[2];
+  }
   int64_t index(double x, int axis) const { return int64_t(std::floor((x - origin[axis]) / cell)); }
-  static uint64_t key(int64_t i, int64_t j, int64_t k) { return (uint64_t(i) << 42) | (uint64_t(j) << 21) | uint64_t(k); }
+  uint64_t key(int64_t i, int64_t j, int64_t k) const { return (uint64_t(i + 1) * nj + uint64_t(j + 1)) * nk + uint64_t(k + 1); }
   // How far every cell test and cell box is enlarged: far beyond the rounding of the overlap
   // test and of the halving below, so that a cell a triangle touches is never missed.
   double pad() const { return 1e-6 * cell; }
   Vec3 corner(uint64_t key) const {  // the cell's low corner
-    const int64_t i = int64_t(key >> 42), j = int64_t((key >> 21) & 0x1fffff), k = int64_t(key & 0x1fffff);
-    return {origin[0] + i * cell, origin[1] + j * cell, origin[2] + k * cell};
+    const int64_t i = int64_t(key / (nj * nk)) - 1, j = int64_t(key / nk % nj) - 1, k = int64_t(key % nk) - 1;
+    return {origin[0] + double(i) * cell, origin[1] + double(j) * cell, origin[2] + double(k) * cell};
   }
 };
 
@@ -167,7 +175,7 @@ void cells_of(const Vec3& a, const Vec3& b, const Vec3& c, const CellGrid& grid,
     return;
   }
   if (lo[0] == hi[0] && lo[1] == hi[1] && lo[2] == hi[2]) {  // inside one cell
-    out.push_back(CellGrid::key(lo[0], lo[1], lo[2]));
+    out.push_back(grid.key(lo[0], lo[1], lo[2]));
     return;
   }
   // The plane test first: most cells beside a thin part are off its plane, and it is cheap.
@@ -180,7 +188,7 @@ void cells_of(const Vec3& a, const Vec3& b, const Vec3& c, const CellGrid& grid,
         const Vec3 centre{grid.origin[0] + (i + 0.5) * grid.cell, grid.origin[1] + (j + 0.5) * grid.cell,
                           grid.origin[2] + (k + 0.5) * grid.cell};
         if (std::fabs(dot(n, centre - a)) > reach * (1 + 1e-9)) continue;
-        if (triangle_overlaps_box(a, b, c, centre, {half, half, half})) out.push_back(CellGrid::key(i, j, k));
+        if (triangle_overlaps_box(a, b, c, centre, {half, half, half})) out.push_back(grid.key(i, j, k));
       }
 }
 
@@ -367,24 +375,26 @@ SurfaceIndex::SurfaceIndex(const std::vector<Vec3>& points, const std::vector<Tr
   std::nth_element(sizes.begin(), sizes.begin() + sizes.size() / 2, sizes.end());
   const double size = 2 * sizes[sizes.size() / 2];
   const double span = std::max({all.xmax() - all.xmin(), all.ymax() - all.ymin(), all.zmax() - all.zmin()});
-  CellGrid grid{{all.xmin(), all.ymin(), all.zmin()}, std::max(size, span / double(1 << 20))};
+  const CellGrid grid({all.xmin(), all.ymin(), all.zmin()}, {all.xmax(), all.ymax(), all.zmax()}, std::max(size, span / double(1 << 20)));
   // A triangle over this many cells is cut into at most 16 parts instead (a huge flat triangle
   // among tiny ones would otherwise fill the grid).
   constexpr double max_cells = 4096;
 
-  // Long triangles: (cell, triangle) entries, found in parallel, then sorted (deterministic).
+  // Long triangles: (cell, triangle) entries, found in parallel in chunks of triangles joined
+  // in order, then sorted by cell, stably: each cell's triangles stay in order.
   struct Entry {
     uint64_t cell;
     uint32_t triangle;
   };
-  ThreadBlocks<Entry> entries;
-  tbb::enumerable_thread_specific<std::vector<std::pair<uint32_t, CGAL::Bbox_3>>> parts;
-  tbb::parallel_for(tbb::blocked_range<uint32_t>(0, uint32_t(triangles.size()), 1024), [&](const tbb::blocked_range<uint32_t>& r) {
+  constexpr uint32_t kChunk = 4096;
+  const size_t chunks = (triangles.size() + kChunk - 1) / kChunk;
+  std::vector<std::vector<Entry>> chunk_entries(chunks);
+  std::vector<std::vector<std::pair<uint32_t, CGAL::Bbox_3>>> chunk_parts(chunks);
+  tbb::parallel_for(size_t(0), chunks, [&](size_t chunk) {
     std::vector<uint64_t> cells;
     std::vector<CGAL::Bbox_3> boxes;
-    auto& my_entries = entries.local();
-    auto& my_parts = parts.local();
-    for (uint32_t f = r.begin(); f != r.end(); ++f) {
+    const uint32_t first = uint32_t(chunk * kChunk), last = uint32_t(std::min(triangles.size(), (chunk + 1) * kChunk));
+    for (uint32_t f = first; f != last; ++f) {
       const Tri& t = triangles[f];
       const Vec3 &a = points[t[0]], &b = points[t[1]], &c = points[t[2]];
       if (diagonal(box_of(a, b, c)) <= size) continue;
@@ -393,21 +403,19 @@ SurfaceIndex::SurfaceIndex(const std::vector<Vec3>& points, const std::vector<Tr
       if (estimate > max_cells) {
         boxes.clear();
         add_parts(a, b, c, size, 4, boxes);
-        for (const CGAL::Bbox_3& box : boxes) my_parts.push_back({f, box});
+        for (const CGAL::Bbox_3& box : boxes) chunk_parts[chunk].push_back({f, box});
         continue;
       }
       cells.clear();
       cells_of(a, b, c, grid, cells);
       std::sort(cells.begin(), cells.end());
       cells.erase(std::unique(cells.begin(), cells.end()), cells.end());
-      for (uint64_t key : cells) my_entries.push_back({key, f});
+      for (uint64_t key : cells) chunk_entries[chunk].push_back({key, f});
     }
   });
-  FillVector<Entry> cut = gather(entries);
-  tbb::parallel_sort(cut.begin(), cut.end(), [](const Entry& x, const Entry& y) { return x.cell != y.cell ? x.cell < y.cell : x.triangle < y.triangle; });
-  std::vector<std::pair<uint32_t, CGAL::Bbox_3>> large;
-  for (auto& local : parts) large.insert(large.end(), local.begin(), local.end());
-  std::sort(large.begin(), large.end(), [](const auto& x, const auto& y) { return x.first < y.first; });
+  const FillVector<Entry> cut = radix_sort_joined(chunk_entries, [](const Entry& e) { return e.cell; }, bits_for(grid.count));
+  std::vector<std::pair<uint32_t, CGAL::Bbox_3>> large;  // by triangle
+  for (const auto& part : chunk_parts) large.insert(large.end(), part.begin(), part.end());
 
   // Pieces: each short triangle, each part of a huge one, and each cell with its long ones.
   impl_->pieces.reserve(triangles.size());
