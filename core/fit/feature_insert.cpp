@@ -1,7 +1,6 @@
 #include "fit/feature_insert.h"
 
 #include <tbb/blocked_range.h>
-#include <tbb/concurrent_unordered_map.h>
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 
@@ -16,6 +15,7 @@
 #include "check/intersections.h"
 #include "common/bitwise_key.h"
 #include "common/closest_point.h"
+#include "common/concurrent_memo.h"
 #include "common/float_round.h"
 #include "common/grid_key.h"
 #include "common/triangle_buckets.h"
@@ -67,12 +67,12 @@ struct Scratch {
 
 // A memo of the input's answers, shared by the planning threads: `compute` runs when the key
 // is new (two threads may both run it, with the same value).
-template <typename Map, typename Compute>
-auto remembered(Map& known, const typename Map::key_type& key, Compute&& compute) {
-  const auto it = known.find(key);
-  if (it != known.end()) return it->second;
-  const auto value = compute();
-  known.emplace(key, value);
+template <typename Memo, typename Compute>
+auto remembered(Memo& known, const typename Memo::key_type& key, Compute&& compute) {
+  typename Memo::mapped_type value;
+  if (known.find(key, value)) return value;
+  value = compute();
+  known.insert(key, value);
   return value;
 }
 BitwiseKey<9> corners_key(const Corners& c) {
@@ -584,9 +584,9 @@ class Inserter {
   std::vector<Vec3>& p_;
   std::vector<Tri>& t_;
   const SurfaceIndex& input_;
-  mutable tbb::concurrent_unordered_map<BitwiseKey<6>, bool, BitwiseKeyHash> in_view_known_;
-  mutable tbb::concurrent_unordered_map<BitwiseKey<9>, bool, BitwiseKeyHash> touches_known_;
-  mutable tbb::concurrent_unordered_map<BitwiseKey<9>, double, BitwiseKeyHash> deviation_known_;
+  mutable ConcurrentMemo<BitwiseKey<6>, bool, BitwiseKeyHash> in_view_known_;
+  mutable ConcurrentMemo<BitwiseKey<9>, bool, BitwiseKeyHash> touches_known_;
+  mutable ConcurrentMemo<BitwiseKey<9>, double, BitwiseKeyHash> deviation_known_;
   Vec3 origin_;
   FeatureInsertParams prm_;
   TriangleBuckets buckets_;

@@ -12,23 +12,23 @@ NearestMemo::Hit NearestMemo::closest(const Vec3& q) const {
 
 bool NearestMemo::closest_within(const Vec3& q, double radius, Hit& hit) const {
   const BitwiseKey<3> key = bitwise_key<3>({q[0], q[1], q[2]});
-  const auto it = known_.find(key);
-  if (it != known_.end()) {
-    const Known& k = it->second;
+  Known k;
+  const bool known = known_.find(key, k);
+  if (known) {
     if (k.triangle != UINT32_MAX) {
       // The nearest triangle is within the radius exactly when its distance is: then the
       // index would answer with it (see SurfaceIndex::closest_within).
-      const Hit known = input_.hit_on(q, k.triangle);
-      if (!(known.squared_distance <= radius * radius)) return false;
-      hit = known;
+      const Hit found = input_.hit_on(q, k.triangle);
+      if (!(found.squared_distance <= radius * radius)) return false;
+      hit = found;
       return true;
     }
     if (radius <= k.none_within) return false;
   }
   // Asked for the first time, or farther than a search that found nothing: the index answers.
-  // (Entries are never changed: concurrent readers may hold them.)
+  // (Entries are never changed: the first answer for a point stays.)
   const bool found = input_.closest_within(q, radius, hit);
-  if (it == known_.end()) known_.emplace(key, Known{found ? hit.triangle : UINT32_MAX, radius});
+  if (!known) known_.insert(key, Known{found ? hit.triangle : UINT32_MAX, radius});
   return found;
 }
 

@@ -6,9 +6,8 @@
 #pragma once
 #include <cstdint>
 
-#include <tbb/concurrent_unordered_map.h>
-
 #include "common/bitwise_key.h"
+#include "common/concurrent_memo.h"
 #include "fit/surface_index.h"
 
 namespace vdbwrap::post {
@@ -28,7 +27,7 @@ class NearestMemo {
     double none_within;
   };
   const fit::SurfaceIndex& input_;
-  mutable tbb::concurrent_unordered_map<BitwiseKey<3>, Known, BitwiseKeyHash> known_;
+  mutable ConcurrentMemo<BitwiseKey<3>, Known, BitwiseKeyHash> known_;
 };
 
 }  // namespace vdbwrap::post
