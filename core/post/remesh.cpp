@@ -132,12 +132,13 @@ class Remesher {
       const double reach = 3.0 * std::max({s_.cell_size[st[0]], s_.cell_size[st[1]], s_.cell_size[st[2]]});
       const Vec3 at = centroid(seed);
       std::vector<uint32_t> core{seed};
-      std::unordered_set<uint32_t> in{seed};
+      const uint32_t in = next_mark();  // marks_[g] == in: g is in the core
+      marks_[seed] = in;
       for (size_t k = 0; k < core.size() && core.size() < prm_.max_region_triangles; ++k)
         for (uint32_t v : s_.triangles[core[k]])
           for (uint32_t g : vf_[v])
-            if (!in.count(g) && is_bad(g) && !taken[g] && core.size() < prm_.max_region_triangles && norm(centroid(g) - at) < reach)
-              in.insert(g), core.push_back(g);
+            if (marks_[g] != in && is_bad(g) && !taken[g] && core.size() < prm_.max_region_triangles && norm(centroid(g) - at) < reach)
+              marks_[g] = in, core.push_back(g);
       // Next to another region: a later round. Checked after each growth step (each one only
       // adds triangles), so a clash costs no more growth than it takes to find it.
       auto clashes = [&](const std::vector<uint32_t>& set) {
@@ -172,16 +173,20 @@ class Remesher {
 
   // `set` (sorted) plus the pockets it encloses: groups of other triangles, connected through
   // edges, that reach nothing but the set (a ring-shaped region becomes a disc).
-  std::vector<uint32_t> close_pockets(const std::vector<uint32_t>& set) const {
-    std::unordered_set<uint32_t> in(set.begin(), set.end()), seen;
+  std::vector<uint32_t> close_pockets(const std::vector<uint32_t>& set) {
+    // Marks instead of hash sets (gathering is serial, and its sets were most of it).
+    const uint32_t in = next_mark(), seen = next_mark();
+    for (uint32_t f : set) marks_[f] = in;
+    auto is_in = [&](uint32_t f) { return marks_[f] == in; };
+    auto was_seen = [&](uint32_t f) { return marks_[f] == seen; };
     std::vector<uint32_t> out = set;
     const size_t limit = set.size();
     for (uint32_t f : set)
       for (uint32_t v : s_.triangles[f])
         for (uint32_t start : vf_[v]) {
-          if (in.count(start) || seen.count(start)) continue;
+          if (is_in(start) || was_seen(start)) continue;
           std::vector<uint32_t> pocket{start};
-          seen.insert(start);
+          marks_[start] = seen;
           bool open = false;
           for (size_t k = 0; k < pocket.size() && !open; ++k) {
             const Tri& t = s_.triangles[pocket[k]];
@@ -189,8 +194,8 @@ class Remesher {
               for (uint32_t g : vf_[t[e]]) {
                 const Tri& o = s_.triangles[g];
                 const uint32_t w = t[(e + 1) % 3];
-                if (in.count(g) || seen.count(g) || !(o[0] == w || o[1] == w || o[2] == w)) continue;
-                seen.insert(g);
+                if (is_in(g) || was_seen(g) || !(o[0] == w || o[1] == w || o[2] == w)) continue;
+                marks_[g] = seen;
                 pocket.push_back(g);
                 if (pocket.size() > limit) open = true;
               }
@@ -590,6 +595,14 @@ class Remesher {
   std::vector<uint8_t> alive_;
   std::vector<std::vector<uint32_t>> vf_;
   std::unordered_set<uint64_t> tried_;
+  // Per triangle: the last mark given to it (see next_mark), for gathering's sets.
+  std::vector<uint32_t> marks_;
+  uint32_t mark_ = 0;
+  uint32_t next_mark() {
+    if (marks_.size() != s_.triangles.size()) marks_.assign(s_.triangles.size(), 0), mark_ = 0;
+    if (++mark_ == 0) std::fill(marks_.begin(), marks_.end(), 0), mark_ = 1;  // wrapped around
+    return mark_;
+  }
   std::unordered_set<uint64_t> feature_edges_;
   double feature_cell_ = 1;
   std::unordered_map<GridKey, std::vector<uint32_t>, GridKeyHash> features_;
