@@ -131,13 +131,7 @@ class Coarsener {
       tbb::parallel_for(tbb::blocked_range<size_t>(0, batch.size(), 1), [&](const tbb::blocked_range<size_t>& r) {
         for (size_t i = r.begin(); i != r.end(); ++i) {
           const Entry& e = batch[i];
-          Plan& pl = plans[i];
-          pl.hit_other = false;
-          bool ok = removable(e.a, e.b) && plan(e.a, e.b, pl);
-          bool hit_other = pl.hit_other;
-          if (!ok) ok = removable(e.b, e.a) && plan(e.b, e.a, pl), hit_other = hit_other || pl.hit_other;
-          pl.ok = ok;
-          pl.hit_other = hit_other;
+          plan_either_way(e, plans[i]);
         }
       });
       for (size_t i = 0; i < batch.size(); ++i) {
@@ -281,11 +275,8 @@ class Coarsener {
         continue;
       }
       ++step;
-      pl.hit_other = false;
-      bool ok = removable(e.a, e.b) && plan(e.a, e.b, pl);
-      bool hit_other = pl.hit_other;
-      if (!ok) ok = removable(e.b, e.a) && plan(e.b, e.a, pl), hit_other = hit_other || pl.hit_other;
-      if (ok) {
+      plan_either_way(e, pl);
+      if (pl.ok) {
         bool covered = true;
         for (const Tri& n : pl.fresh) covered = covered && buckets_.covers(box_of(n));
         if (!covered) {
@@ -295,7 +286,7 @@ class Coarsener {
         apply(pl, step, made, false);
         ++blk.collapses;
       } else {
-        blk.refusals.push_back({edge_key(e.a, e.b), step, !hit_other});
+        blk.refusals.push_back({edge_key(e.a, e.b), step, !pl.hit_other});
       }
     }
   }
@@ -353,6 +344,17 @@ class Coarsener {
       refusals_.insert(refusals_.end(), b.refusals.begin(), b.refusals.end());
     }
     return collapses;
+  }
+
+  // Checks merging e.a into e.b, else e.b into e.a: pl.ok says whether one may go,
+  // pl.hit_other whether a check was refused by triangles outside the 1-rings.
+  void plan_either_way(const Entry& e, Plan& pl) const {
+    pl.hit_other = false;
+    bool ok = removable(e.a, e.b) && plan(e.a, e.b, pl);
+    bool hit_other = pl.hit_other;
+    if (!ok) ok = removable(e.b, e.a) && plan(e.b, e.a, pl), hit_other = hit_other || pl.hit_other;
+    pl.ok = ok;
+    pl.hit_other = hit_other;
   }
 
   // Edge a-b as a queue entry; false when it is already too long to collapse.
