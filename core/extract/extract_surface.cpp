@@ -3,10 +3,12 @@
 #include <algorithm>
 #include <limits>
 #include <map>
+#include <queue>
 #include <set>
 #include <unordered_map>
 
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_sort.h>
 
 #include "common/fill_vector.h"
 #include "common/grid_key.h"
@@ -251,14 +253,63 @@ size_t exclude_nonmanifold_cells(AdaptiveGrid& g, int32_t label, VolumeChoice ch
     return r.ijk.x() > 0 && r.ijk.y() > 0 && r.ijk.z() > 0 && r.ijk.x() < d.x() - 1 && r.ijk.y() < d.y() - 1 &&
            r.ijk.z() < d.z() - 1;
   };
+  const size_t n = surf.nodes.size();
+  auto octant_cell = [](const Coord& p, int o) { return Coord(p.x() - 1 + (o & 1), p.y() - 1 + ((o >> 1) & 1), p.z() - 1 + ((o >> 2) & 1)); };
+  // The nodes that are not manifold as the grid stands, in parallel (the grid is only read).
+  // The loop below visits those, and the later nodes at a cell it takes out (their octants
+  // change); at every other node it would find a manifold disc and change nothing, so the
+  // result is that of visiting every node in order. (Visiting all was 0.3-0.4 s of each
+  // round on the 2.37M assembly at 0.25 %.)
+  std::vector<uint8_t> flagged(n, 0);
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 4096), [&](const tbb::blocked_range<size_t>& r) {
+    AdaptiveGrid::Reader local(g);
+    for (size_t i = r.begin(); i != r.end(); ++i) {
+      bool in[8];
+      for (int o = 0; o < 8; ++o) in[o] = in_volume(local.leaf_at(L, octant_cell(surf.nodes[i], o)), label, choice);
+      int group[8], groups_in, groups_out;
+      octant_groups(in, group, groups_in, groups_out);
+      flagged[i] = groups_in > 1 || groups_out > 1;
+    }
+  });
+  // Nodes by lattice point, to find those at a cell taken out.
+  std::vector<std::pair<uint64_t, uint32_t>> by_point(n);
+  const uint64_t ny = uint64_t(g.dims0().y()) * uint64_t(g.fine_units(0)) + 1, nz = uint64_t(g.dims0().z()) * uint64_t(g.fine_units(0)) + 1;
+  auto number = [&](int64_t x, int64_t y, int64_t z) { return (uint64_t(x) * ny + uint64_t(y)) * nz + uint64_t(z); };
+  tbb::parallel_for(size_t(0), n, [&](size_t i) {
+    const Coord& p = surf.nodes[i];
+    by_point[i] = {number(p.x(), p.y(), p.z()), uint32_t(i)};
+  });
+  tbb::parallel_sort(by_point.begin(), by_point.end());
+  std::priority_queue<uint32_t, std::vector<uint32_t>, std::greater<uint32_t>> pending;  // later nodes at taken cells
+  size_t current = 0;
+  auto queue_nodes_at = [&](const LeafKey& key) {  // the nodes on the cell's boundary after `current`
+    const int64_t s = g.fine_units(key.level);
+    const int64_t x0 = int64_t(key.c.x()) * s, y0 = int64_t(key.c.y()) * s, z0 = int64_t(key.c.z()) * s;
+    for (int64_t x = x0; x <= x0 + s; ++x)
+      for (int64_t y = y0; y <= y0 + s; ++y)
+        for (int64_t z = z0; z <= z0 + s; ++z) {
+          if (x != x0 && x != x0 + s && y != y0 && y != y0 + s && z != z0 && z != z0 + s) continue;  // inside
+          if (x < 0 || y < 0 || z < 0) continue;
+          const uint64_t point = number(x, y, z);
+          auto it = std::lower_bound(by_point.begin(), by_point.end(), std::make_pair(point, uint32_t(0)));
+          if (it != by_point.end() && it->first == point && it->second > current) pending.push(it->second);
+        }
+  };
   AdaptiveGrid::Reader reader(g);  // nodes come in order: cached reads (the grid changes only after)
-  for (const Coord& p : surf.nodes) {
+  for (size_t next_flagged = 0;;) {
+    while (next_flagged < n && !flagged[next_flagged]) ++next_flagged;
+    size_t visit = next_flagged;
+    if (!pending.empty() && pending.top() < visit) visit = pending.top();
+    if (visit >= n) break;
+    while (!pending.empty() && pending.top() == visit) pending.pop();
+    if (visit == next_flagged) ++next_flagged;
+    current = visit;
+    const Coord& p = surf.nodes[visit];
     // The 8 finest cells around node p; octant bit k set means the +side along axis k.
     LeafRef leaf[8];
     bool in[8];
     for (int o = 0; o < 8; ++o) {
-      Coord cell(p.x() - 1 + (o & 1), p.y() - 1 + ((o >> 1) & 1), p.z() - 1 + ((o >> 2) & 1));
-      leaf[o] = reader.leaf_at(L, cell);
+      leaf[o] = reader.leaf_at(L, octant_cell(p, o));
       LeafKey key{leaf[o].level, leaf[o].ijk};
       in[o] = in_volume(leaf[o], label, choice) && !to_exclude.count(key);
     }
@@ -311,6 +362,7 @@ size_t exclude_nonmanifold_cells(AdaptiveGrid& g, int32_t label, VolumeChoice ch
         break;
       }
       to_exclude.insert(key);
+      queue_nodes_at(key);
       for (int o = 0; o < 8; ++o)
         if (leaf[o].level == key.level && leaf[o].ijk == key.c) in[o] = false;
     }
