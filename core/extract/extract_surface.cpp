@@ -10,6 +10,7 @@
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_sort.h>
 
+#include "common/dense_numbers.h"
 #include "common/fill_vector.h"
 #include "common/grid_key.h"
 #include "common/radix_sort.h"
@@ -21,6 +22,13 @@ namespace {
 
 using grid::AdaptiveGrid;
 using grid::LeafRef;
+
+// The finest lattice's points, from 0 to the box's far side, numbered densely.
+DenseNumbers lattice_numbers(const AdaptiveGrid& g) {
+  const uint64_t fu = uint64_t(g.fine_units(0));
+  const Coord& d = g.dims0();
+  return DenseNumbers({0, 0, 0}, {uint64_t(d.x()) * fu + 1, uint64_t(d.y()) * fu + 1, uint64_t(d.z()) * fu + 1});
+}
 
 bool in_volume(const LeafRef& r, int32_t label, VolumeChoice choice) {
   if (r.outside_box) return choice == VolumeChoice::Outside;
@@ -137,10 +145,8 @@ LatticeSurface extract_faces(const AdaptiveGrid& g, int32_t label, VolumeChoice 
   // (lattice point, corner) groups the corners of each point, in parallel, the first of each
   // group is its first appearance, and one pass over the corners in order numbers them.
   LatticeSurface surf;
-  const uint64_t fu = uint64_t(g.fine_units(0));
-  const uint64_t ny = uint64_t(g.dims0().y()) * fu + 1, nz = uint64_t(g.dims0().z()) * fu + 1;
-  const uint64_t points = (uint64_t(g.dims0().x()) * fu + 1) * ny * nz;
-  auto number = [&](const Coord& p) { return (uint64_t(p.x()) * ny + uint64_t(p.y())) * nz + uint64_t(p.z()); };
+  const DenseNumbers lattice = lattice_numbers(g);
+  auto number = [&](const Coord& p) { return lattice.number(p.x(), p.y(), p.z()); };
   struct CornerRef {
     uint64_t point;   // the lattice point's number
     uint32_t corner;  // quad * 4 + corner
@@ -153,7 +159,7 @@ LatticeSurface extract_faces(const AdaptiveGrid& g, int32_t label, VolumeChoice 
     for (size_t i = k * kQuadChunk; i < end; ++i)
       for (int c = 0; c < 4; ++c) parts[k].push_back({number(quads[i].corner[c]), uint32_t(4 * i + size_t(c))});
   });
-  const FillVector<CornerRef> sorted = radix_sort_joined(parts, [](const CornerRef& r) { return r.point; }, bits_for(points));
+  const FillVector<CornerRef> sorted = radix_sort_joined(parts, [](const CornerRef& r) { return r.point; }, bits_for(lattice.count));
   std::vector<uint64_t> group_point;  // per group of corners at one point, ascending
   std::vector<size_t> group_start;
   for (size_t i = 0; i < sorted.size(); ++i)
@@ -273,8 +279,8 @@ size_t exclude_nonmanifold_cells(AdaptiveGrid& g, int32_t label, VolumeChoice ch
   });
   // Nodes by lattice point, to find those at a cell taken out.
   std::vector<std::pair<uint64_t, uint32_t>> by_point(n);
-  const uint64_t ny = uint64_t(g.dims0().y()) * uint64_t(g.fine_units(0)) + 1, nz = uint64_t(g.dims0().z()) * uint64_t(g.fine_units(0)) + 1;
-  auto number = [&](int64_t x, int64_t y, int64_t z) { return (uint64_t(x) * ny + uint64_t(y)) * nz + uint64_t(z); };
+  const DenseNumbers lattice = lattice_numbers(g);
+  auto number = [&](int64_t x, int64_t y, int64_t z) { return lattice.number(x, y, z); };
   tbb::parallel_for(size_t(0), n, [&](size_t i) {
     const Coord& p = surf.nodes[i];
     by_point[i] = {number(p.x(), p.y(), p.z()), uint32_t(i)};

@@ -14,6 +14,7 @@
 
 #include "common/box_overlap.h"
 #include "common/closest_point.h"
+#include "common/dense_numbers.h"
 #include "common/fill_vector.h"
 #include "common/radix_sort.h"
 #include "common/vec.h"
@@ -140,22 +141,21 @@ struct CellGrid {
   Vec3 origin;
   double cell;
   // Cells from -1 (a test's padding reaches below the origin) to past the far side, numbered
-  // densely, i first, then j, then k: the numbers order cells as (i, j, k) does and need only
-  // as many bits as there are cells, so that a radix sort of (cell, triangle) takes few passes.
-  uint64_t nj = 0, nk = 0, count = 0;
+  // densely: a cell's key.
+  DenseNumbers numbers;
   CellGrid(const Vec3& low, const Vec3& high, double size) : origin(low), cell(size) {
-    uint64_t n[3];
+    std::array<uint64_t, 3> n;
     for (int a = 0; a < 3; ++a) n[a] = uint64_t(std::floor((high[a] - low[a]) / cell)) + 3;
-    nj = n[1], nk = n[2], count = n[0] * n[1] * n[2];
+    numbers = DenseNumbers({-1, -1, -1}, n);
   }
   int64_t index(double x, int axis) const { return int64_t(std::floor((x - origin[axis]) / cell)); }
-  uint64_t key(int64_t i, int64_t j, int64_t k) const { return (uint64_t(i + 1) * nj + uint64_t(j + 1)) * nk + uint64_t(k + 1); }
+  uint64_t key(int64_t i, int64_t j, int64_t k) const { return numbers.number(i, j, k); }
   // How far every cell test and cell box is enlarged: far beyond the rounding of the overlap
   // test and of the halving below, so that a cell a triangle touches is never missed.
   double pad() const { return 1e-6 * cell; }
   Vec3 corner(uint64_t key) const {  // the cell's low corner
-    const int64_t i = int64_t(key / (nj * nk)) - 1, j = int64_t(key / nk % nj) - 1, k = int64_t(key % nk) - 1;
-    return {origin[0] + double(i) * cell, origin[1] + double(j) * cell, origin[2] + double(k) * cell};
+    const auto c = numbers.point(key);
+    return {origin[0] + double(c[0]) * cell, origin[1] + double(c[1]) * cell, origin[2] + double(c[2]) * cell};
   }
 };
 
@@ -413,7 +413,7 @@ SurfaceIndex::SurfaceIndex(const std::vector<Vec3>& points, const std::vector<Tr
       for (uint64_t key : cells) chunk_entries[chunk].push_back({key, f});
     }
   });
-  const FillVector<Entry> cut = radix_sort_joined(chunk_entries, [](const Entry& e) { return e.cell; }, bits_for(grid.count));
+  const FillVector<Entry> cut = radix_sort_joined(chunk_entries, [](const Entry& e) { return e.cell; }, bits_for(grid.numbers.count));
   std::vector<std::pair<uint32_t, CGAL::Bbox_3>> large;  // by triangle
   for (const auto& part : chunk_parts) large.insert(large.end(), part.begin(), part.end());
 

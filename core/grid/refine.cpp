@@ -6,6 +6,7 @@
 #include <cmath>
 #include <unordered_map>
 
+#include "common/dense_numbers.h"
 #include "common/fill_vector.h"
 #include "common/grid_key.h"
 #include "common/radix_sort.h"
@@ -26,16 +27,14 @@ struct CellHit {
   uint64_t cell;
   uint32_t triangle;
 };
-// Level-0 cells (coordinates from -1 to the grid's size) numbered densely, x first, then y,
-// then z: the numbers order the cells as Coord's x, y, z order does, and they need only as
-// many bits as the grid has cells, so that a radix sort of the hits takes few passes.
-struct CellNumbers {
-  uint64_t ny, nz, count;
-  explicit CellNumbers(const Coord& dims)
-      : ny(uint64_t(dims.y()) + 2), nz(uint64_t(dims.z()) + 2), count((uint64_t(dims.x()) + 2) * ny * nz) {}
-  uint64_t number(int x, int y, int z) const { return (uint64_t(x + 1) * ny + uint64_t(y + 1)) * nz + uint64_t(z + 1); }
-  Coord cell(uint64_t n) const { return Coord(int(n / (ny * nz)) - 1, int(n / nz % ny) - 1, int(n % nz) - 1); }
-};
+// Level-0 cells, coordinates from -1 to the grid's size, numbered densely (x, y, z order).
+DenseNumbers level0_numbers(const Coord& dims) {
+  return DenseNumbers({-1, -1, -1}, {uint64_t(dims.x()) + 2, uint64_t(dims.y()) + 2, uint64_t(dims.z()) + 2});
+}
+Coord cell_of(const DenseNumbers& numbers, uint64_t n) {
+  const auto p = numbers.point(n);
+  return Coord(int(p[0]), int(p[1]), int(p[2]));
+}
 
 struct FeatureSegments {
   // per triangle: indices into segments (feature edges and intersection segments it carries)
@@ -80,9 +79,9 @@ namespace {
 class ContactBuckets {
  public:
   template <typename Hits>
-  ContactBuckets(const Hits& hits, const CellNumbers& numbers, const prep::PreparedInput& in, const SizeControls& sc) {
+  ContactBuckets(const Hits& hits, const DenseNumbers& numbers, const prep::PreparedInput& in, const SizeControls& sc) {
     for (const CellHit& hit : hits)
-      if (sc.part_in_contact_rule[size_t(in.mesh.part_of(hit.triangle))]) cells_[key(numbers.cell(hit.cell))].push_back(hit.triangle);
+      if (sc.part_in_contact_rule[size_t(in.mesh.part_of(hit.triangle))]) cells_[key(cell_of(numbers, hit.cell))].push_back(hit.triangle);
   }
 
   // True when the cell [lo, lo+h]^3, grown by h on every side, meets a triangle of a part
@@ -147,7 +146,7 @@ RefineResult build_refined_grid(const prep::PreparedInput& in, const WrapParams&
   // triangles joined in order; then a stable sort by cell puts each cell's triangles in
   // order. (Tens of millions of hits on a 2M-triangle assembly: a comparison sort of them
   // took 4 s.)
-  const CellNumbers numbers(dims0);
+  const DenseNumbers numbers = level0_numbers(dims0);
   const double h0 = base;
   constexpr size_t kChunk = 4096;
   std::vector<std::vector<CellHit>> chunk_hits((tris.size() + kChunk - 1) / kChunk);
@@ -171,7 +170,7 @@ RefineResult build_refined_grid(const prep::PreparedInput& in, const WrapParams&
   if (sc.contact()) contact = std::make_unique<ContactBuckets>(hits, numbers, in, sc);
   std::vector<CellTris> level_cells;
   for (size_t i = 0; i < hits.size();) {
-    CellTris ct{numbers.cell(hits[i].cell), {}};
+    CellTris ct{cell_of(numbers, hits[i].cell), {}};
     size_t j = i;
     for (; j < hits.size() && hits[j].cell == hits[i].cell; ++j) ct.tris.push_back(hits[j].triangle);
     level_cells.push_back(std::move(ct));
