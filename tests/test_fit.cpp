@@ -208,6 +208,75 @@ TEST(SurfaceIndex, NearestPointsAreExactInCrowdedCells) {
   }
 }
 
+// Crowded cells sort their triangles along a line and stop early (see Lane in
+// surface_index.cpp); each triangle is also dismissed by a bound in its own frame. Both use
+// rounded floats with margins: far from the origin, beside two crossing cylinders of 3000
+// slivers and among degenerate triangles (a repeated vertex, three points on a line), the
+// nearest triangle must still be the exact one, the lowest index among equally near ones.
+TEST(SurfaceIndex, NearestPointsAreExactBesideThousandsOfSliversFarFromTheOrigin) {
+  Mesh m;
+  const Vec3 far{1000.0, -2000.0, 500.0};
+  const int n = 3000;
+  auto cylinder = [&](const Vec3& axis_tilt) {
+    const uint32_t first = uint32_t(m.points.size());
+    for (int end = 0; end < 2; ++end)
+      for (int i = 0; i < n; ++i) {
+        const double a = 2 * M_PI * i / n;
+        Vec3 p{0.5 * std::cos(a), 0.5 * std::sin(a), 2.0 * end};
+        const double y = p[1] * std::cos(axis_tilt[0]) - p[2] * std::sin(axis_tilt[0]);
+        const double z = p[1] * std::sin(axis_tilt[0]) + p[2] * std::cos(axis_tilt[0]);
+        const double x = p[0] * std::cos(axis_tilt[1]) + z * std::sin(axis_tilt[1]);
+        m.points.push_back(far + Vec3{x, y, -p[0] * std::sin(axis_tilt[1]) + z * std::cos(axis_tilt[1])});
+      }
+    for (uint32_t i = 0; i < uint32_t(n); ++i) {
+      const uint32_t a = first + i, b = first + (i + 1) % n;
+      m.triangles.push_back({a, b, b + n});
+      m.triangles.push_back({a, b + n, a + n});
+    }
+  };
+  cylinder({0.4, 0.7});
+  cylinder({-0.9, 0.2});
+  // Small triangles all around, so that the typical triangle is small and the slivers are cut.
+  Uniform uniform(99);
+  for (int k = 0; k < 4000; ++k) {
+    const Vec3 c = far + Vec3{uniform(-1.5, 1.5), uniform(-1.5, 1.5), uniform(-1, 2.5)};
+    const uint32_t a = uint32_t(m.points.size());
+    m.points.push_back(c);
+    m.points.push_back(c + Vec3{uniform(-0.01, 0.01), uniform(-0.01, 0.01), uniform(-0.01, 0.01)});
+    m.points.push_back(c + Vec3{uniform(-0.01, 0.01), uniform(-0.01, 0.01), uniform(-0.01, 0.01)});
+    m.triangles.push_back({a, a + 1, a + 2});
+    if (k % 50 == 0) m.triangles.push_back({a, a + 1, a + 1});  // a repeated vertex
+    if (k % 50 == 1) {                                           // three points on a line
+      m.points.push_back(lerp(m.points[a], m.points[a + 1], 0.25));
+      m.triangles.push_back({a, uint32_t(m.points.size() - 1), a + 1});
+    }
+  }
+  // A few slivers duplicated: exactly equal distances, so the lowest index must win.
+  for (uint32_t k = 0; k < 200; k += 7) m.triangles.push_back(m.triangles[k]);
+  fit::SurfaceIndex index(m.points, m.triangles);
+  for (int k = 0; k < 3000; ++k) {
+    // Beside a sliver of either cylinder, at distances from none to a tenth of the radius.
+    const uint32_t f = uint32_t(uniform(0, 4 * n));
+    const Tri& t = m.triangles[f];
+    const Vec3 on = lerp(lerp(m.points[t[0]], m.points[t[1]], uniform(0, 1)), m.points[t[2]], uniform(0, 1));
+    const double s = k % 3 == 0 ? 1e-6 : (k % 3 == 1 ? 1e-3 : 5e-2);
+    const Vec3 q = on + Vec3{uniform(-s, s), uniform(-s, s), uniform(-s, s)};
+    double best = INFINITY;
+    uint32_t lowest = UINT32_MAX;
+    for (uint32_t g = 0; g < m.triangles.size(); ++g) {
+      const Tri& u = m.triangles[g];
+      const double d2 = norm2(closest_on_triangle(q, m.points[u[0]], m.points[u[1]], m.points[u[2]]) - q);
+      if (d2 < best) best = d2, lowest = g;
+    }
+    const auto hit = index.closest(q);
+    ASSERT_EQ(hit.squared_distance, best) << "query " << k;
+    ASSERT_EQ(hit.triangle, lowest) << "query " << k;
+    const double d = std::sqrt(best);
+    EXPECT_TRUE(index.within(q, d * (1 + 1e-9) + 1e-12)) << "query " << k;
+    if (d > 1e-9) EXPECT_FALSE(index.within(q, d * (1 - 1e-6))) << "query " << k;
+  }
+}
+
 // Each query starts from the triangle the thread found last, so answers must not depend on
 // the order of queries: the nearest triangle, the lowest index among equally near ones. On a
 // grid of exactly coplanar triangles, many queries are equally near several triangles.
