@@ -247,11 +247,12 @@ RefineResult build_refined_grid(const prep::PreparedInput& in, const WrapParams&
         refine[i] = 1;
         const double hc = h * 0.5;
         Vec3 half{hc * (0.5 + margin_fraction), hc * (0.5 + margin_fraction), hc * (0.5 + margin_fraction)};
-        for (int k = 0; k < 8; ++k) {
-          Vec3 center = lo + Vec3{((k & 1) + 0.5) * hc, (((k >> 1) & 1) + 0.5) * hc, (((k >> 2) & 1) + 0.5) * hc};
-          for (uint32_t t : ct.tris)
-            if (triangle_overlaps_box(pts[tris[t][0]], pts[tris[t][1]], pts[tris[t][2]], center, half))
-              children[i][k].push_back(t);
+        Vec3 centers[8];
+        for (int k = 0; k < 8; ++k) centers[k] = lo + Vec3{((k & 1) + 0.5) * hc, (((k >> 1) & 1) + 0.5) * hc, (((k >> 2) & 1) + 0.5) * hc};
+        for (uint32_t t : ct.tris) {
+          const TriangleBoxTester triangle(pts[tris[t][0]], pts[tris[t][1]], pts[tris[t][2]]);
+          for (int k = 0; k < 8; ++k)
+            if (triangle.overlaps(centers[k], half)) children[i][k].push_back(t);
         }
       }
     });
