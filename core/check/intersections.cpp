@@ -1,7 +1,9 @@
 // One of the few translation units that include CGAL's heavy headers.
 #include "check/intersections.h"
 #include "common/edge_triangles.h"
+#include "common/dense_numbers.h"
 #include "common/fill_vector.h"
+#include "common/radix_sort.h"
 #include "common/vec.h"
 
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
@@ -280,41 +282,63 @@ void grid_candidate_pairs(const FillVector<Bounds>& boxes, const std::vector<uin
   }
   const double inv = 1.0 / cell;
   auto index = [&](double x, int axis) { return int64_t((x - all.min(axis)) * inv); };  // >= 0: truncation is floor
-  auto key = [](int64_t i, int64_t j, int64_t k) { return (uint64_t(i) << 42) | (uint64_t(j) << 21) | uint64_t(k); };
+  std::array<uint64_t, 3> cells_along;
+  for (int a = 0; a < 3; ++a) cells_along[a] = uint64_t(index(all.max(a), a)) + 1;
+  const DenseNumbers numbers({0, 0, 0}, cells_along);
+  auto key = [&](int64_t i, int64_t j, int64_t k) { return numbers.number(i, j, k); };
   constexpr int64_t max_cells = 27;  // more, and the triangle goes to the box intersection
   auto cell_range = [&](const Bounds& b, int64_t lo[3], int64_t hi[3]) {
     for (int a = 0; a < 3; ++a) lo[a] = index(b.min_coord(a), a), hi[a] = index(b.max_coord(a), a);
     const int64_t cells = (hi[0] - lo[0] + 1) * (hi[1] - lo[1] + 1) * (hi[2] - lo[2] + 1);
     return cells > max_cells ? 0 : size_t(cells);  // 0: a large box
   };
-  // The (cell, triangle) entries in parallel: counts, offsets, then each box fills its own
-  // run. The sort's order is total, so the result is the same on any number of threads.
-  std::vector<size_t> offset(boxes.size() + 1, 0);
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, boxes.size(), 4096), [&](const tbb::blocked_range<size_t>& r) {
-    int64_t lo[3], hi[3];
-    for (size_t n = r.begin(); n != r.end(); ++n) offset[n + 1] = cell_range(boxes[n], lo, hi);
-  });
-  std::vector<Box> large;
+  // The (cell, triangle) entries in parallel, in chunks of boxes joined in order, then sorted
+  // by (cell, group) with a stable radix sort, so each run of one group keeps its boxes in
+  // order (the order the pair loop needs; the same on any number of threads). A comparison
+  // sort of the 2.37M assembly's entries took 2.2 s of a core per check.
+  constexpr size_t kChunk = 4096;
+  const size_t chunks = (boxes.size() + kChunk - 1) / kChunk;
+  std::vector<std::vector<GridEntry>> chunk_entries(chunks);
   std::vector<uint8_t> is_large(boxes.size(), 0);
-  for (size_t n = 0; n < boxes.size(); ++n) {
-    if (offset[n + 1] == 0) large.emplace_back(boxes[n].bbox(), n), is_large[n] = 1;
-    offset[n + 1] += offset[n];
-  }
-  FillVector<GridEntry> entries(offset.back());  // each box fills its own run
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, boxes.size(), 4096), [&](const tbb::blocked_range<size_t>& r) {
+  uint32_t groups = 0;  // one more than the largest group other than kNoGroup
+  for (uint32_t g : group)
+    if (g != kNoGroup) groups = std::max(groups, g + 1);
+  tbb::parallel_for(size_t(0), chunks, [&](size_t chunk) {
     int64_t lo[3], hi[3];
-    for (size_t n = r.begin(); n != r.end(); ++n) {
-      if (is_large[n]) continue;
-      cell_range(boxes[n], lo, hi);
-      size_t e = offset[n];
+    for (size_t n = chunk * kChunk; n < std::min(boxes.size(), (chunk + 1) * kChunk); ++n) {
+      if (cell_range(boxes[n], lo, hi) == 0) {
+        is_large[n] = 1;
+        continue;
+      }
       for (int64_t i = lo[0]; i <= hi[0]; ++i)
         for (int64_t j = lo[1]; j <= hi[1]; ++j)
-          for (int64_t k = lo[2]; k <= hi[2]; ++k) entries[e++] = {key(i, j, k), group[n], uint32_t(n)};
+          for (int64_t k = lo[2]; k <= hi[2]; ++k) chunk_entries[chunk].push_back({key(i, j, k), group[n], uint32_t(n)});
     }
   });
-  tbb::parallel_sort(entries.begin(), entries.end(), [](const GridEntry& x, const GridEntry& y) {
-    return x.cell != y.cell ? x.cell < y.cell : x.group != y.group ? x.group < y.group : x.box < y.box;
-  });
+  std::vector<Box> large;
+  for (size_t n = 0; n < boxes.size(); ++n)
+    if (is_large[n]) large.emplace_back(boxes[n].bbox(), n);
+  // kNoGroup sorts after every group, as its number does.
+  const int group_bits = bits_for(uint64_t(groups) + 1), cell_bits = bits_for(numbers.count);
+  const uint64_t no_group = (uint64_t(1) << group_bits) - 1;
+  FillVector<GridEntry> entries;
+  if (group_bits + cell_bits <= 64) {
+    entries = radix_sort_joined(
+        chunk_entries, [&](const GridEntry& e) { return (e.cell << group_bits) | (e.group == kNoGroup ? no_group : uint64_t(e.group)); },
+        group_bits + cell_bits);
+  } else {  // a key too wide for one word
+    size_t total = 0;
+    for (const auto& c : chunk_entries) total += c.size();
+    entries = FillVector<GridEntry>(total);
+    size_t e = 0;
+    for (auto& c : chunk_entries) {
+      for (const GridEntry& x : c) entries[e++] = x;
+      std::vector<GridEntry>().swap(c);
+    }
+    tbb::parallel_sort(entries.begin(), entries.end(), [](const GridEntry& x, const GridEntry& y) {
+      return x.cell != y.cell ? x.cell < y.cell : x.group != y.group ? x.group < y.group : x.box < y.box;
+    });
+  }
   std::vector<size_t> starts;
   for (size_t e = 0; e < entries.size(); ++e)
     if (e == 0 || entries[e].cell != entries[e - 1].cell) starts.push_back(e);
