@@ -74,8 +74,14 @@ bool split_along_02(const std::array<uint32_t, 4>& q, const std::vector<Vec3>& p
   double min13 = std::min(area2(q[0], q[1], q[3]), area2(q[1], q[2], q[3]));
   if (min02 < min_area2 && min13 >= min_area2) return false;
   if (min13 < min_area2 && min02 >= min_area2) return true;
-  double d02 = input.squared_distance((p[q[0]] + p[q[2]]) * 0.5);
-  double d13 = input.squared_distance((p[q[1]] + p[q[3]]) * 0.5);
+  const double d02 = input.squared_distance((p[q[0]] + p[q[2]]) * 0.5);
+  // The other midpoint is only compared with it: a query bounded a little beyond d02 finds
+  // its exact distance when it is that near (the two may then tie), and else 0-2 is nearer.
+  // (The bounded query prunes more: choosing diagonals was 1.9 s of the 2.37M assembly's
+  // projection at 0.25 %.)
+  SurfaceIndex::Hit near13;
+  if (!input.closest_within((p[q[1]] + p[q[3]]) * 0.5, std::sqrt(d02 * (1 + 1e-9)), near13)) return true;
+  const double d13 = near13.squared_distance;
   if (std::fabs(d02 - d13) <= 1e-12 * (d02 + d13)) return min02 >= min13;
   return d02 < d13;
 }
