@@ -297,6 +297,12 @@ TEST(SurfaceIndex, AnswersDoNotDependOnTheOrderOfQueries) {
     ASSERT_EQ(forward[k].triangle, backward[k].triangle) << "query " << k;
     ASSERT_EQ(forward[k].point, backward[k].point) << "query " << k;
     ASSERT_EQ(forward[k].squared_distance, backward[k].squared_distance);
+    // A hint (a triangle tried first) changes the work, not the answer: far, near, invalid.
+    for (uint32_t hint : {uint32_t(k * 7919 % m.triangles.size()), forward[k].triangle, uint32_t(m.triangles.size() + 3)}) {
+      const auto hinted = index.closest(queries[k], hint);
+      ASSERT_EQ(hinted.triangle, forward[k].triangle) << "query " << k << ", hint " << hint;
+      ASSERT_EQ(hinted.squared_distance, forward[k].squared_distance);
+    }
     // The lowest index among the equally near triangles.
     const Vec3& q = queries[k];
     uint32_t lowest = UINT32_MAX;

@@ -68,19 +68,21 @@ class NodeProximity {
 
 // Diagonal (0-2 or 1-3) of a quad whose midpoint lies nearer the input: the split that
 // deviates least from it. A split that makes a degenerate triangle is never chosen.
-bool split_along_02(const std::array<uint32_t, 4>& q, const std::vector<Vec3>& p, const SurfaceIndex& input, double min_area2) {
+// `foot`: each node's nearest input triangle when it was projected (a hint: see closest()).
+bool split_along_02(const std::array<uint32_t, 4>& q, const std::vector<Vec3>& p, const SurfaceIndex& input, double min_area2,
+                    const std::vector<uint32_t>& foot) {
   auto area2 = [&](uint32_t a, uint32_t b, uint32_t c) { return norm(area_vector(p[a], p[b], p[c])); };
   double min02 = std::min(area2(q[0], q[1], q[2]), area2(q[0], q[2], q[3]));
   double min13 = std::min(area2(q[0], q[1], q[3]), area2(q[1], q[2], q[3]));
   if (min02 < min_area2 && min13 >= min_area2) return false;
   if (min13 < min_area2 && min02 >= min_area2) return true;
-  const double d02 = input.squared_distance((p[q[0]] + p[q[2]]) * 0.5);
+  const double d02 = input.closest((p[q[0]] + p[q[2]]) * 0.5, foot[q[0]]).squared_distance;
   // The other midpoint is only compared with it: a query bounded a little beyond d02 finds
   // its exact distance when it is that near (the two may then tie), and else 0-2 is nearer.
   // (The bounded query prunes more: choosing diagonals was 1.9 s of the 2.37M assembly's
   // projection at 0.25 %.)
   SurfaceIndex::Hit near13;
-  if (!input.closest_within((p[q[1]] + p[q[3]]) * 0.5, std::sqrt(d02 * (1 + 1e-9)), near13)) return true;
+  if (!input.closest_within((p[q[1]] + p[q[3]]) * 0.5, std::sqrt(d02 * (1 + 1e-9)), near13, foot[q[1]])) return true;
   const double d13 = near13.squared_distance;
   if (std::fabs(d02 - d13) <= 1e-12 * (d02 + d13)) return min02 >= min13;
   return d02 < d13;
@@ -158,8 +160,12 @@ FittedSurface fit_to_input(const extract::LatticeSurface& surf, const grid::Adap
   // The nearest input point of `from`, `offset` off the input on node i's side (the side
   // its lattice node is on, judged against the plane of the triangle hit: smoothing may
   // have carried `from` across a thin sheet).
+  // Each node's nearest triangle from its last projection: the next query for the node
+  // (relaxing moves it a little) and the quads' diagonal choice start from it.
+  std::vector<uint32_t> foot(n, UINT32_MAX);
   auto project_on_side = [&](size_t i, const Vec3& from) {
-    auto hit = input.closest(from);
+    auto hit = input.closest(from, foot[i]);
+    foot[i] = hit.triangle;
     const double lattice_side = dot(lattice[i] - hit.point, hit.normal);
     const Vec3 fallback = lattice_side >= 0 ? hit.normal : hit.normal * -1.0;
     Vec3 away = from - hit.point;
@@ -255,7 +261,7 @@ FittedSurface fit_to_input(const extract::LatticeSurface& surf, const grid::Adap
       bool along02 = is_traced(q[0], q[2]) || (side[0] && side[3]) || (side[1] && side[2]);
       bool along13 = is_traced(q[1], q[3]) || (side[0] && side[1]) || (side[2] && side[3]);
       if (along02 == along13) along02 = along13 = false;  // both or neither: the input decides
-      split_02[k] = along02 || (!along13 && split_along_02(q, target, input, min_area2));
+      split_02[k] = along02 || (!along13 && split_along_02(q, target, input, min_area2, foot));
     }
   });
   for (size_t k = 0; k < quads.size(); ++k) {

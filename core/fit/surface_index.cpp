@@ -599,19 +599,21 @@ thread_local const void* last_closest_index = nullptr;
 thread_local uint32_t last_closest_triangle = UINT32_MAX;
 }  // namespace
 
-SurfaceIndex::Hit SurfaceIndex::closest(const Vec3& q) const {
+SurfaceIndex::Hit SurfaceIndex::closest(const Vec3& q, uint32_t hint) const {
   Hit hit;
-  if (!closest_within(q, std::numeric_limits<double>::infinity(), hit)) {  // no input triangles
+  if (!closest_within(q, std::numeric_limits<double>::infinity(), hit, hint)) {  // no input triangles
     hit.point = q, hit.triangle = UINT32_MAX, hit.squared_distance = std::numeric_limits<double>::infinity(), hit.normal = {0, 0, 0};
   }
   return hit;
 }
 
-bool SurfaceIndex::closest_within(const Vec3& q, double radius, Hit& hit) const {
+bool SurfaceIndex::closest_within(const Vec3& q, double radius, Hit& hit, uint32_t hint) const {
   const Store& store = impl_->store;
   NearestTraits traits(q, store);
   traits.best_d2 = radius * radius;
-  if (last_closest_index == impl_.get() && last_closest_triangle < store.triangles.size()) traits.consider(last_closest_triangle);
+  if (hint < store.triangles.size()) traits.consider(hint);
+  if (last_closest_index == impl_.get() && last_closest_triangle < store.triangles.size() && last_closest_triangle != hint)
+    traits.consider(last_closest_triangle);
   impl_->tree.traversal_with_priority(point(q), traits);
   if (traits.best == UINT32_MAX) return false;
   last_closest_index = impl_.get(), last_closest_triangle = traits.best;

@@ -22,10 +22,12 @@ class SurfaceIndex {
     double squared_distance;
     Vec3 normal;  // unit normal of the triangle hit (its vertex order decides the sign)
   };
-  Hit closest(const Vec3& query) const;
+  // `hint`: a triangle likely near the query (UINT32_MAX: none), tried first so that the
+  // tree opens fewer boxes. The answer does not depend on it.
+  Hit closest(const Vec3& query, uint32_t hint = UINT32_MAX) const;
   // The same hit when the input is within `radius` of the query (false, and `hit` untouched,
   // when it is not): boxes beyond the radius are never opened, so a far query costs little.
-  bool closest_within(const Vec3& query, double radius, Hit& hit) const;
+  bool closest_within(const Vec3& query, double radius, Hit& hit, uint32_t hint = UINT32_MAX) const;
   double squared_distance(const Vec3& query) const { return closest(query).squared_distance; }
   // The hit on a given triangle: for the nearest triangle, the same hit as closest() gives.
   Hit hit_on(const Vec3& query, uint32_t triangle) const;
