@@ -265,12 +265,12 @@ constexpr size_t kLaneAbove = 8;
 // across the first one in its plane (see Lane). `mid`: about the piece's centre.
 void add_piece(const Store& store, const CGAL::Bbox_3& box, const Vec3& mid, const std::vector<uint32_t>& tris, PieceList& out) {
   Piece piece{uint32_t(out.ids.size()), uint32_t(tris.size()), box};
-  if (tris.size() <= kLaneAbove) {
+  auto add_unsorted = [&] {
     out.pieces.push_back(piece);
     out.ids.insert(out.ids.end(), tris.begin(), tris.end());
     out.keys.resize(out.ids.size(), 0.0f);
-    return;
-  }
+  };
+  if (tris.size() <= kLaneAbove) return add_unsorted();
   const auto& m = store.frames[tris[0]].axis[1];
   const auto& n = store.frames[tris[0]].axis[2];
   const Vec3 across{m[0], m[1], m[2]}, normal{n[0], n[1], n[2]};
@@ -299,6 +299,9 @@ void add_piece(const Store& store, const CGAL::Bbox_3& box, const Vec3& mid, con
     farthest = std::max(farthest, std::fabs(key));
     keyed.push_back({float(key), f});
   }
+  // Coordinates so large that the projections overflow (or their float keys would): no order
+  // to rely on, nor to sort by.
+  if (!std::isfinite(reach + farthest + lane.low + lane.high + size) || farthest > 1e30) return add_unsorted();
   std::sort(keyed.begin(), keyed.end());
   lane.reach = reach + 2.4e-7 * farthest;  // a float key is within 2^-23 of its double
   lane.slack = 1e-10 * (size + std::fabs(lane.centre));
