@@ -146,10 +146,10 @@ class Remesher {
       };
       std::vector<uint32_t> region = core;
       bool clash = false;
-      for (int r = 0; r < rings && !clash; ++r) clash = clashes(region = grow(region));
+      for (int r = 0; r < rings && !clash; ++r) clash = clashes(region = grow_marked(region));
       if (clash || clashes(region = close_pockets(region))) continue;
       tried_.insert(signature_of(seed, rings));
-      const std::vector<uint32_t> around = grow(region);
+      const std::vector<uint32_t> around = grow_marked(region);
       for (uint32_t f : around) taken[f] = 1;
       Region reg;
       reg.triangles = region;
@@ -202,6 +202,23 @@ class Remesher {
           }
           if (!open) out.insert(out.end(), pocket.begin(), pocket.end());
         }
+    std::sort(out.begin(), out.end());
+    return out;
+  }
+
+  // grow() for gathering, which is serial: marks drop the repeats before the sort (each
+  // triangle is listed from the fans of up to three vertices, and sorting every listing was
+  // most of gathering: 2.37M assembly at 0.25 %, its serial part 1.8 -> 0.7 s).
+  std::vector<uint32_t> grow_marked(const std::vector<uint32_t>& set) {
+    const uint32_t in = next_mark();
+    std::vector<uint32_t> out;
+    auto add = [&](uint32_t g) {
+      if (marks_[g] != in) marks_[g] = in, out.push_back(g);
+    };
+    for (uint32_t f : set) add(f);
+    for (uint32_t f : set)
+      for (uint32_t v : s_.triangles[f])
+        for (uint32_t g : vf_[v]) add(g);
     std::sort(out.begin(), out.end());
     return out;
   }
