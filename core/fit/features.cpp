@@ -5,11 +5,14 @@
 #include <limits>
 #include <map>
 #include <queue>
+#include <type_traits>
 #include <unordered_map>
 
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_sort.h>
 
 #include "common/closest_point.h"
+#include "common/fill_vector.h"
 #include "common/grid_key.h"
 #include "common/vec.h"
 
@@ -24,6 +27,58 @@ struct Candidate {
   uint32_t cell, node;
   double distance;
   bool operator<(const Candidate& o) const { return cell != o.cell ? cell < o.cell : node < o.node; }
+};
+
+// Nodes by grid cell, a node in the cell of each of its two given positions, each cell's
+// nodes in increasing order: (cell, node) pairs sorted in parallel, and a map from each cell
+// to its run. (A map of per-cell vectors, filled serially, was 0.4 s of the 2.37M assembly's
+// snapping with one core idle.)
+class SortedNodeCells {
+ public:
+  SortedNodeCells(const std::vector<Vec3>& at, const std::vector<Vec3>& also_at, double inv_cell) {
+    const size_t n = at.size();
+    FillVector<Entry> entries(2 * n);
+    const Key none{INT64_MAX, INT64_MAX, INT64_MAX};  // sorts last: a node whose two cells are one
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 8192), [&](const tbb::blocked_range<size_t>& r) {
+      for (size_t i = r.begin(); i != r.end(); ++i) {
+        const Key a = grid_key(at[i], inv_cell), b = grid_key(also_at[i], inv_cell);
+        entries[2 * i] = {a, uint32_t(i)};
+        entries[2 * i + 1] = {b == a ? none : b, uint32_t(i)};
+      }
+    });
+    tbb::parallel_sort(entries.begin(), entries.end());
+    while (!entries.empty() && entries.back().key == none) entries.pop_back();
+    nodes_.resize(entries.size());
+    for (size_t i = 0; i < entries.size(); ++i) {
+      nodes_[i] = entries[i].node;
+      if (i == 0 || !(entries[i].key == entries[i - 1].key)) runs_.push_back({entries[i].key, uint32_t(i)});
+    }
+    cells_.reserve(runs_.size());
+    for (size_t k = 0; k < runs_.size(); ++k) cells_.emplace(runs_[k].key, uint32_t(k));
+    runs_.push_back({none, uint32_t(entries.size())});
+  }
+  template <typename F>
+  void for_each_in(const Key& k, F&& fn) const {
+    auto it = cells_.find(k);
+    if (it == cells_.end()) return;
+    for (uint32_t i = runs_[it->second].start; i < runs_[it->second + 1].start; ++i) fn(nodes_[i]);
+  }
+
+ private:
+  struct Entry {
+    Key key;
+    uint32_t node;
+    bool operator<(const Entry& o) const {
+      return key.x != o.key.x ? key.x < o.key.x : key.y != o.key.y ? key.y < o.key.y : key.z != o.key.z ? key.z < o.key.z : node < o.node;
+    }
+  };
+  struct Run {
+    Key key;
+    uint32_t start;
+  };
+  std::vector<uint32_t> nodes_;
+  std::vector<Run> runs_;
+  std::unordered_map<Key, uint32_t, KeyHash> cells_;  // cell -> its run
 };
 
 // A piece of a curve with arc-length parameters at its points.
@@ -162,13 +217,8 @@ std::vector<std::pair<uint32_t, uint32_t>> snap_to_curves(const std::vector<Feat
   // Nodes bucketed by target position, cells of the radius.
   const double inv = 1.0 / radius;
   auto key = [&](const Vec3& p) { return grid_key(p, inv); };
-  std::unordered_map<Key, std::vector<uint32_t>, KeyHash> buckets;
   const std::vector<Vec3> first_target = target;  // the targets the buckets were built on
-  for (uint32_t i = 0; i < n; ++i) {
-    Key kt = key(target[i]), kl = key(lattice[i]);
-    buckets[kt].push_back(i);
-    if (!(kl == kt)) buckets[kl].push_back(i);
-  }
+  const SortedNodeCells buckets(target, lattice, inv);
 
   // Corner points already taken by a node, so curves meeting there share it.
   std::unordered_map<Key, uint32_t, KeyHash> corner_node;
@@ -213,17 +263,25 @@ std::vector<std::pair<uint32_t, uint32_t>> snap_to_curves(const std::vector<Feat
     piece.closest(lattice[v], dl, at);
     return std::min(d, dl);
   };
-  // The nodes of `cells` (buckets of nodes) within r of the piece, in scan order.
+  // The nodes of `cells` (buckets of nodes: a NodeCells or SortedNodeCells) within r of the
+  // piece, in scan order.
   using NodeCells = std::unordered_map<Key, std::vector<uint32_t>, KeyHash>;
-  auto nodes_near = [&](const Piece& piece, double r, const NodeCells& cells) {
+  auto for_each_in = [](const auto& cells, const Key& k, auto&& fn) {
+    if constexpr (std::is_same_v<std::decay_t<decltype(cells)>, NodeCells>) {
+      auto it = cells.find(k);
+      if (it != cells.end())
+        for (uint32_t v : it->second) fn(v);
+    } else {
+      cells.for_each_in(k, fn);
+    }
+  };
+  auto nodes_near = [&](const Piece& piece, double r, const auto& cells) {
     std::vector<Candidate> out;
     for_region_cells(piece, r, [&](uint32_t cell, const Key& k) {
-      auto it = cells.find(k);
-      if (it == cells.end()) return;
-      for (uint32_t v : it->second) {
+      for_each_in(cells, k, [&](uint32_t v) {
         const double d = distance_to(piece, v);
         if (d <= r) out.push_back({cell, v, d});
-      }
+      });
     });
     return out;
   };

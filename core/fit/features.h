@@ -6,6 +6,7 @@
 #include <utility>
 #include <vector>
 
+#include "common/compressed_lists.h"
 #include "prep/prepare.h"
 #include "vdbwrap/mesh.h"
 
@@ -32,7 +33,7 @@ struct SnapStats {
 // The wrap as a graph for tracing: every node's neighbours through polygon edges, quad
 // diagonals and fan spokes.
 struct WrapGraph {
-  std::vector<std::vector<uint32_t>> neighbours;
+  CompressedLists neighbours;
 };
 
 // Traces each curve, in pieces of about piece_length, as a shortest path over the wrap graph

@@ -8,6 +8,7 @@
 #include <unordered_map>
 
 #include "check/intersections.h"
+#include "common/compressed_lists.h"
 #include "common/float_round.h"
 #include "common/grid_key.h"
 #include "common/sorted_point_grid.h"
@@ -129,19 +130,14 @@ FittedSurface fit_to_input(const extract::LatticeSurface& surf, const grid::Adap
   // non-shrinking variant measured worse on the corpus: it untangles less), then each
   // smoothed node goes to its nearest input point, stopped a small offset short of it on
   // its lattice node's side, so sheets wrapped around a zero-thickness input never coincide.
-  std::vector<std::vector<uint32_t>> neighbours(n);
-  auto link = [&](uint32_t a, uint32_t b) {
-    neighbours[a].push_back(b);
-    neighbours[b].push_back(a);
-  };
-  for (const auto& poly : surf.polygons)
-    for (size_t k = 0; k < poly.size(); ++k)
-      if (poly[k] < poly[(k + 1) % poly.size()] || poly.size() != 4) link(poly[k], poly[(k + 1) % poly.size()]);
-  for (const Tri& f : fans) link(f[0], f[1]);
-  for (auto& nb : neighbours) {
-    std::sort(nb.begin(), nb.end());
-    nb.erase(std::unique(nb.begin(), nb.end()), nb.end());
-  }
+  CompressedLists neighbours = compressed_lists(n, [&](auto&& emit) {
+    auto link = [&](uint32_t a, uint32_t b) { emit(a, b), emit(b, a); };
+    for (const auto& poly : surf.polygons)
+      for (size_t k = 0; k < poly.size(); ++k)
+        if (poly[k] < poly[(k + 1) % poly.size()] || poly.size() != 4) link(poly[k], poly[(k + 1) % poly.size()]);
+    for (const Tri& f : fans) link(f[0], f[1]);
+  });
+  sort_and_unique(neighbours);
   std::vector<Vec3> smoothed = lattice, next(n);
   for (int it = 0; it < params.presmooth_iterations; ++it) {
     tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 1024), [&](const tbb::blocked_range<size_t>& r) {
@@ -206,11 +202,11 @@ FittedSurface fit_to_input(const extract::LatticeSurface& surf, const grid::Adap
     // radius covers that.
     const double trace_radius = std::max(2.0 * hf, 1.5 * g.base_size());
     WrapGraph graph;
-    graph.neighbours = neighbours;
-    for (const auto& q : quads) {
-      graph.neighbours[q[0]].push_back(q[2]), graph.neighbours[q[2]].push_back(q[0]);
-      graph.neighbours[q[1]].push_back(q[3]), graph.neighbours[q[3]].push_back(q[1]);
-    }
+    graph.neighbours = compressed_lists(n, [&](auto&& emit) {  // each node's neighbours, then its diagonals
+      for (uint32_t i = 0; i < n; ++i)
+        for (uint32_t w : neighbours[i]) emit(i, w);
+      for (const auto& q : quads) emit(q[0], q[2]), emit(q[2], q[0]), emit(q[1], q[3]), emit(q[3], q[1]);
+    });
     auto reachable = [&](const Vec3& from, const Vec3& to) { return input.in_view(from, to, offset); };
     for (const auto& [a, b] : snap_to_curves(curves, graph, lattice, target, snapped, trace_radius, std::max(8.0 * hf, 2.0 * trace_radius), offset, out.snap, reachable))
       traced.insert({std::min(a, b), std::max(a, b)});
@@ -291,10 +287,7 @@ FittedSurface fit_to_input(const extract::LatticeSurface& surf, const grid::Adap
   p.resize(n);
   for (size_t i = 0; i < n; ++i) p[i] = world(target[i]);
   std::vector<uint8_t> strikes(n, 0);
-  std::vector<std::vector<uint32_t>> vertex_triangles(n);
-  (void)t;
-  for (uint32_t f = 0; f < out.triangles.size(); ++f)
-    for (uint32_t v : out.triangles[f]) vertex_triangles[v].push_back(f);
+  const CompressedLists vertex_triangles = vertex_triangle_lists(n, out.triangles);
 
   // Nodes on a feature curve stay on it: an offending triangle moves its other nodes first.
   auto flag_triangle = [&](uint32_t f, std::vector<uint8_t>& flag) {
