@@ -54,6 +54,16 @@ CompressedLists vertex_triangle_lists(size_t n, const Triangles& triangles) {
   });
 }
 
+// The lists as one vector each, for lists that change afterwards: each made at its final
+// size, in parallel (pushing item by item reallocated most lists a few times, serially).
+inline std::vector<std::vector<uint32_t>> to_vectors(const CompressedLists& lists) {
+  std::vector<std::vector<uint32_t>> out(lists.size());
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, lists.size(), 4096), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t i = r.begin(); i != r.end(); ++i) out[i].assign(lists[i].begin(), lists[i].end());
+  });
+  return out;
+}
+
 // Every list sorted and its repeats dropped (in parallel), then the arrays closed up.
 inline void sort_and_unique(CompressedLists& lists) {
   const size_t n = lists.size();

@@ -13,6 +13,7 @@
 #include <unordered_map>
 
 #include "check/intersections.h"
+#include "common/compressed_lists.h"
 #include "common/bitwise_key.h"
 #include "common/closest_point.h"
 #include "common/concurrent_memo.h"
@@ -104,9 +105,7 @@ class Inserter {
       : s_(s), p_(s.points), t_(s.triangles), input_(input), origin_(origin), prm_(prm),
         buckets_(s.points, s.triangles, std::max(prm.max_move, 1e-300)),
         inv_change_cell_(1.0 / std::max(prm.max_move, 1e-300)) {
-    vf_.resize(p_.size());
-    for (uint32_t f = 0; f < t_.size(); ++f)
-      for (uint32_t v : t_[f]) vf_[v].push_back(f);
+    vf_ = to_vectors(vertex_triangle_lists(p_.size(), t_));
     for (const auto& [a, b] : s.feature_edges) edges_.insert({std::min(a, b), std::max(a, b)});
   }
 

@@ -12,6 +12,7 @@
 #include <unordered_map>
 
 #include "check/intersections.h"
+#include "common/compressed_lists.h"
 #include "common/edge_key.h"
 #include "common/grid_key.h"
 #include "common/triangle_buckets.h"
@@ -39,14 +40,12 @@ class Coarsener {
         buckets_(p, t, std::max(params.max_edge, 1e-300)) {
     alive_.assign(t.size(), 1);
     vertex_alive_.assign(p.size(), 1);
-    vf_.resize(p.size());
+    vf_ = to_vectors(vertex_triangle_lists(p.size(), t));
     ring_claim_.assign(p.size(), 0);
     changed_in_.assign(p.size(), 0);
     made_in_.assign(t.size(), 0);
     witness_ = std::make_unique<std::atomic<uint32_t>[]>(p.size());
     for (size_t i = 0; i < p.size(); ++i) witness_[i].store(UINT32_MAX, std::memory_order_relaxed);
-    for (uint32_t f = 0; f < t.size(); ++f)
-      for (uint32_t v : t[f]) vf_[v].push_back(f);
     cos_turn_ = std::cos(prm_.max_normal_turn_deg * M_PI / 180.0);
     cos_min_angle_ = std::cos(prm_.min_angle_deg * M_PI / 180.0);
     for (uint32_t f = 0; f < t.size(); ++f)

@@ -9,6 +9,7 @@
 #include <unordered_set>
 
 #include "check/intersections.h"
+#include "common/compressed_lists.h"
 #include "common/edge_key.h"
 #include "common/float_round.h"
 #include "common/grid_key.h"
@@ -65,9 +66,7 @@ class Remesher {
       deviation_[f] = float(normal_deviation_deg(s.points[t[0]], s.points[t[1]], s.points[t[2]], cell, ref));
     });
     for (const auto& [a, b] : s.feature_edges) feature_edges_.insert(edge_key(a, b));
-    vf_.resize(s.points.size());
-    for (uint32_t f = 0; f < s.triangles.size(); ++f)
-      for (uint32_t v : s.triangles[f]) vf_[v].push_back(f);
+    vf_ = to_vectors(vertex_triangle_lists(s.points.size(), s.triangles));
     // Feature samples bucketed, to find those near a region.
     feature_cell_ = 2.0 * *std::max_element(s.cell_size.begin(), s.cell_size.end());
     for (uint32_t i = 0; i < ref.feature_samples.size(); ++i)
