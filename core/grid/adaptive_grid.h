@@ -140,12 +140,12 @@ class AdaptiveGrid {
 
   // Level 0 in the order z, y, x (the order of for_each_leaf), by rows of blocks: a uniform
   // block's cells in a row come as one run, on_run(first, length, value, block); the cells of
-  // other blocks one by one, on_cell(c, value).
+  // other blocks one by one, on_cell(c, value). Optionally only the planes z_begin <= z < z_end.
   template <typename OnRun, typename OnCell>
-  void for_each_level0_run(OnRun&& on_run, OnCell&& on_cell) const {
+  void for_each_level0_run(OnRun&& on_run, OnCell&& on_cell, int z_begin = 0, int z_end = INT32_MAX) const {
     const Coord& d = dims0_;
     auto level0 = grids_[0]->getConstAccessor();
-    for (int z = 0; z < d.z(); ++z)
+    for (int z = std::max(0, z_begin); z < std::min(d.z(), z_end); ++z)
       for (int y = 0; y < d.y(); ++y)
         for (int x0 = 0; x0 < d.x(); x0 += kBlock) {
           const Block b = block_of(Coord(x0, y, z));
