@@ -338,10 +338,12 @@ WrapResult run_pipeline(const Mesh& input, const WrapParams& params, ProgressSin
     if (progress) progress->progress("validate", 0.0, "checking the wrap");
     check::CgalVerdict verdict;
     for (int attempt = 0;; ++attempt) {
-      report.output = diagnose(result.surface, false);
+      // The authoritative self-intersection verdict is CGAL's own on the closed mesh. Both
+      // checks only read the surface, and each has serial parts: side by side.
+      tbb::task_group checks;
+      checks.run([&] { report.output = diagnose(result.surface, false); });
+      checks.run_and_wait([&] { verdict = check::cgal_verdict(result.surface.points, result.surface.triangles); });
       check_cancel(progress);
-      // The authoritative self-intersection verdict is CGAL's own on the closed mesh.
-      verdict = check::cgal_verdict(result.surface.points, result.surface.triangles);
       report.output.self_intersecting = verdict.self_intersects;
       crossing.clear();
       if (verdict.valid_polygon_mesh && verdict.self_intersects) {
