@@ -1,6 +1,7 @@
 #include "post/quality.h"
 
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_sort.h>
 
 #include <algorithm>
 #include <cmath>
@@ -143,19 +144,21 @@ QualityCounts analyse_quality(const std::vector<Vec3>& p, const std::vector<Tri>
     }
   }
 
-  // Edges are counted once each (an edge defect flags both its triangles).
-  std::vector<std::pair<uint64_t, uint8_t>> edges;
-  edges.reserve(tris.size() * 3);
-  for (uint32_t f = 0; f < tris.size(); ++f)
-    for (int k = 0; k < 3; ++k) {
-      const uint32_t u = tris[f][k], v = tris[f][(k + 1) % 3];
-      const double len = norm(p[v] - p[u]);
-      uint8_t e = 0;
-      if (len < t.short_edge * std::min(cell_size[u], cell_size[v])) e |= kShortEdge;
-      if (len > t.long_edge * std::max(cell_size[u], cell_size[v])) e |= kLongEdge;
-      edges.push_back({edge_key(u, v), e});
-    }
-  std::sort(edges.begin(), edges.end());
+  // Edges are counted once each (an edge defect flags both its triangles). Listed and sorted
+  // in parallel: serially, 0.16 s of each analysis of the 2.37M assembly's wrap.
+  std::vector<std::pair<uint64_t, uint8_t>> edges(tris.size() * 3);
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, tris.size(), 4096), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t f = r.begin(); f != r.end(); ++f)
+      for (int k = 0; k < 3; ++k) {
+        const uint32_t u = tris[f][k], v = tris[f][(k + 1) % 3];
+        const double len = norm(p[v] - p[u]);
+        uint8_t e = 0;
+        if (len < t.short_edge * std::min(cell_size[u], cell_size[v])) e |= kShortEdge;
+        if (len > t.long_edge * std::max(cell_size[u], cell_size[v])) e |= kLongEdge;
+        edges[3 * f + size_t(k)] = {edge_key(u, v), e};
+      }
+  });
+  tbb::parallel_sort(edges.begin(), edges.end());
   edges.erase(std::unique(edges.begin(), edges.end(), [](const auto& x, const auto& y) { return x.first == y.first; }),
               edges.end());
   q.edges = edges.size();
