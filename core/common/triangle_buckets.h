@@ -8,6 +8,8 @@
 #include <unordered_map>
 #include <utility>
 #include <vector>
+#include <chrono>
+#include <cstdio>
 
 #include <tbb/parallel_for.h>
 
@@ -26,8 +28,10 @@ class TriangleBuckets {
   TriangleBuckets(const std::vector<Vec3>& p, const std::vector<Tri>& tris, double cell) : p_(p), tris_(tris), inv_(1.0 / cell) {
     boxes_.resize(tris.size());
     seen_.assign(tris.size(), 0);
+    auto t0 = std::chrono::steady_clock::now();
     if (!build_sorted())
       for (uint32_t f = 0; f < tris.size(); ++f) insert(f);
+    fprintf(stderr, "TIMING buckets %zu tris %zu cells %.3f\n", tris.size(), cells_.size(), std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
   }
   // After triangle f moved, or was appended to the triangle list.
   void update(uint32_t f) { insert(f); }
@@ -173,17 +177,21 @@ class TriangleBuckets {
           for_cells(boxes_[f], [&](const Key& k) { parts[c].push_back({numbers.number(k.x, k.y, k.z), uint32_t(f)}); });
     });
     const FillVector<Entry> sorted = radix_sort_joined(parts, [](const Entry& e) { return e.cell; }, bits_for(numbers.count));
-    size_t runs = 0;
-    for (size_t i = 0; i < sorted.size(); ++i) runs += i == 0 || sorted[i].cell != sorted[i - 1].cell;
-    cells_.reserve(runs);
-    for (size_t i = 0; i < sorted.size();) {
-      size_t j = i;
-      while (j < sorted.size() && sorted[j].cell == sorted[i].cell) ++j;
-      std::vector<uint32_t> list(j - i);
-      for (size_t k = i; k < j; ++k) list[k - i] = sorted[k].triangle;
-      const std::array<int64_t, 3> at = numbers.point(sorted[i].cell);
-      cells_.emplace(Key{at[0], at[1], at[2]}, std::move(list));
-      i = j;
+    std::vector<size_t> runs;  // where each cell's entries start
+    for (size_t i = 0; i < sorted.size(); ++i)
+      if (i == 0 || sorted[i].cell != sorted[i - 1].cell) runs.push_back(i);
+    runs.push_back(sorted.size());
+    std::vector<std::vector<uint32_t>> lists(runs.size() - 1);  // made in parallel, moved into the map
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, lists.size(), 1024), [&](const tbb::blocked_range<size_t>& r) {
+      for (size_t k = r.begin(); k != r.end(); ++k) {
+        lists[k].resize(runs[k + 1] - runs[k]);
+        for (size_t i = runs[k]; i < runs[k + 1]; ++i) lists[k][i - runs[k]] = sorted[i].triangle;
+      }
+    });
+    cells_.reserve(lists.size());
+    for (size_t k = 0; k < lists.size(); ++k) {
+      const std::array<int64_t, 3> at = numbers.point(sorted[runs[k]].cell);
+      cells_.emplace(Key{at[0], at[1], at[2]}, std::move(lists[k]));
     }
     return true;
   }
