@@ -8,8 +8,6 @@
 #include <unordered_map>
 #include <utility>
 #include <vector>
-#include <chrono>
-#include <cstdio>
 
 #include <tbb/parallel_for.h>
 
@@ -28,10 +26,8 @@ class TriangleBuckets {
   TriangleBuckets(const std::vector<Vec3>& p, const std::vector<Tri>& tris, double cell) : p_(p), tris_(tris), inv_(1.0 / cell) {
     boxes_.resize(tris.size());
     seen_.assign(tris.size(), 0);
-    auto t0 = std::chrono::steady_clock::now();
     if (!build_sorted())
       for (uint32_t f = 0; f < tris.size(); ++f) insert(f);
-    fprintf(stderr, "TIMING buckets %zu tris %zu cells %.3f\n", tris.size(), cells_.size(), std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
   }
   // After triangle f moved, or was appended to the triangle list.
   void update(uint32_t f) { insert(f); }
