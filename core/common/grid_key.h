@@ -11,6 +11,8 @@ namespace vdbwrap {
 struct GridKey {
   int64_t x, y, z;
   bool operator==(const GridKey& o) const { return x == o.x && y == o.y && z == o.z; }
+  // x first, then y, then z: for sorting entries by cell.
+  bool operator<(const GridKey& o) const { return x != o.x ? x < o.x : y != o.y ? y < o.y : z < o.z; }
 };
 
 struct GridKeyHash {

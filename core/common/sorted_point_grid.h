@@ -60,9 +60,7 @@ class SortedPointGrid {
   struct Entry {
     GridKey key;
     uint32_t point;
-    bool operator<(const Entry& o) const {
-      return key.x != o.key.x ? key.x < o.key.x : key.y != o.key.y ? key.y < o.key.y : key.z != o.key.z ? key.z < o.key.z : point < o.point;
-    }
+    bool operator<(const Entry& o) const { return key == o.key ? point < o.point : key < o.key; }
   };
   double inv_;
   FillVector<Entry> entries_;

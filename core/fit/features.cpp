@@ -14,8 +14,8 @@
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_reduce.h>
-#include <tbb/task_group.h>
 #include <tbb/parallel_sort.h>
+#include <tbb/task_group.h>
 
 #include "common/closest_point.h"
 #include "common/fill_vector.h"
@@ -74,9 +74,7 @@ class SortedNodeCells {
   struct Entry {
     Key key;
     uint32_t node;
-    bool operator<(const Entry& o) const {
-      return key.x != o.key.x ? key.x < o.key.x : key.y != o.key.y ? key.y < o.key.y : key.z != o.key.z ? key.z < o.key.z : node < o.node;
-    }
+    bool operator<(const Entry& o) const { return key == o.key ? node < o.node : key < o.key; }
   };
   struct Run {
     Key key;
@@ -226,7 +224,7 @@ std::vector<std::pair<uint32_t, uint32_t>> snap_to_curves(const std::vector<Feat
   const SortedNodeCells buckets(target, lattice, inv);
 
   // Corner points already taken by a node, so curves meeting there share it. (Written by
-  // curves traced at once: see the waves below.)
+  // curves traced at once: see the order of tracing below.)
   tbb::concurrent_unordered_map<Key, uint32_t, KeyHash> corner_node;
   const double ctol = radius * 1e-6;
   auto corner_key = [&](const Vec3& p) {
