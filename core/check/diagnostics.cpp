@@ -145,7 +145,7 @@ MeshDiagnostics diagnose(const Mesh& mesh, bool find_intersections) {
   }
   {
     std::vector<int32_t> parts(mesh.triangle_part.begin(), mesh.triangle_part.end());
-    std::sort(parts.begin(), parts.end());
+    tbb::parallel_sort(parts.begin(), parts.end());
     d.parts = parts.empty() ? (tris.empty() ? 0 : 1) : size_t(std::unique(parts.begin(), parts.end()) - parts.begin());
   }
 

@@ -3,6 +3,7 @@
 #include <tbb/blocked_range.h>
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_sort.h>
 
 #include <algorithm>
 #include <array>
@@ -225,7 +226,7 @@ class Inserter {
       const GridKey k = grid_key(samples_[i].q, inv);
       entries[i] = {int((k.x & 1) | ((k.y & 1) << 1) | ((k.z & 1) << 2)), k, i};
     }
-    std::sort(entries.begin(), entries.end(), [](const Entry& x, const Entry& y) {
+    tbb::parallel_sort(entries.begin(), entries.end(), [](const Entry& x, const Entry& y) {  // a total order
       if (x.parity != y.parity) return x.parity < y.parity;
       if (x.cell.x != y.cell.x) return x.cell.x < y.cell.x;
       if (x.cell.y != y.cell.y) return x.cell.y < y.cell.y;
