@@ -9,6 +9,7 @@
 #include <tbb/parallel_sort.h>
 
 #include "check/intersections.h"
+#include "common/compressed_lists.h"
 #include "common/exact_weld.h"
 #include "common/edge_key.h"
 #include "common/vec.h"
@@ -73,15 +74,7 @@ EdgeUses count_edge_uses(const std::vector<Tri>& tris) {
 // triangles around one vertex. Vertices are independent: a parallel sum.
 size_t count_nonmanifold_vertices(const std::vector<Tri>& tris, size_t vertices, const EdgeUses& edges) {
   // Triangles around each vertex (a triangle repeating a vertex is listed once per corner).
-  std::vector<uint32_t> first(vertices + 1, 0), around(tris.size() * 3);
-  for (const Tri& t : tris)
-    for (uint32_t v : t) ++first[v + 1];
-  for (size_t v = 0; v < vertices; ++v) first[v + 1] += first[v];
-  {
-    std::vector<uint32_t> fill(first.begin(), first.end() - 1);
-    for (uint32_t t = 0; t < tris.size(); ++t)
-      for (uint32_t v : tris[t]) around[fill[v]++] = t;
-  }
+  const CompressedLists stars = vertex_triangle_lists(vertices, tris);
   struct Scratch {
     std::vector<std::pair<uint32_t, uint32_t>> by_other;  // (other vertex w, position in the list around v)
     UnionFind uf{0};
@@ -92,11 +85,12 @@ size_t count_nonmanifold_vertices(const std::vector<Tri>& tris, size_t vertices,
       [&](const tbb::blocked_range<size_t>& r, size_t count) {
         Scratch& s = scratch.local();
         for (size_t v = r.begin(); v != r.end(); ++v) {
-          const uint32_t begin = first[v], n = first[v + 1] - begin;
+          const CompressedLists::Range around = stars[v];
+          const uint32_t n = uint32_t(around.size());
           if (n < 2) continue;
           s.by_other.clear();
           for (uint32_t i = 0; i < n; ++i)
-            for (uint32_t w : tris[around[begin + i]])
+            for (uint32_t w : tris[around.begin()[i]])
               if (w != v) s.by_other.push_back({w, i});
           std::sort(s.by_other.begin(), s.by_other.end());
           s.uf.parent.resize(n);

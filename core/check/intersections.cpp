@@ -1,5 +1,6 @@
 // One of the few translation units that include CGAL's heavy headers.
 #include "check/intersections.h"
+#include "common/compressed_lists.h"
 #include "common/edge_triangles.h"
 #include "common/dense_numbers.h"
 #include "common/fill_vector.h"
@@ -395,25 +396,15 @@ void grid_candidate_pairs(const FillVector<Bounds>& boxes, const std::vector<uin
   CGAL::box_intersection_d<CGAL::Parallel_if_available_tag>(large.begin(), large.end(), small.begin(), small.end(), report, cutoff);
 }
 
-// The usable triangles around each vertex: star[first[v] .. first[v + 1]).
-struct VertexStars {
-  std::vector<uint32_t> first, star;
-  uint32_t size(size_t v) const { return first[v + 1] - first[v]; }
-};
+// The usable triangles around each vertex, in increasing order: items[first[v] .. first[v + 1]).
+using VertexStars = CompressedLists;
 
 VertexStars vertex_stars(size_t points, const std::vector<Tri>& triangles, const std::vector<uint8_t>& usable) {
-  VertexStars s;
-  s.first.assign(points + 1, 0);
-  for (size_t t = 0; t < triangles.size(); ++t)
-    if (usable[t])
-      for (uint32_t v : triangles[t]) ++s.first[v + 1];
-  for (size_t v = 0; v < points; ++v) s.first[v + 1] += s.first[v];
-  s.star.resize(s.first.back());
-  std::vector<uint32_t> fill(s.first.begin(), s.first.end() - 1);
-  for (size_t t = 0; t < triangles.size(); ++t)
-    if (usable[t])
-      for (uint32_t v : triangles[t]) s.star[fill[v]++] = uint32_t(t);
-  return s;
+  return compressed_lists(points, [&](auto&& emit) {
+    for (uint32_t t = 0; t < triangles.size(); ++t)
+      if (usable[t])
+        for (uint32_t v : triangles[t]) emit(v, t);
+  });
 }
 
 // Vertices whose triangles form an unfolded fan: seen along the axis nearest to their common
@@ -427,7 +418,7 @@ VertexStars vertex_stars(size_t points, const std::vector<Tri>& triangles, const
 std::vector<uint8_t> unfolded_fan_vertices(const std::vector<P3>& p, const std::vector<Tri>& triangles, const VertexStars& stars) {
   constexpr uint32_t min_fan = 16;
   const std::vector<uint32_t>& first = stars.first;
-  const std::vector<uint32_t>& star = stars.star;
+  const auto& star = stars.items;
   std::vector<uint8_t> fan(p.size(), 0);
   tbb::parallel_for(tbb::blocked_range<size_t>(0, p.size(), 4096), [&](const tbb::blocked_range<size_t>& r) {
     struct Sector {
@@ -647,7 +638,7 @@ bool turns_once(const std::vector<P3>& p, const std::vector<Tri>& triangles, con
   constexpr double clear = 1e-7;  // sine of the smallest angle trusted
   double turn = 0;
   for (uint32_t k = stars.first[c]; k < stars.first[c + 1]; ++k) {
-    const Tri& t = triangles[stars.star[k]];
+    const Tri& t = triangles[stars.items[k]];
     int i = 0;
     while (t[i] != c) ++i;
     const Vec3 a = flat(p[t[(i + 1) % 3]]), b = flat(p[t[(i + 2) % 3]]);
@@ -716,17 +707,17 @@ std::vector<uint32_t> star_shaped_pieces(const std::vector<P3>& given_points, co
   std::vector<uint8_t> vertex_ok(p.size(), 1);
   tbb::parallel_for(tbb::blocked_range<size_t>(0, p.size(), 4096), [&](const tbb::blocked_range<size_t>& r) {
     for (size_t c = r.begin(); c != r.end(); ++c) {
-      if (stars.size(c) == 0) continue;
-      const uint32_t id = piece[stars.star[stars.first[c]]];
+      if (stars[c].empty()) continue;
+      const uint32_t id = piece[stars.items[stars.first[c]]];
       if (!ok[id]) continue;
       bool one_piece = true;
-      for (uint32_t k = stars.first[c]; k < stars.first[c + 1] && one_piece; ++k) one_piece = piece[stars.star[k]] == id;
+      for (uint32_t k = stars.first[c]; k < stars.first[c + 1] && one_piece; ++k) one_piece = piece[stars.items[k]] == id;
       vertex_ok[c] = one_piece && turns_once(p, triangles, stars, uint32_t(c), centre[id]);
     }
   });
   for (size_t c = 0; c < p.size(); ++c)
     if (!vertex_ok[c])
-      for (uint32_t k = stars.first[c]; k < stars.first[c + 1]; ++k) ok[piece[stars.star[k]]] = 0;
+      for (uint32_t k = stars.first[c]; k < stars.first[c + 1]; ++k) ok[piece[stars.items[k]]] = 0;
   piece.resize(given_triangles.size());  // the fans were for the checks only
   tbb::parallel_for(tbb::blocked_range<size_t>(0, piece.size(), 4096), [&](const tbb::blocked_range<size_t>& r) {
     for (size_t t = r.begin(); t != r.end(); ++t)
