@@ -94,6 +94,36 @@ TEST(TriangleBox, BlockSearchFindsTheSameCellsAsTestingEach) {
   EXPECT_GT(cells_found, 2000u);  // the triangles do cross many cells
 }
 
+// The eight octants at once must be the octants a test of each one finds, for long slivers,
+// small triangles and triangles lying on the cell's mid-planes, and a subset asked for must
+// be that subset of them.
+TEST(TriangleBox, OctantsAtOnceMatchTestingEachOctant) {
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> coord(-1.2, 1.2), small(-0.3, 0.3);
+  const Vec3 centre{0.13, -0.07, 0.21};
+  const double quarter = 0.25, half = quarter * (1 + 2e-3);
+  size_t met = 0, partly = 0;
+  for (int n = 0; n < 2000; ++n) {
+    Vec3 a = centre + Vec3{coord(rng), coord(rng), coord(rng)};
+    Vec3 b = n % 2 ? centre + Vec3{coord(rng), coord(rng), coord(rng)} : a + Vec3{small(rng), small(rng), small(rng)};
+    Vec3 c = n % 2 ? b + Vec3{small(rng), small(rng), small(rng)} * 0.1 : a + Vec3{small(rng), small(rng), small(rng)};
+    if (n % 5 == 0) a[n % 3] = b[n % 3] = c[n % 3] = centre[n % 3];  // on a mid-plane
+    uint8_t each = 0;
+    for (int k = 0; k < 8; ++k) {
+      const Vec3 box{centre[0] + (k & 1 ? quarter : -quarter), centre[1] + (k & 2 ? quarter : -quarter),
+                     centre[2] + (k & 4 ? quarter : -quarter)};
+      if (triangle_overlaps_box(a, b, c, box, {half, half, half})) each |= uint8_t(1 << k);
+    }
+    ASSERT_EQ(int(octants_overlapped(a, b, c, centre, quarter, half)), int(each)) << "triangle " << n;
+    const uint8_t among = uint8_t(rng());
+    ASSERT_EQ(int(octants_overlapped(a, b, c, centre, quarter, half, among)), int(each & among)) << "triangle " << n;
+    met += each != 0;
+    partly += each != 0 && each != 0xff;
+  }
+  EXPECT_GT(met, 500u);  // the cases are not all trivial
+  EXPECT_GT(partly, 300u);
+}
+
 TEST(Refine, FeaturesRefineAndFlatFacesDoNot) {
   // Normal spread is switched off (179 degrees) so features alone decide.
   Mesh box = box_mesh({0, 0, 0}, {1, 1, 1});

@@ -84,6 +84,45 @@ class TriangleBoxTester {
   double min_[kAxes], max_[kAxes];
 };
 
+// Which of the eight octant boxes of a cell (those in `among`) triangle abc meets: bit k is
+// octant k, whose centre is `centre` + `quarter` * (+-1, +-1, +-1), + along axis j when bit j
+// of k is set, and whose half-width is `half`. The same thirteen separating axes as above,
+// each projecting the triangle once for all the octants asked about: an octant's centre
+// projects to the cell centre's projection plus its offset, and all share the radius.
+// Refinement asks only about the children no triangle met yet (see build_refined_grid).
+inline uint8_t octants_overlapped(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& centre, double quarter, double half,
+                                  uint8_t among = 0xff) {
+  const Vec3 v[3] = {a - centre, b - centre, c - centre};
+  // The box axes: along axis j the triangle's extent against the octants below and above.
+  static constexpr uint8_t below[3] = {0x55, 0x33, 0x0f}, above[3] = {0xaa, 0xcc, 0xf0};
+  uint8_t mask = among;
+  for (int j = 0; j < 3; ++j) {
+    const double lo = std::min({v[0][j], v[1][j], v[2][j]}), hi = std::max({v[0][j], v[1][j], v[2][j]});
+    if (lo + quarter > half || hi + quarter < -half) mask &= uint8_t(~below[j]);
+    if (lo - quarter > half || hi - quarter < -half) mask &= uint8_t(~above[j]);
+  }
+  // The other axes, each against the octants still in.
+  auto separate = [&](const Vec3& u) {
+    const double p0 = dot(v[0], u), p1 = dot(v[1], u), p2 = dot(v[2], u);
+    const double lo = std::min({p0, p1, p2}), hi = std::max({p0, p1, p2});
+    const double r = half * (std::fabs(u[0]) + std::fabs(u[1]) + std::fabs(u[2]));
+    const double ox = quarter * u[0], oy = quarter * u[1], oz = quarter * u[2];
+    for (unsigned left = mask; left; left &= left - 1) {
+      const int k = __builtin_ctz(left);
+      const double o = (k & 1 ? ox : -ox) + (k & 2 ? oy : -oy) + (k & 4 ? oz : -oz);
+      if (lo - o > r || hi - o < -r) mask &= uint8_t(~(1u << k));
+    }
+  };
+  const Vec3 e[3] = {v[1] - v[0], v[2] - v[1], v[0] - v[2]};
+  for (int i = 0; i < 3 && mask; ++i) {  // the edges crossed with the box axes
+    separate(Vec3{0, -e[i][2], e[i][1]});
+    if (mask) separate(Vec3{e[i][2], 0, -e[i][0]});
+    if (mask) separate(Vec3{-e[i][1], e[i][0], 0});
+  }
+  if (mask) separate(cross(e[0], e[1]));  // the normal
+  return mask;
+}
+
 // Calls fn(x, y, z) for every cell of the block lo..hi (inclusive, per axis) of a grid of cubes
 // of side `cell` from `origin` that triangle abc overlaps, each cell grown to half-width
 // `half_cell`: the cells a test of each one would find, but blocks of cells are tested first
