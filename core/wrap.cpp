@@ -7,6 +7,7 @@
 #include <chrono>
 #include <cmath>
 #include <memory>
+#include <mutex>
 #include <set>
 
 #include "check/intersections.h"
@@ -75,6 +76,33 @@ void check_cancel(ProgressSink* progress) {
 }  // namespace
 
 namespace {
+// The input's nearest-point index, built in the background from the prepared input (which
+// must outlive this): its build is serial in part (CGAL's tree), seconds on millions of
+// triangles, and the grid stages before its first use (refinement, the flood fill,
+// extraction) leave a core idle in their own serial steps.
+class IndexInBackground {
+ public:
+  explicit IndexInBackground(const prep::PreparedInput& in) {
+    task_.run([this, &in] { index_ = std::make_unique<fit::SurfaceIndex>(in.mesh.points, in.mesh.triangles); });
+  }
+  ~IndexInBackground() {
+    try {
+      task_.wait();
+    } catch (...) {  // the pipeline is unwinding already
+    }
+  }
+  // Waits for the build the first time (from any thread).
+  const fit::SurfaceIndex& get() {
+    std::call_once(built_, [this] { task_.wait(); });
+    return *index_;
+  }
+
+ private:
+  tbb::task_group task_;
+  std::once_flag built_;
+  std::unique_ptr<fit::SurfaceIndex> index_;
+};
+
 WrapResult run_pipeline(const Mesh& input, const WrapParams& params, ProgressSink* progress);
 }
 
@@ -133,25 +161,21 @@ WrapResult run_pipeline(const Mesh& input, const WrapParams& params, ProgressSin
   report.control_sizes = controls.described;
   check_cancel(progress);
 
-  // The input's nearest-point index (clearance for gap closure and leaks, then projection) is
-  // built while the grid is refined: its tree build is serial (CGAL's), seconds on millions of
-  // triangles, and the refinement leaves a core idle in its own serial steps.
-  std::unique_ptr<fit::SurfaceIndex> index_built;
-  tbb::task_group index_task;
-  index_task.run([&] { index_built = std::make_unique<fit::SurfaceIndex>(prepared.mesh.points, prepared.mesh.triangles); });
+  // The nearest-point index: for the clearance of gap closure and leaks, then projection.
+  IndexInBackground index_builder(prepared);
+  const fit::SurfaceIndex* index_ready = nullptr;
+  auto wait_for_index = [&]() -> const fit::SurfaceIndex& {
+    if (!index_ready) {
+      StageTimer timer("index", report.stages);  // what is left of the build when first needed
+      index_ready = &index_builder.get();
+    }
+    return *index_ready;
+  };
   grid::RefineResult refined;
-  try {
+  {
     StageTimer timer("refine", report.stages);
     refined = grid::build_refined_grid(prepared, params, base, controls, progress);
-  } catch (...) {
-    index_task.wait();  // it reads the prepared input
-    throw;
   }
-  {
-    StageTimer timer("index", report.stages);  // what is left of the index build after refining
-    index_task.wait();
-  }
-  const fit::SurfaceIndex& index = *index_built;
   report.cells_per_level = refined.touched_per_level;
   if (controls.contact()) {
     report.contact.rules = params.contact_prevention.size();
@@ -177,8 +201,10 @@ WrapResult run_pipeline(const Mesh& input, const WrapParams& params, ProgressSin
     request.world_offset = prepared.origin;
     for (const Vec3& s : params.seed_points) request.seeds.push_back(s - prepared.origin);
     request.gap_closure = params.gap_closure ? params.gap_closure->resolve(prepared.diagonal) : 0.0;
+    // Clearances are measured for gap closure and for a seed's leak only.
+    if (request.gap_closure > 0 || !request.seeds.empty()) wait_for_index();
     grid::VolumeSelection sel = grid::select_volume(
-        g, request, [&](const Vec3& p) { return std::sqrt(index.squared_distance(p)); }, progress);
+        g, request, [&](const Vec3& p) { return std::sqrt(index_builder.get().squared_distance(p)); }, progress);
     report.volumes = sel.report;
     if (sel.leak.detected) {
       report.leak = sel.leak;
@@ -207,6 +233,7 @@ WrapResult run_pipeline(const Mesh& input, const WrapParams& params, ProgressSin
   }
   check_cancel(progress);
 
+  const fit::SurfaceIndex& index = wait_for_index();
   fit::FittedSurface fitted;
   {
     StageTimer timer("project", report.stages);

@@ -11,6 +11,7 @@
 #include <utility>
 
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
 
 #include "common/box_overlap.h"
 #include "common/closest_point.h"
@@ -322,15 +323,13 @@ void add_cell_pieces(const Store& store, const Vec3& lo, double side, double pad
     return;
   }
   const double half = 0.5 * side;
-  const Vec3 reach{0.5 * half + pad, 0.5 * half + pad, 0.5 * half + pad};
+  const Vec3 centre = lo + Vec3{half, half, half};
   std::array<std::vector<uint32_t>, 8> inside;
   for (uint32_t f : tris) {
     const Triangle& t = store.triangles[f];
-    const TriangleBoxTester triangle(vec(t.vertex(0)), vec(t.vertex(1)), vec(t.vertex(2)));
-    for (int octant = 0; octant < 8; ++octant) {
-      const Vec3 centre{lo[0] + (octant & 1 ? 1.5 : 0.5) * half, lo[1] + (octant & 2 ? 1.5 : 0.5) * half, lo[2] + (octant & 4 ? 1.5 : 0.5) * half};
-      if (triangle.overlaps(centre, reach)) inside[octant].push_back(f);
-    }
+    const uint8_t in = octants_overlapped(vec(t.vertex(0)), vec(t.vertex(1)), vec(t.vertex(2)), centre, 0.5 * half, 0.5 * half + pad);
+    for (int octant = 0; octant < 8; ++octant)
+      if (in & (1 << octant)) inside[octant].push_back(f);
   }
   for (int octant = 0; octant < 8; ++octant) {
     const Vec3 child{lo[0] + (octant & 1 ? half : 0), lo[1] + (octant & 2 ? half : 0), lo[2] + (octant & 4 ? half : 0)};
@@ -487,19 +486,23 @@ struct SurfaceIndex::Impl {
 
 SurfaceIndex::SurfaceIndex(const std::vector<Vec3>& points, const std::vector<Tri>& triangles) : impl_(new Impl) {
   Store& store = impl_->store;
-  store.triangles.reserve(triangles.size());
-  store.frames.reserve(triangles.size());
-  std::vector<double> sizes;
-  sizes.reserve(triangles.size());
-  CGAL::Bbox_3 all;
-  for (const Tri& t : triangles) {
-    const Vec3 &a = points[t[0]], &b = points[t[1]], &c = points[t[2]];
-    store.triangles.emplace_back(point(a), point(b), point(c));
-    store.frames.push_back(frame_of(a, b, c));
-    const CGAL::Bbox_3 box = box_of(a, b, c);
-    sizes.push_back(diagonal(box));
-    all += box;
-  }
+  store.triangles.resize(triangles.size());
+  store.frames.resize(triangles.size());
+  std::vector<double> sizes(triangles.size());
+  const CGAL::Bbox_3 all = tbb::parallel_reduce(
+      tbb::blocked_range<size_t>(0, triangles.size(), 4096), CGAL::Bbox_3(),
+      [&](const tbb::blocked_range<size_t>& r, CGAL::Bbox_3 part) {
+        for (size_t f = r.begin(); f != r.end(); ++f) {
+          const Vec3 &a = points[triangles[f][0]], &b = points[triangles[f][1]], &c = points[triangles[f][2]];
+          store.triangles[f] = Triangle(point(a), point(b), point(c));
+          store.frames[f] = frame_of(a, b, c);
+          const CGAL::Bbox_3 box = box_of(a, b, c);
+          sizes[f] = diagonal(box);
+          part += box;
+        }
+        return part;
+      },
+      [](const CGAL::Bbox_3& x, const CGAL::Bbox_3& y) { return x + y; });
   if (triangles.empty()) return;
   // Pieces about twice the typical triangle: the typical one stays whole.
   std::nth_element(sizes.begin(), sizes.begin() + sizes.size() / 2, sizes.end());

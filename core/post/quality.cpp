@@ -2,6 +2,7 @@
 
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_sort.h>
+#include <tbb/task_group.h>
 
 #include <algorithm>
 #include <cmath>
@@ -102,6 +103,40 @@ QualityCounts analyse_quality(const std::vector<Vec3>& p, const std::vector<Tri>
   q.triangles = tris.size();
   std::vector<uint8_t> flags(tris.size(), 0);
 
+  // Lost features: sharp-edge samples of the input farther from the surface than the
+  // tolerance, within reach of the wrap; the surface triangle nearest each is flagged (below).
+  // Measured beside the rest: building the surface's index is partly serial.
+  q.feature_samples = ref.feature_samples.size();
+  std::vector<int8_t> sample_state(ref.feature_samples.size(), 0);  // 1 lost, 2 out of reach
+  std::vector<uint32_t> sample_nearest(ref.feature_samples.size(), 0);
+  tbb::task_group features;
+  if (!ref.feature_samples.empty() && !tris.empty())
+    features.run([&] {
+      fit::SurfaceIndex surface(p, tris);
+      const double tolerance = t.feature_tolerance * ref.finest_size;
+      tbb::parallel_for(tbb::blocked_range<size_t>(0, ref.feature_samples.size(), 1024), [&](const tbb::blocked_range<size_t>& r) {
+        for (size_t i = r.begin(); i != r.end(); ++i) {
+          auto hit = surface.closest(ref.feature_samples[i] + ref.origin);
+          const double d = std::sqrt(hit.squared_distance);
+          if (d <= tolerance) continue;
+          const Tri& tri = tris[hit.triangle];
+          const double cell = std::max({cell_size[tri[0]], cell_size[tri[1]], cell_size[tri[2]]});
+          sample_state[i] = d > t.feature_reach * cell ? 2 : 1;
+          sample_nearest[i] = hit.triangle;
+        }
+      });
+    });
+  // Whatever throws below, the task must end before its data go.
+  struct WaitAtExit {
+    tbb::task_group& g;
+    ~WaitAtExit() {
+      try {
+        g.wait();
+      } catch (...) {
+      }
+    }
+  } wait_at_exit{features};
+
   // Intersecting and degenerate triangles.
   std::vector<uint32_t> crossing;
   if (intersecting) {
@@ -167,29 +202,10 @@ QualityCounts analyse_quality(const std::vector<Vec3>& p, const std::vector<Tri>
     q.long_edges += (e & kLongEdge) ? 1 : 0;
   }
 
-  // Lost features: sharp-edge samples of the input farther from the surface than the
-  // tolerance, within reach of the wrap; the surface triangle nearest each is flagged.
-  q.feature_samples = ref.feature_samples.size();
-  if (!ref.feature_samples.empty() && !tris.empty()) {
-    fit::SurfaceIndex surface(p, tris);
-    const double tolerance = t.feature_tolerance * ref.finest_size;
-    std::vector<int8_t> state(ref.feature_samples.size(), 0);  // 1 lost, 2 out of reach
-    std::vector<uint32_t> nearest(ref.feature_samples.size(), 0);
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, ref.feature_samples.size(), 1024), [&](const tbb::blocked_range<size_t>& r) {
-      for (size_t i = r.begin(); i != r.end(); ++i) {
-        auto hit = surface.closest(ref.feature_samples[i] + ref.origin);
-        const double d = std::sqrt(hit.squared_distance);
-        if (d <= tolerance) continue;
-        const Tri& tri = tris[hit.triangle];
-        const double cell = std::max({cell_size[tri[0]], cell_size[tri[1]], cell_size[tri[2]]});
-        state[i] = d > t.feature_reach * cell ? 2 : 1;
-        nearest[i] = hit.triangle;
-      }
-    });
-    for (size_t i = 0; i < state.size(); ++i) {
-      if (state[i] == 1) ++q.lost_feature_samples, flags[nearest[i]] |= kLostFeature;
-      if (state[i] == 2) ++q.unreachable_feature_samples;
-    }
+  features.wait();
+  for (size_t i = 0; i < sample_state.size(); ++i) {
+    if (sample_state[i] == 1) ++q.lost_feature_samples, flags[sample_nearest[i]] |= kLostFeature;
+    if (sample_state[i] == 2) ++q.unreachable_feature_samples;
   }
 
   q.min_angle_deg = tris.empty() ? 0 : 180;
