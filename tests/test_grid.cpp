@@ -124,6 +124,27 @@ TEST(TriangleBox, OctantsAtOnceMatchTestingEachOctant) {
   EXPECT_GT(partly, 300u);
 }
 
+// Level-0 cells numbered past 32 bits (two small boxes 2000 cells apart on each axis) take
+// the wide hits: each box must touch and refine the cells it does alone.
+TEST(Refine, GridsNumberedPast32BitsFindTheSameCells) {
+  const Mesh one = box_mesh({0, 0, 0}, {1, 1, 1});
+  Mesh two = one;
+  add_box(two, {2000, 2000, 2000}, {2001, 2001, 2001});
+  // Base size 0.25 in both (percent of each diagonal): the far box sits on the same cell
+  // boundaries as the near one.
+  const auto alone = refine(one, 25.0 / std::sqrt(3.0), 1);
+  const auto apart = refine(two, 25.0 / (std::sqrt(3.0) * 2001.0), 1);
+  ASSERT_GT(double(apart.grid->dims0().x()) * apart.grid->dims0().y() * apart.grid->dims0().z(), 4.3e9);
+  ASSERT_EQ(alone.touched_per_level.size(), apart.touched_per_level.size());
+  ASSERT_GT(alone.touched_per_level[0], 0u);
+  ASSERT_EQ(alone.refined_per_level.size(), apart.refined_per_level.size());
+  ASSERT_GT(alone.refined_per_level[0], 0u);  // the boxes' edges refine
+  for (size_t level = 0; level < alone.touched_per_level.size(); ++level) {
+    EXPECT_EQ(apart.touched_per_level[level], 2 * alone.touched_per_level[level]) << "level " << level;
+    EXPECT_EQ(apart.refined_per_level[level], 2 * alone.refined_per_level[level]) << "level " << level;
+  }
+}
+
 TEST(Refine, FeaturesRefineAndFlatFacesDoNot) {
   // Normal spread is switched off (179 degrees) so features alone decide.
   Mesh box = box_mesh({0, 0, 0}, {1, 1, 1});

@@ -49,14 +49,16 @@ class TriangleBoxTester {
     const Vec3 v[3] = {Vec3{0, 0, 0}, b - a, c - a};
     for (int k = 0; k < 3; ++k) lo_[k] = std::min({v[0][k], v[1][k], v[2][k]}), hi_[k] = std::max({v[0][k], v[1][k], v[2][k]});
     const Vec3 e[3] = {v[1] - v[0], v[2] - v[1], v[0] - v[2]};
+    // The normal first: a box beside the triangle's plane is the usual miss. (The answer is the
+    // same in any order: every axis is tested in full.)
     int n = 0;
+    add_axis(cross(e[0], e[1]), v, n++);
     for (int i = 0; i < 3; ++i)
       for (int k = 0; k < 3; ++k) {
         Vec3 unit{0, 0, 0};
         unit[k] = 1;
         add_axis(cross(unit, e[i]), v, n++);
       }
-    add_axis(cross(e[0], e[1]), v, n);
   }
   // Does the triangle meet the box of this centre and half-widths?
   bool overlaps(const Vec3& center, const Vec3& half) const {
@@ -73,7 +75,7 @@ class TriangleBoxTester {
   }
 
  private:
-  static constexpr int kAxes = 10;  // nine edge crosses, then the normal
+  static constexpr int kAxes = 10;  // the normal, then nine edge crosses
   void add_axis(const Vec3& u, const Vec3 (&v)[3], int i) {
     axis_[i] = u;
     const double p0 = dot(v[0], u), p1 = dot(v[1], u), p2 = dot(v[2], u);
@@ -114,12 +116,12 @@ inline uint8_t octants_overlapped(const Vec3& a, const Vec3& b, const Vec3& c, c
     }
   };
   const Vec3 e[3] = {v[1] - v[0], v[2] - v[1], v[0] - v[2]};
+  if (mask) separate(cross(e[0], e[1]));  // the normal first (see TriangleBoxTester)
   for (int i = 0; i < 3 && mask; ++i) {  // the edges crossed with the box axes
     separate(Vec3{0, -e[i][2], e[i][1]});
     if (mask) separate(Vec3{e[i][2], 0, -e[i][0]});
     if (mask) separate(Vec3{-e[i][1], e[i][0], 0});
   }
-  if (mask) separate(cross(e[0], e[1]));  // the normal
   return mask;
 }
 

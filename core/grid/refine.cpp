@@ -22,10 +22,23 @@ struct CellTris {
   std::vector<uint32_t> tris;
 };
 
-// A level-0 cell the input meets and the triangle that meets it.
-struct CellHit {
-  uint64_t cell;
-  uint32_t triangle;
+// A level-0 cell the input meets and the triangle that meets it: in one word when the cell
+// numbers fit in 32 bits (the 2.37M assembly at 0.25 % has 29.7M of them to sort: half the
+// memory moved), else in two.
+struct PackedHit {
+  uint64_t word;
+  PackedHit() = default;
+  PackedHit(uint64_t cell, uint32_t triangle) : word(cell << 32 | triangle) {}
+  uint64_t cell() const { return word >> 32; }
+  uint32_t triangle() const { return uint32_t(word); }
+};
+struct WideHit {
+  uint64_t cell_number;
+  uint32_t triangle_number;
+  WideHit() = default;
+  WideHit(uint64_t cell, uint32_t triangle) : cell_number(cell), triangle_number(triangle) {}
+  uint64_t cell() const { return cell_number; }
+  uint32_t triangle() const { return triangle_number; }
 };
 // Level-0 cells, coordinates from -1 to the grid's size, numbered densely (x, y, z order).
 DenseNumbers level0_numbers(const Coord& dims) {
@@ -80,8 +93,9 @@ class ContactBuckets {
  public:
   template <typename Hits>
   ContactBuckets(const Hits& hits, const DenseNumbers& numbers, const prep::PreparedInput& in, const SizeControls& sc) {
-    for (const CellHit& hit : hits)
-      if (sc.part_in_contact_rule[size_t(in.mesh.part_of(hit.triangle))]) cells_[key(cell_of(numbers, hit.cell))].push_back(hit.triangle);
+    for (const auto& hit : hits)
+      if (sc.part_in_contact_rule[size_t(in.mesh.part_of(hit.triangle()))])
+        cells_[key(cell_of(numbers, hit.cell()))].push_back(hit.triangle());
   }
 
   // True when the cell [lo, lo+h]^3, grown by h on every side, meets a triangle of a part
@@ -120,6 +134,47 @@ class ContactBuckets {
 
 }  // namespace
 
+// Level 0's cells on the input, each with its triangles in order; `contact` gets the
+// contact prevention's buckets when there are rules. Cell size h0, each cell grown by the margin.
+template <typename Hit>
+std::vector<CellTris> level0_cells(const prep::PreparedInput& in, const SizeControls& sc, const Vec3& origin, double h0,
+                                   const DenseNumbers& numbers, double margin_fraction, std::unique_ptr<ContactBuckets>& contact) {
+  // Every triangle against the cells of its bounding box, in parallel, in chunks of
+  // triangles joined in order; then a stable sort by cell puts each cell's triangles in
+  // order. (Tens of millions of hits on a 2M-triangle assembly: a comparison sort of them
+  // took 4 s.)
+  const auto& pts = in.mesh.points;
+  const auto& tris = in.mesh.triangles;
+  constexpr size_t kChunk = 4096;
+  std::vector<std::vector<Hit>> chunk_hits((tris.size() + kChunk - 1) / kChunk);
+  tbb::parallel_for(size_t(0), chunk_hits.size(), [&](size_t chunk) {
+    std::vector<Hit>& hits = chunk_hits[chunk];
+    for (size_t t = chunk * kChunk; t < std::min(tris.size(), (chunk + 1) * kChunk); ++t) {
+      const Vec3 &a = pts[tris[t][0]], &b = pts[tris[t][1]], &c = pts[tris[t][2]];
+      Box3 tb;
+      tb.add(a), tb.add(b), tb.add(c);
+      int lo[3], hi[3];
+      for (int k = 0; k < 3; ++k) {
+        lo[k] = int(std::floor((tb.lo[k] - origin[k]) / h0 - margin_fraction));
+        hi[k] = int(std::floor((tb.hi[k] - origin[k]) / h0 + margin_fraction));
+      }
+      for_cells_overlapping(a, b, c, origin, h0, h0 * (0.5 + margin_fraction), lo, hi,
+                            [&](int x, int y, int z) { hits.emplace_back(numbers.number(x, y, z), uint32_t(t)); });
+    }
+  });
+  FillVector<Hit> hits = radix_sort_joined(chunk_hits, [](const Hit& h) { return h.cell(); }, bits_for(numbers.count));
+  if (sc.contact()) contact = std::make_unique<ContactBuckets>(hits, numbers, in, sc);
+  std::vector<CellTris> level_cells;
+  for (size_t i = 0; i < hits.size();) {
+    CellTris ct{cell_of(numbers, hits[i].cell()), {}};
+    size_t j = i;
+    for (; j < hits.size() && hits[j].cell() == hits[i].cell(); ++j) ct.tris.push_back(hits[j].triangle());
+    level_cells.push_back(std::move(ct));
+    i = j;
+  }
+  return level_cells;
+}
+
 RefineResult build_refined_grid(const prep::PreparedInput& in, const WrapParams& params, double base,
                                 const SizeControls& sc, ProgressSink* progress, int padding) {
   const auto& pts = in.mesh.points;
@@ -142,42 +197,11 @@ RefineResult build_refined_grid(const prep::PreparedInput& in, const WrapParams&
   // faces of free cells stay strictly off the input.
   const double margin_fraction = 1e-3;
 
-  // Level 0: every triangle against the cells of its bounding box, in parallel, in chunks of
-  // triangles joined in order; then a stable sort by cell puts each cell's triangles in
-  // order. (Tens of millions of hits on a 2M-triangle assembly: a comparison sort of them
-  // took 4 s.)
   const DenseNumbers numbers = level0_numbers(dims0);
-  const double h0 = base;
-  constexpr size_t kChunk = 4096;
-  std::vector<std::vector<CellHit>> chunk_hits((tris.size() + kChunk - 1) / kChunk);
-  tbb::parallel_for(size_t(0), chunk_hits.size(), [&](size_t chunk) {
-    std::vector<CellHit>& hits = chunk_hits[chunk];
-    for (size_t t = chunk * kChunk; t < std::min(tris.size(), (chunk + 1) * kChunk); ++t) {
-      const Vec3 &a = pts[tris[t][0]], &b = pts[tris[t][1]], &c = pts[tris[t][2]];
-      Box3 tb;
-      tb.add(a), tb.add(b), tb.add(c);
-      int lo[3], hi[3];
-      for (int k = 0; k < 3; ++k) {
-        lo[k] = int(std::floor((tb.lo[k] - origin[k]) / h0 - margin_fraction));
-        hi[k] = int(std::floor((tb.hi[k] - origin[k]) / h0 + margin_fraction));
-      }
-      for_cells_overlapping(a, b, c, origin, h0, h0 * (0.5 + margin_fraction), lo, hi,
-                            [&](int x, int y, int z) { hits.push_back({numbers.number(x, y, z), uint32_t(t)}); });
-    }
-  });
-  FillVector<CellHit> hits = radix_sort_joined(chunk_hits, [](const CellHit& h) { return h.cell; }, bits_for(numbers.count));
   std::unique_ptr<ContactBuckets> contact;
-  if (sc.contact()) contact = std::make_unique<ContactBuckets>(hits, numbers, in, sc);
-  std::vector<CellTris> level_cells;
-  for (size_t i = 0; i < hits.size();) {
-    CellTris ct{cell_of(numbers, hits[i].cell), {}};
-    size_t j = i;
-    for (; j < hits.size() && hits[j].cell == hits[i].cell; ++j) ct.tris.push_back(hits[j].triangle);
-    level_cells.push_back(std::move(ct));
-    i = j;
-  }
-  hits.clear();
-  hits.shrink_to_fit();
+  std::vector<CellTris> level_cells =
+      bits_for(numbers.count) <= 32 ? level0_cells<PackedHit>(in, sc, origin, base, numbers, margin_fraction, contact)
+                                    : level0_cells<WideHit>(in, sc, origin, base, numbers, margin_fraction, contact);
 
   const FeatureSegments features = collect_features(in);
   const double cos_spread = std::cos(params.refine_normal_spread_deg * M_PI / 180.0);
