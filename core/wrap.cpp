@@ -10,6 +10,7 @@
 #include <mutex>
 #include <set>
 
+#include "check/diagnostics.h"
 #include "check/intersections.h"
 #include "common/stage_timer.h"
 #include "common/vec.h"
@@ -122,19 +123,22 @@ WrapResult run_pipeline(const Mesh& input, const WrapParams& params, ProgressSin
   WrapReport& report = result.report;
   report.params = params;
 
+  ExactWeld input_weld;  // shared with prepare
   {
     StageTimer timer("diagnose input", report.stages);
     if (progress) progress->progress("diagnose input", 0.0, "checking the input for defects");
     // Intersections are left to prepare, whose one search serves both the report and the
     // intersection lines; the counts are filled in below.
-    report.input = diagnose(input, false);
+    input_weld = exact_weld(input.points);
+    report.input = check::diagnose_welded(input, input_weld, false);
   }
   check_cancel(progress);
 
   prep::PreparedInput prepared;
   {
     StageTimer timer("prepare", report.stages);
-    prepared = prep::prepare(input, params, progress);
+    prepared = prep::prepare(input, params, progress, &input_weld);
+    input_weld = ExactWeld();  // its memory back
   }
   {
     const prep::InputIntersections crossing =

@@ -184,6 +184,37 @@ TEST(Prepare, FindsTheJunctionLineOfTwoInterpenetratingBoxes) {
   EXPECT_NEAR(length, 6.0, 1e-9);
 }
 
+// Welding from the input's exact weld (what the pipeline does after diagnosing) must give
+// what welding every point gives: also where two points differ in the input only below the
+// rounding of the move to the local frame (x = 1 and the next double, the box centred at
+// x = -3: both become 4), with and without a tolerance.
+TEST(Prepare, WeldingFromTheInputsExactWeldGivesTheSameMesh) {
+  Mesh soup = box_mesh({-7, -7, -7}, {-6, -6, -6});
+  Mesh sheet;
+  const double x1 = 1.0, x2 = std::nextafter(1.0, 2.0);
+  for (int k = 0; k < 4; ++k) {  // each triangle with its own points, as STL files have them
+    const double x = k % 2 ? x2 : x1, y = 0.25 * k;
+    const uint32_t first = uint32_t(soup.points.size());
+    soup.points.push_back({x, y, 0});
+    soup.points.push_back({x, y + 0.25, 0});
+    soup.points.push_back({x, y, 0.5});
+    soup.triangles.push_back({first, first + 1, first + 2});
+  }
+  for (const double tolerance : {0.0, 1e-7}) {
+    WrapParams params;
+    params.weld_tolerance = tolerance;
+    const prep::PreparedInput all = prep::prepare(soup, params, nullptr);
+    const ExactWeld weld = exact_weld(soup.points);
+    const prep::PreparedInput shared = prep::prepare(soup, params, nullptr, &weld);
+    EXPECT_EQ(all.mesh.points, shared.mesh.points) << "tolerance " << tolerance;
+    EXPECT_EQ(all.mesh.triangles, shared.mesh.triangles) << "tolerance " << tolerance;
+    EXPECT_EQ(all.input_to_mesh, shared.input_to_mesh) << "tolerance " << tolerance;
+    EXPECT_EQ(all.welded_vertices, shared.welded_vertices) << "tolerance " << tolerance;
+    // The two x values met in the local frame: fewer points than the input's exact weld has.
+    EXPECT_LT(all.mesh.points.size(), weld.unique.size()) << "tolerance " << tolerance;
+  }
+}
+
 TEST(Prepare, RejectsInputWithNothingUsable) {
   Mesh empty;
   try {

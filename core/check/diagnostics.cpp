@@ -8,6 +8,7 @@
 #include <tbb/parallel_reduce.h>
 #include <tbb/parallel_sort.h>
 
+#include "check/diagnostics.h"
 #include "check/intersections.h"
 #include "common/compressed_lists.h"
 #include "common/exact_weld.h"
@@ -118,10 +119,14 @@ size_t count_nonmanifold_vertices(const std::vector<Tri>& tris, size_t vertices,
 }  // namespace
 
 MeshDiagnostics diagnose(const Mesh& mesh, bool find_intersections) {
+  return check::diagnose_welded(mesh, exact_weld(mesh.points), find_intersections);
+}
+
+MeshDiagnostics check::diagnose_welded(const Mesh& mesh, const ExactWeld& weld, bool find_intersections) {
   MeshDiagnostics d;
   // Exact weld: only bit-identical coordinates merge, so the counts describe the file as it is.
-  std::vector<Vec3> pts;
-  const std::vector<uint32_t> remap = exact_weld(mesh.points, pts);
+  const std::vector<Vec3>& pts = weld.unique;
+  const std::vector<uint32_t>& remap = weld.remap;
   Box3 box;
   std::vector<Tri> tris;
   tris.reserve(mesh.triangles.size());

@@ -88,4 +88,15 @@ inline std::vector<uint32_t> exact_weld(const std::vector<Vec3>& points, std::ve
   return remap;
 }
 
+// A point set's exact weld: its distinct points, and each point's index among them.
+struct ExactWeld {
+  std::vector<Vec3> unique;
+  std::vector<uint32_t> remap;
+};
+inline ExactWeld exact_weld(const std::vector<Vec3>& points) {
+  ExactWeld w;
+  w.remap = exact_weld(points, w.unique);
+  return w;
+}
+
 }  // namespace vdbwrap

@@ -196,7 +196,7 @@ InputIntersections input_intersections(const std::vector<check::TrianglePair>& m
   return counts;
 }
 
-PreparedInput prepare(const Mesh& input, const WrapParams& params, ProgressSink* progress) {
+PreparedInput prepare(const Mesh& input, const WrapParams& params, ProgressSink* progress, const ExactWeld* input_weld) {
   PreparedInput out;
   if (input.triangles.empty()) throw Error(ErrorKind::InvalidInput, "input contains no triangles");
   Box3 box;
@@ -210,11 +210,25 @@ PreparedInput prepare(const Mesh& input, const WrapParams& params, ProgressSink*
   if (!(out.diagonal > 0)) throw Error(ErrorKind::InvalidInput, "input has zero extent (all vertices coincide)");
 
   if (progress) progress->progress("prepare", 0.0, "welding vertices");
-  std::vector<Vec3> local(input.points.size());
-  for (size_t i = 0; i < local.size(); ++i) local[i] = input.points[i] - out.origin;
+  // Points equal in the input stay equal in the local frame, and the weld's distinct points
+  // come in the order of first appearance either way: welding the input's distinct points
+  // and composing gives what welding all of them would (an STL file repeats each about six
+  // times, and their exact weld was half of this step).
+  const std::vector<Vec3>& from = input_weld ? input_weld->unique : input.points;
+  std::vector<Vec3> local(from.size());
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, local.size(), 8192), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t i = r.begin(); i != r.end(); ++i) local[i] = from[i] - out.origin;
+  });
   std::vector<Vec3> welded;
   std::vector<uint32_t> remap = weld_points(local, params.weld_tolerance * out.diagonal, welded);
-  out.welded_vertices = local.size() - welded.size();
+  if (input_weld) {
+    std::vector<uint32_t> composed(input.points.size());
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, composed.size(), 8192), [&](const tbb::blocked_range<size_t>& r) {
+      for (size_t i = r.begin(); i != r.end(); ++i) composed[i] = remap[input_weld->remap[i]];
+    });
+    remap.swap(composed);
+  }
+  out.welded_vertices = input.points.size() - welded.size();
 
   // Drop triangles with repeated or collinear vertices (normal undefined) and exact duplicates.
   Mesh& m = out.mesh;

@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "check/intersections.h"
+#include "common/exact_weld.h"
 #include "vdbwrap/mesh.h"
 #include "vdbwrap/wrap.h"
 
@@ -64,7 +65,9 @@ struct InputIntersections {
 InputIntersections input_intersections(const std::vector<check::TrianglePair>& mesh_pairs,
                                        const std::vector<uint32_t>& input_to_mesh, size_t mesh_triangles);
 
-// The whole stage. Throws Error(InvalidInput) when nothing usable is left.
-PreparedInput prepare(const Mesh& input, const WrapParams& params, ProgressSink* progress);
+// The whole stage. Throws Error(InvalidInput) when nothing usable is left. `input_weld`, when
+// given, is the exact weld of input.points (the input's diagnosis makes one): the welding
+// starts from its distinct points instead of all of them, with the same result.
+PreparedInput prepare(const Mesh& input, const WrapParams& params, ProgressSink* progress, const ExactWeld* input_weld = nullptr);
 
 }  // namespace vdbwrap::prep
