@@ -364,15 +364,28 @@ WrapResult run_pipeline(const Mesh& input, const WrapParams& params, ProgressSin
   check_cancel(progress);
 
   std::vector<uint32_t> crossing;  // CGAL's intersecting faces of the final surface
+  // The final quality analysis runs beside the first validation: it holds when the validation
+  // finds no intersection (nothing to count for it, nothing repaired); else it runs again after.
+  QualityCounts quality_beside;
+  double quality_beside_seconds = 0;
+  bool repaired_in_validation = false;
   {
     StageTimer timer("validate", report.stages);
     if (progress) progress->progress("validate", 0.0, "checking the wrap");
     check::CgalVerdict verdict;
     for (int attempt = 0;; ++attempt) {
-      // The authoritative self-intersection verdict is CGAL's own on the closed mesh. Both
+      // The authoritative self-intersection verdict is CGAL's own on the closed mesh. The
       // checks only read the surface, and each has serial parts: side by side.
       tbb::task_group checks;
       checks.run([&] { report.output = diagnose(result.surface, false); });
+      if (attempt == 0)
+        checks.run([&] {
+          const auto start = std::chrono::steady_clock::now();
+          const std::vector<uint32_t> none;
+          quality_beside = post::analyse_quality(surface.points, surface.triangles, surface.cell_size, quality_ref, nullptr, &none,
+                                                 &deviation_memo);
+          quality_beside_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+        });
       checks.run_and_wait([&] { verdict = check::cgal_verdict(result.surface.points, result.surface.triangles); });
       check_cancel(progress);
       report.output.self_intersecting = verdict.self_intersects;
@@ -386,6 +399,7 @@ WrapResult run_pipeline(const Mesh& input, const WrapParams& params, ProgressSin
       // A closed manifold that intersects itself: the intersection repair, once.
       if (attempt > 0 || !verdict.self_intersects || !verdict.valid_polygon_mesh || !report.output.closed) break;
       if (!repair_if_intersecting()) break;
+      repaired_in_validation = true;
       result.surface = label_parts();
     }
     if (!report.output.valid_closed_surface() || !verdict.valid_polygon_mesh || !verdict.outward) {
@@ -402,7 +416,14 @@ WrapResult run_pipeline(const Mesh& input, const WrapParams& params, ProgressSin
     report.contact.separate_bodies = report.output.components;
     if (progress) progress->progress("validate", 1.0, "closed, manifold, outward, no self-intersections");
   }
-  {
+  if (crossing.empty() && !repaired_in_validation) {
+    report.quality.after = quality_beside;
+    StageStats beside;  // timed inside the validation
+    beside.name = "quality";
+    beside.seconds = quality_beside_seconds;
+    beside.peak_memory_mb = current_peak_memory_mb();
+    report.stages.push_back(beside);
+  } else {
     StageTimer timer("quality", report.stages);
     report.quality.after = post::analyse_quality(surface.points, surface.triangles, surface.cell_size, quality_ref, nullptr, &crossing, &deviation_memo);
   }
