@@ -77,31 +77,31 @@ void check_cancel(ProgressSink* progress) {
 }  // namespace
 
 namespace {
-// The input's nearest-point index, built in the background from the prepared input (which
-// must outlive this): its build is serial in part (CGAL's tree), seconds on millions of
-// triangles, and the grid stages before its first use (refinement, the flood fill,
-// extraction) leave a core idle in their own serial steps.
-class IndexInBackground {
+// A value made in the background from data that must outlive this; get() waits for it the
+// first time (from any thread). The grid stages leave a core idle in their serial steps
+// (the flood fill is one), and what projection needs first can be made meanwhile.
+template <typename T>
+class InBackground {
  public:
-  explicit IndexInBackground(const prep::PreparedInput& in) {
-    task_.run([this, &in] { index_ = std::make_unique<fit::SurfaceIndex>(in.mesh.points, in.mesh.triangles); });
+  template <typename Make>
+  explicit InBackground(Make make) {
+    task_.run([this, make] { value_ = make(); });
   }
-  ~IndexInBackground() {
+  ~InBackground() {
     try {
       task_.wait();
     } catch (...) {  // the pipeline is unwinding already
     }
   }
-  // Waits for the build the first time (from any thread).
-  const fit::SurfaceIndex& get() {
-    std::call_once(built_, [this] { task_.wait(); });
-    return *index_;
+  const T& get() {
+    std::call_once(made_, [this] { task_.wait(); });
+    return value_;
   }
 
  private:
   tbb::task_group task_;
-  std::once_flag built_;
-  std::unique_ptr<fit::SurfaceIndex> index_;
+  std::once_flag made_;
+  T value_{};
 };
 
 WrapResult run_pipeline(const Mesh& input, const WrapParams& params, ProgressSink* progress);
@@ -165,13 +165,15 @@ WrapResult run_pipeline(const Mesh& input, const WrapParams& params, ProgressSin
   report.control_sizes = controls.described;
   check_cancel(progress);
 
-  // The nearest-point index: for the clearance of gap closure and leaks, then projection.
-  IndexInBackground index_builder(prepared);
+  // The nearest-point index: for the clearance of gap closure and leaks, then projection. Its
+  // build is serial in part (CGAL's tree), seconds on millions of triangles.
+  InBackground<std::unique_ptr<fit::SurfaceIndex>> index_builder(
+      [&] { return std::make_unique<fit::SurfaceIndex>(prepared.mesh.points, prepared.mesh.triangles); });
   const fit::SurfaceIndex* index_ready = nullptr;
   auto wait_for_index = [&]() -> const fit::SurfaceIndex& {
     if (!index_ready) {
       StageTimer timer("index", report.stages);  // what is left of the build when first needed
-      index_ready = &index_builder.get();
+      index_ready = index_builder.get().get();
     }
     return *index_ready;
   };
@@ -196,6 +198,10 @@ WrapResult run_pipeline(const Mesh& input, const WrapParams& params, ProgressSin
   grid::AdaptiveGrid& g = *refined.grid;
   check_cancel(progress);
 
+  // The input's feature curves (serial), beside the flood fill (serial too).
+  InBackground<std::vector<fit::FeatureCurve>> curves_builder([&] {
+    return params.snap_features ? fit::build_feature_curves(prepared, params.corner_angle_deg) : std::vector<fit::FeatureCurve>();
+  });
   int32_t label;
   std::vector<grid::Coord> anchors;
   {
@@ -208,7 +214,7 @@ WrapResult run_pipeline(const Mesh& input, const WrapParams& params, ProgressSin
     // Clearances are measured for gap closure and for a seed's leak only.
     if (request.gap_closure > 0 || !request.seeds.empty()) wait_for_index();
     grid::VolumeSelection sel = grid::select_volume(
-        g, request, [&](const Vec3& p) { return std::sqrt(index_builder.get().squared_distance(p)); }, progress);
+        g, request, [&](const Vec3& p) { return std::sqrt(index_builder.get()->squared_distance(p)); }, progress);
     report.volumes = sel.report;
     if (sel.leak.detected) {
       report.leak = sel.leak;
@@ -241,8 +247,7 @@ WrapResult run_pipeline(const Mesh& input, const WrapParams& params, ProgressSin
   fit::FittedSurface fitted;
   {
     StageTimer timer("project", report.stages);
-    std::vector<fit::FeatureCurve> curves;
-    if (params.snap_features) curves = fit::build_feature_curves(prepared, params.corner_angle_deg);
+    const std::vector<fit::FeatureCurve>& curves = curves_builder.get();
     fitted = fit::fit_to_input(lattice, g, index, curves, prepared.origin, params, progress);
     report.nodes_held_back = fitted.held_back;
     report.features.curves = fitted.snap.curves;
