@@ -39,9 +39,10 @@ inline bool triangle_overlaps_box(const Vec3& a, const Vec3& b, const Vec3& c, c
 
 // A triangle prepared for many box tests: the same thirteen separating axes as
 // triangle_overlaps_box, with the triangle's extent along each computed once (from its first
-// vertex), so that each box costs a dot product per axis. The voxel stage tests each
-// triangle against the eight children of every cell it refines and against the blocks and
-// cells of its bounding box: tens of millions of tests on a 2M-triangle assembly.
+// vertex), so that each box costs a dot product per axis. The voxel stage and the
+// nearest-point index test each triangle against the blocks and cells of its bounding box:
+// tens of millions of tests on a 2M-triangle assembly. (A cell's eight children are tested
+// at once by octants_overlapped, below.)
 // Mathematically the same test; the rounding differs only far below the callers' margins.
 class TriangleBoxTester {
  public:
@@ -91,7 +92,8 @@ class TriangleBoxTester {
 // of k is set, and whose half-width is `half`. The same thirteen separating axes as above,
 // each projecting the triangle once for all the octants asked about: an octant's centre
 // projects to the cell centre's projection plus its offset, and all share the radius.
-// Refinement asks only about the children no triangle met yet (see build_refined_grid).
+// Refinement splits its cells with it (asking only about the children no triangle met yet:
+// see build_refined_grid), and the nearest-point index its crowded cells.
 inline uint8_t octants_overlapped(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& centre, double quarter, double half,
                                   uint8_t among = 0xff) {
   const Vec3 v[3] = {a - centre, b - centre, c - centre};
