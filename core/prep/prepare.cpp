@@ -89,10 +89,11 @@ std::vector<uint32_t> weld_points(const std::vector<Vec3>& points, double tolera
   return remap;
 }
 
-size_t orient_pieces(const std::vector<Vec3>& points, std::vector<Tri>& triangles) {
+size_t orient_pieces(const std::vector<Vec3>& points, std::vector<Tri>& triangles, const EdgeTriangles* edges) {
   // Triangles meeting at an edge used by exactly two of them must traverse it in opposite
   // directions; a breadth-first walk flips neighbours that disagree.
-  const EdgeTriangles edge_tris = edge_triangles(triangles);
+  EdgeTriangles made;
+  const EdgeTriangles& edge_tris = edges ? *edges : (made = edge_triangles(triangles));
 
   // Per triangle side, in parallel (the edge lookups were most of the walk): the triangle
   // across it when the edge has exactly two, and whether that one runs the edge the same way.
@@ -155,9 +156,11 @@ size_t orient_pieces(const std::vector<Vec3>& points, std::vector<Tri>& triangle
 }
 
 std::vector<FeatureEdge> find_feature_edges(const std::vector<Vec3>& points, const std::vector<Tri>& triangles,
-                                            const std::vector<Vec3>& normals, double feature_angle_deg) {
+                                            const std::vector<Vec3>& normals, double feature_angle_deg,
+                                            const EdgeTriangles* edges) {
   (void)points;
-  const EdgeTriangles edge_tris = edge_triangles(triangles);
+  EdgeTriangles made;
+  const EdgeTriangles& edge_tris = edges ? *edges : (made = edge_triangles(triangles));
   const double cos_limit = std::cos(feature_angle_deg * M_PI / 180.0);
   std::vector<FeatureEdge> out;
   // Keys in increasing order: the edges come out sorted by (a, b).
@@ -292,7 +295,9 @@ PreparedInput prepare(const Mesh& input, const WrapParams& params, ProgressSink*
   if (progress && progress->cancelled()) throw Error(ErrorKind::Cancelled, "cancelled");
 
   if (progress) progress->progress("prepare", 0.3, "orienting connected pieces");
-  out.flipped_triangles = orient_pieces(m.points, m.triangles);
+  // One edge listing for orienting and for the feature edges: flips change no triangle's edges.
+  const EdgeTriangles edges = edge_triangles(m.triangles);
+  out.flipped_triangles = orient_pieces(m.points, m.triangles, &edges);
 
   out.normals.resize(m.triangles.size());
   tbb::parallel_for(tbb::blocked_range<size_t>(0, m.triangles.size(), 4096), [&](const tbb::blocked_range<size_t>& r) {
@@ -302,7 +307,7 @@ PreparedInput prepare(const Mesh& input, const WrapParams& params, ProgressSink*
     }
   });
   if (progress) progress->progress("prepare", 0.5, "finding feature edges");
-  out.feature_edges = find_feature_edges(m.points, m.triangles, out.normals, params.feature_angle_deg);
+  out.feature_edges = find_feature_edges(m.points, m.triangles, out.normals, params.feature_angle_deg, &edges);
 
   if (progress) progress->progress("prepare", 0.7, "finding self-intersection lines");
   out.intersecting_pairs = check::find_intersecting_pairs(m.points, m.triangles);

@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "check/intersections.h"
+#include "common/edge_triangles.h"
 #include "common/exact_weld.h"
 #include "vdbwrap/mesh.h"
 #include "vdbwrap/wrap.h"
@@ -47,11 +48,13 @@ std::vector<uint32_t> weld_points(const std::vector<Vec3>& points, double tolera
 
 // Makes the orientation consistent across every manifold edge of each connected piece and
 // turns closed-looking pieces outward (positive signed volume). Returns triangles flipped.
-size_t orient_pieces(const std::vector<Vec3>& points, std::vector<Tri>& triangles);
+// `edges`: the triangles' edges when known (flipping triangles changes none of them).
+size_t orient_pieces(const std::vector<Vec3>& points, std::vector<Tri>& triangles, const EdgeTriangles* edges = nullptr);
 
 // Sharp (dihedral angle over feature_angle_deg), boundary and non-manifold edges.
 std::vector<FeatureEdge> find_feature_edges(const std::vector<Vec3>& points, const std::vector<Tri>& triangles,
-                                            const std::vector<Vec3>& normals, double feature_angle_deg);
+                                            const std::vector<Vec3>& normals, double feature_angle_deg,
+                                            const EdgeTriangles* edges = nullptr);
 
 // Intersection counts of the input mesh (MeshDiagnostics::intersecting_pairs / _triangles)
 // from the pairs found on the prepared mesh, so the input need not be searched a second
