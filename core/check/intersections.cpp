@@ -513,8 +513,11 @@ struct SideLinks {
   std::vector<uint8_t> open;
 };
 
-SideLinks side_links(const std::vector<Tri>& triangles, const std::vector<uint8_t>& usable) {
-  const EdgeTriangles edges = edge_triangles(triangles, &usable);
+// `known`: the edges of all the triangles, used when all are usable (the same listing).
+SideLinks side_links(const std::vector<Tri>& triangles, const std::vector<uint8_t>& usable, const EdgeTriangles* known) {
+  EdgeTriangles made;
+  const bool all_usable = std::all_of(usable.begin(), usable.end(), [](uint8_t u) { return u != 0; });
+  const EdgeTriangles& edges = known && all_usable ? *known : (made = edge_triangles(triangles, &usable));
   SideLinks out{std::vector<uint32_t>(3 * triangles.size(), kNoPiece), std::vector<uint8_t>(3 * triangles.size(), 0)};
   tbb::parallel_for(tbb::blocked_range<size_t>(0, edges.edges(), 4096), [&](const tbb::blocked_range<size_t>& r) {
     for (size_t i = r.begin(); i != r.end(); ++i) {
@@ -550,9 +553,10 @@ struct ClosedUp {
   std::vector<uint32_t> across;  // as SideLinks::across, for all of them
 };
 
-ClosedUp close_holes(const std::vector<P3>& p, const std::vector<Tri>& triangles, const std::vector<uint8_t>& usable) {
+ClosedUp close_holes(const std::vector<P3>& p, const std::vector<Tri>& triangles, const std::vector<uint8_t>& usable,
+                     const EdgeTriangles* edges) {
   ClosedUp out{p, triangles, usable, {}};
-  SideLinks links = side_links(triangles, usable);
+  SideLinks links = side_links(triangles, usable, edges);
   // The open side after side (t, e), which runs a -> b with a = t[e]: the hole runs b -> a and
   // goes on from a along the next open side met turning round a.
   constexpr uint32_t none = UINT32_MAX;
@@ -650,8 +654,8 @@ bool turns_once(const std::vector<P3>& p, const std::vector<Tri>& triangles, con
 }
 
 std::vector<uint32_t> star_shaped_pieces(const std::vector<P3>& given_points, const std::vector<Tri>& given_triangles,
-                                         const std::vector<uint8_t>& given_usable) {
-  const ClosedUp closed = close_holes(given_points, given_triangles, given_usable);
+                                         const std::vector<uint8_t>& given_usable, const EdgeTriangles* edges = nullptr) {
+  const ClosedUp closed = close_holes(given_points, given_triangles, given_usable, edges);
   const std::vector<P3>& p = closed.points;
   const std::vector<Tri>& triangles = closed.triangles;
   const std::vector<uint8_t>& usable = closed.usable;
@@ -923,7 +927,8 @@ ExactInput exact_input(const std::vector<Vec3>& points, const std::vector<Tri>& 
 
 }  // namespace
 
-std::vector<TrianglePair> find_intersecting_pairs(const std::vector<Vec3>& points, const std::vector<Tri>& triangles, SoupKind kind) {
+std::vector<TrianglePair> find_intersecting_pairs(const std::vector<Vec3>& points, const std::vector<Tri>& triangles, SoupKind kind,
+                                                  const EdgeTriangles* edges) {
   const ExactInput in = exact_input(points, triangles);
   const std::vector<P3>& p = in.p;
   const std::vector<uint8_t>& usable = in.usable;
@@ -931,7 +936,7 @@ std::vector<TrianglePair> find_intersecting_pairs(const std::vector<Vec3>& point
   const VertexStars stars = vertex_stars(p.size(), triangles, usable);
   const std::vector<uint8_t> fan = unfolded_fan_vertices(p, triangles, stars);
   const std::vector<uint32_t> piece =
-      kind == SoupKind::kInput ? star_shaped_pieces(p, triangles, usable) : std::vector<uint32_t>(triangles.size(), kNoPiece);
+      kind == SoupKind::kInput ? star_shaped_pieces(p, triangles, usable, edges) : std::vector<uint32_t>(triangles.size(), kNoPiece);
   const std::vector<PlaneBound> planes = plane_bounds(points, triangles, usable);
   // Exact tests inside the (parallel) candidate callback: fans and long thin CAD triangles give
   // hundreds of millions of overlapping boxes, too many to store as candidates first.

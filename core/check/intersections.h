@@ -6,6 +6,10 @@
 
 #include "vdbwrap/mesh.h"
 
+namespace vdbwrap {
+struct EdgeTriangles;
+}
+
 namespace vdbwrap::check {
 
 struct TrianglePair {
@@ -21,9 +25,10 @@ enum class SoupKind { kInput, kWrap };
 
 // Pairs of triangles of an indexed soup that share points other than their common
 // vertices and edge (crossing, overlapping, folded onto each other). Triangles with
-// repeated or collinear vertices are skipped (count those separately).
+// repeated or collinear vertices are skipped (count those separately). `edges`: the
+// triangles' edges when known (an input's star-shaped parts are found through them).
 std::vector<TrianglePair> find_intersecting_pairs(const std::vector<Vec3>& points, const std::vector<Tri>& triangles,
-                                                  SoupKind kind = SoupKind::kInput);
+                                                  SoupKind kind = SoupKind::kInput, const EdgeTriangles* edges = nullptr);
 
 // Intersecting pairs with at least one triangle in `subset` (the rest of the mesh is only
 // tested against the subset). Same rules as find_intersecting_pairs; degenerate triangles
