@@ -7,11 +7,11 @@
 #include <chrono>
 #include <cmath>
 #include <memory>
-#include <mutex>
 #include <set>
 
 #include "check/diagnostics.h"
 #include "check/intersections.h"
+#include "common/in_background.h"
 #include "common/stage_timer.h"
 #include "common/vec.h"
 #include "io/mesh_io.h"
@@ -77,33 +77,6 @@ void check_cancel(ProgressSink* progress) {
 }  // namespace
 
 namespace {
-// A value made in the background from data that must outlive this; get() waits for it the
-// first time (from any thread). The grid stages leave a core idle in their serial steps
-// (the flood fill is one), and what projection needs first can be made meanwhile.
-template <typename T>
-class InBackground {
- public:
-  template <typename Make>
-  explicit InBackground(Make make) {
-    task_.run([this, make] { value_ = make(); });
-  }
-  ~InBackground() {
-    try {
-      task_.wait();
-    } catch (...) {  // the pipeline is unwinding already
-    }
-  }
-  const T& get() {
-    std::call_once(made_, [this] { task_.wait(); });
-    return value_;
-  }
-
- private:
-  tbb::task_group task_;
-  std::once_flag made_;
-  T value_{};
-};
-
 WrapResult run_pipeline(const Mesh& input, const WrapParams& params, ProgressSink* progress);
 }
 

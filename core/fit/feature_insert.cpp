@@ -228,9 +228,7 @@ class Inserter {
     }
     tbb::parallel_sort(entries.begin(), entries.end(), [](const Entry& x, const Entry& y) {  // a total order
       if (x.parity != y.parity) return x.parity < y.parity;
-      if (x.cell.x != y.cell.x) return x.cell.x < y.cell.x;
-      if (x.cell.y != y.cell.y) return x.cell.y < y.cell.y;
-      if (x.cell.z != y.cell.z) return x.cell.z < y.cell.z;
+      if (!(x.cell == y.cell)) return x.cell < y.cell;
       return x.sample < y.sample;
     });
     order_.resize(entries.size());

@@ -2,13 +2,13 @@
 
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_sort.h>
-#include <tbb/task_group.h>
 
 #include <algorithm>
 #include <cmath>
 
 #include "check/intersections.h"
 #include "common/edge_key.h"
+#include "common/in_background.h"
 #include "common/vec.h"
 
 namespace vdbwrap::post {
@@ -107,35 +107,30 @@ QualityCounts analyse_quality(const std::vector<Vec3>& p, const std::vector<Tri>
   // tolerance, within reach of the wrap; the surface triangle nearest each is flagged (below).
   // Measured beside the rest: building the surface's index is partly serial.
   q.feature_samples = ref.feature_samples.size();
-  std::vector<int8_t> sample_state(ref.feature_samples.size(), 0);  // 1 lost, 2 out of reach
-  std::vector<uint32_t> sample_nearest(ref.feature_samples.size(), 0);
-  tbb::task_group features;
-  if (!ref.feature_samples.empty() && !tris.empty())
-    features.run([&] {
-      fit::SurfaceIndex surface(p, tris);
-      const double tolerance = t.feature_tolerance * ref.finest_size;
-      tbb::parallel_for(tbb::blocked_range<size_t>(0, ref.feature_samples.size(), 1024), [&](const tbb::blocked_range<size_t>& r) {
-        for (size_t i = r.begin(); i != r.end(); ++i) {
-          auto hit = surface.closest(ref.feature_samples[i] + ref.origin);
-          const double d = std::sqrt(hit.squared_distance);
-          if (d <= tolerance) continue;
-          const Tri& tri = tris[hit.triangle];
-          const double cell = std::max({cell_size[tri[0]], cell_size[tri[1]], cell_size[tri[2]]});
-          sample_state[i] = d > t.feature_reach * cell ? 2 : 1;
-          sample_nearest[i] = hit.triangle;
-        }
-      });
-    });
-  // Whatever throws below, the task must end before its data go.
-  struct WaitAtExit {
-    tbb::task_group& g;
-    ~WaitAtExit() {
-      try {
-        g.wait();
-      } catch (...) {
+  struct SampleStates {
+    std::vector<int8_t> state;  // 1 lost, 2 out of reach
+    std::vector<uint32_t> nearest;
+  };
+  InBackground<SampleStates> samples([&] {
+    SampleStates out;
+    if (ref.feature_samples.empty() || tris.empty()) return out;
+    out.state.assign(ref.feature_samples.size(), 0);
+    out.nearest.assign(ref.feature_samples.size(), 0);
+    fit::SurfaceIndex surface(p, tris);
+    const double tolerance = t.feature_tolerance * ref.finest_size;
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, ref.feature_samples.size(), 1024), [&](const tbb::blocked_range<size_t>& r) {
+      for (size_t i = r.begin(); i != r.end(); ++i) {
+        auto hit = surface.closest(ref.feature_samples[i] + ref.origin);
+        const double d = std::sqrt(hit.squared_distance);
+        if (d <= tolerance) continue;
+        const Tri& tri = tris[hit.triangle];
+        const double cell = std::max({cell_size[tri[0]], cell_size[tri[1]], cell_size[tri[2]]});
+        out.state[i] = d > t.feature_reach * cell ? 2 : 1;
+        out.nearest[i] = hit.triangle;
       }
-    }
-  } wait_at_exit{features};
+    });
+    return out;
+  });
 
   // Intersecting and degenerate triangles.
   std::vector<uint32_t> crossing;
@@ -202,10 +197,10 @@ QualityCounts analyse_quality(const std::vector<Vec3>& p, const std::vector<Tri>
     q.long_edges += (e & kLongEdge) ? 1 : 0;
   }
 
-  features.wait();
-  for (size_t i = 0; i < sample_state.size(); ++i) {
-    if (sample_state[i] == 1) ++q.lost_feature_samples, flags[sample_nearest[i]] |= kLostFeature;
-    if (sample_state[i] == 2) ++q.unreachable_feature_samples;
+  const SampleStates& lost = samples.get();
+  for (size_t i = 0; i < lost.state.size(); ++i) {
+    if (lost.state[i] == 1) ++q.lost_feature_samples, flags[lost.nearest[i]] |= kLostFeature;
+    if (lost.state[i] == 2) ++q.unreachable_feature_samples;
   }
 
   q.min_angle_deg = tris.empty() ? 0 : 180;
