@@ -372,51 +372,100 @@ TEST(Extract, HandMadeEdgeAndCornerContactsBecomeManifold) {
   }
 }
 
-TEST(Extract, RandomCellConfigurationsAlwaysGiveClosedManifoldSurfaces) {
-  std::mt19937 rng(7);
-  for (int trial = 0; trial < 40; ++trial) {
-    grid::AdaptiveGrid g({0, 0, 0}, 1.0, 2, Coord(9, 9, 9));
-    std::uniform_real_distribution<double> u(0, 1);
-    for (int z = 2; z < 7; ++z)
-      for (int y = 2; y < 7; ++y)
-        for (int x = 2; x < 7; ++x) {
-          double r = u(rng);
-          if (r < 0.25) {
-            g.set(0, Coord(x, y, z), grid::kTouched);
-          } else if (r < 0.4) {
-            g.set(0, Coord(x, y, z), grid::kRefined);
-            for (int k = 0; k < 8; ++k) {
-              Coord c(2 * x + (k & 1), 2 * y + ((k >> 1) & 1), 2 * z + ((k >> 2) & 1));
-              double s = u(rng);
-              if (s < 0.15) {
-                g.set(1, c, grid::kRefined);
-                for (int j = 0; j < 8; ++j)
-                  g.set(2, Coord(2 * c.x() + (j & 1), 2 * c.y() + ((j >> 1) & 1), 2 * c.z() + ((j >> 2) & 1)),
-                        u(rng) < 0.4 ? grid::kTouched : grid::kFree);
-              } else {
-                g.set(1, c, s < 0.5 ? grid::kTouched : grid::kFree);
-              }
+// Random cells on 3 levels: touched and free level-0 cells, refined ones with touched, free
+// and refined children. Each choice of volume gets its own deep copy.
+std::unique_ptr<grid::AdaptiveGrid> random_cell_grid(std::mt19937& rng) {
+  auto g = std::make_unique<grid::AdaptiveGrid>(Vec3{0, 0, 0}, 1.0, 2, Coord(9, 9, 9));
+  std::uniform_real_distribution<double> u(0, 1);
+  for (int z = 2; z < 7; ++z)
+    for (int y = 2; y < 7; ++y)
+      for (int x = 2; x < 7; ++x) {
+        double r = u(rng);
+        if (r < 0.25) {
+          g->set(0, Coord(x, y, z), grid::kTouched);
+        } else if (r < 0.4) {
+          g->set(0, Coord(x, y, z), grid::kRefined);
+          for (int k = 0; k < 8; ++k) {
+            Coord c(2 * x + (k & 1), 2 * y + ((k >> 1) & 1), 2 * z + ((k >> 2) & 1));
+            double s = u(rng);
+            if (s < 0.15) {
+              g->set(1, c, grid::kRefined);
+              for (int j = 0; j < 8; ++j)
+                g->set(2, Coord(2 * c.x() + (j & 1), 2 * c.y() + ((j >> 1) & 1), 2 * c.z() + ((j >> 2) & 1)),
+                       u(rng) < 0.4 ? grid::kTouched : grid::kFree);
+            } else {
+              g->set(1, c, s < 0.5 ? grid::kTouched : grid::kFree);
             }
           }
         }
+      }
+  return g;
+}
+
+std::unique_ptr<grid::AdaptiveGrid> deep_copy(const grid::AdaptiveGrid& g) {
+  // Each level grid is shared by a plain copy; copy the values so that choices do not interfere.
+  auto h = std::make_unique<grid::AdaptiveGrid>(Vec3{0, 0, 0}, 1.0, g.max_level(), g.dims0());
+  for (int l = 0; l <= g.max_level(); ++l)
+    for (auto it = g.level_grid(l)->cbeginValueOn(); it; ++it) h->set(l, it.getCoord(), *it);
+  return h;
+}
+
+TEST(Extract, RandomCellConfigurationsAlwaysGiveClosedManifoldSurfaces) {
+  std::mt19937 rng(7);
+  for (int trial = 0; trial < 40; ++trial) {
+    const auto g = random_cell_grid(rng);
     for (VolumeChoice choice : {VolumeChoice::Outside, VolumeChoice::Inside}) {
-      // Each level grid is shared by the copy; deep-copy them so choices do not interfere.
-      grid::AdaptiveGrid h({0, 0, 0}, 1.0, 2, Coord(9, 9, 9));
-      for (int l = 0; l <= 2; ++l)
-        for (auto it = g.level_grid(l)->cbeginValueOn(); it; ++it) h.set(l, it.getCoord(), *it);
+      auto h = deep_copy(*g);
       grid::Components comps;
       int32_t label;
       try {
-        label = grid::choose_volume(h, choice, comps, nullptr);
+        label = grid::choose_volume(*h, choice, comps, nullptr);
       } catch (const Error&) {
         continue;  // nothing enclosed in this random configuration
       }
       extract::ExtractStats stats;
-      auto surf = extract::extract_manifold_surface(h, label, choice, stats, nullptr);
+      auto surf = extract::extract_manifold_surface(*h, label, choice, stats, nullptr);
       SCOPED_TRACE("trial " + std::to_string(trial) + (choice == VolumeChoice::Inside ? " inside" : " outside"));
       expect_closed_manifold(surf, choice);
     }
   }
+}
+
+// Rounds after the first look only near the cells the last round changed; they must change
+// the same cells as rounds over the whole surface, and so give the same surface.
+TEST(Extract, RoundsNearTheChangesGiveTheSameSurfaceAsWholeRounds) {
+  std::mt19937 rng(11);
+  size_t later_rounds = 0;
+  for (int trial = 0; trial < 60; ++trial) {
+    const auto g = random_cell_grid(rng);
+    for (VolumeChoice choice : {VolumeChoice::Outside, VolumeChoice::Inside}) {
+      SCOPED_TRACE("trial " + std::to_string(trial) + (choice == VolumeChoice::Inside ? " inside" : " outside"));
+      auto near = deep_copy(*g), whole = deep_copy(*g);
+      grid::Components comps;
+      int32_t label_near, label_whole;
+      try {
+        label_near = grid::choose_volume(*near, choice, comps, nullptr);
+        label_whole = grid::choose_volume(*whole, choice, comps, nullptr);
+      } catch (const Error&) {
+        continue;
+      }
+      for (int min_exclude_level : {-1, 1}) {
+        auto a = deep_copy(*near), b = deep_copy(*whole);
+        int32_t la = label_near, lb = label_whole;
+        extract::ExtractStats sa, sb;
+        const auto surf_near = extract::extract_manifold_surface(*a, la, choice, sa, nullptr, {}, min_exclude_level, false);
+        const auto surf_whole = extract::extract_manifold_surface(*b, lb, choice, sb, nullptr, {}, min_exclude_level, true);
+        EXPECT_EQ(sa.rounds, sb.rounds);
+        EXPECT_EQ(sa.excluded_cells, sb.excluded_cells);
+        EXPECT_EQ(sa.dropped_pieces, sb.dropped_pieces);
+        EXPECT_EQ(surf_near.nodes, surf_whole.nodes);
+        EXPECT_EQ(surf_near.node_size, surf_whole.node_size);
+        EXPECT_EQ(surf_near.polygons, surf_whole.polygons);
+        later_rounds += sa.rounds > 2 ? 1 : 0;
+      }
+    }
+  }
+  EXPECT_GT(later_rounds, 10u);  // the configurations do need rounds near the changes
 }
 
 // The extraction's rounds take non-manifold cells out of the volume; the pieces this cuts off

@@ -37,7 +37,7 @@ size_t exclude_nonmanifold_cells(grid::AdaptiveGrid& grid, int32_t label, Volume
 // tell within their budget, or a piece is not below `pocket_share` of the volume left: a
 // full labelling must decide.
 bool drop_cut_off_pockets(grid::AdaptiveGrid& grid, int32_t label, const std::vector<std::pair<int, Coord>>& taken_out,
-                          double pocket_share, size_t& dropped);
+                          double pocket_share, size_t& dropped, std::vector<std::pair<int, Coord>>* dropped_cells = nullptr);
 
 struct ExtractStats {
   size_t excluded_cells = 0, rounds = 0, dropped_pieces = 0;
@@ -47,8 +47,10 @@ struct ExtractStats {
 // piece of the volume (the outside one, the largest inside one, or with seed points the
 // pieces holding the `anchors`, finest-level cells). `label` may change. Cells finer than
 // min_exclude_level (the depth of the refinement criteria) may be taken out of the volume.
+// After the first round, a round looks only near the cells the last one changed, unless
+// `whole_rounds` (every round over the whole surface: the reference the tests compare with).
 LatticeSurface extract_manifold_surface(grid::AdaptiveGrid& grid, int32_t& label, VolumeChoice choice, ExtractStats& stats,
                                         ProgressSink* progress, const std::vector<Coord>& anchors = {},
-                                        int min_exclude_level = -1);
+                                        int min_exclude_level = -1, bool whole_rounds = false);
 
 }  // namespace vdbwrap::extract
