@@ -355,8 +355,12 @@ struct RoundRepairs {
   std::vector<uint64_t> visited;                        // lattice numbers of the nodes the round looked at
 };
 
-// One round of repairs. Visits the surface nodes `flagged` (keys, ascending: nodes that are
-// not manifold as the grid stands) in order, with the later nodes on each cell taken out.
+// One round of repairs at the surface nodes where the chosen cells around the node, or the
+// others, are not face-connected (edge or corner contacts: non-manifold). Takes chosen cells
+// finer than min_exclude_level out of the volume there, and splits coarser chosen cells into
+// chosen children, so that the next round can take those out. Visits the nodes `flagged`
+// (keys, ascending: the nodes not manifold as the grid stands) in order, with the later
+// nodes on each cell taken out.
 // A key orders the nodes: `point_of(key)` is its lattice point, and `key_of(point, number)`
 // the key of a lattice point and its number (UINT64_MAX: not a surface node).
 template <typename PointOf, typename KeyOf>
@@ -546,13 +550,6 @@ RoundRepairs repair_near(AdaptiveGrid& g, int32_t label, VolumeChoice choice, st
 }
 
 }  // namespace
-
-size_t exclude_nonmanifold_cells(AdaptiveGrid& g, int32_t label, VolumeChoice choice, const LatticeSurface& surf,
-                                 int min_exclude_level, std::vector<std::pair<int, Coord>>* taken_out) {
-  RoundRepairs rep = repair_surface(g, label, choice, surf, min_exclude_level, false);
-  if (taken_out) taken_out->insert(taken_out->end(), rep.taken_out.begin(), rep.taken_out.end());
-  return rep.changed;
-}
 
 bool drop_cut_off_pockets(AdaptiveGrid& g, int32_t label, const std::vector<std::pair<int, Coord>>& taken_out, double pocket_share,
                           size_t& dropped, std::vector<std::pair<int, Coord>>* dropped_cells) {

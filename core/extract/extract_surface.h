@@ -22,15 +22,6 @@ struct LatticeSurface {
 // edges (level transitions) are inserted into it, so the result is conforming.
 LatticeSurface extract_faces(const grid::AdaptiveGrid& grid, int32_t label, VolumeChoice choice);
 
-// Lattice nodes of the surface where the chosen cells around the node, or the others, are
-// not face-connected (edge or corner contacts: non-manifold). Takes chosen cells of the
-// finest level out of the volume there, and splits coarser chosen cells into chosen
-// children so that the next round can do so at the finest level. Returns cells changed.
-// Cells at or below min_exclude_level may be taken out; coarser ones are split.
-// `taken_out`, when given, receives the cells taken out (level, cell).
-size_t exclude_nonmanifold_cells(grid::AdaptiveGrid& grid, int32_t label, VolumeChoice choice, const LatticeSurface& surface,
-                                 int min_exclude_level, std::vector<std::pair<int, Coord>>* taken_out = nullptr);
-
 // After `taken_out` left the volume `label` (one piece before), the pieces cut off from
 // the rest, found by searches from the volume cells next to the taken-out ones, are taken
 // out too (`dropped`: how many). Returns false, changing nothing, when the searches cannot
