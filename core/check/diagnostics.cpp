@@ -36,12 +36,6 @@ struct UnionFind {
 struct EdgeUses {
   std::vector<uint64_t> keys;  // edge_key
   std::vector<uint32_t> count, forward;
-
-  uint32_t count_of(uint32_t a, uint32_t b) const {
-    const uint64_t k = edge_key(a, b);
-    auto it = std::lower_bound(keys.begin(), keys.end(), k);
-    return it != keys.end() && *it == k ? count[size_t(it - keys.begin())] : 0;
-  }
 };
 
 EdgeUses count_edge_uses(const std::vector<Tri>& tris) {
@@ -73,7 +67,11 @@ EdgeUses count_edge_uses(const std::vector<Tri>& tris) {
 // triangles) at the vertex, do not form a single fan. Per vertex, the triangles are grouped
 // by their other vertices (sorting), not compared pairwise: cylinder caps fan thousands of
 // triangles around one vertex. Vertices are independent: a parallel sum.
-size_t count_nonmanifold_vertices(const std::vector<Tri>& tris, size_t vertices, const EdgeUses& edges) {
+// A group's size is the number of uses of edge (v, w): a triangle with a corners at v and b
+// at w lists w b times for each of its a listings around v, and uses the edge a * b times
+// (any two corners of a triangle are adjacent). So the group tells, without looking the
+// edge up (7M binary searches among 3.5M edges were half of diagnosing the 2.37M assembly).
+size_t count_nonmanifold_vertices(const std::vector<Tri>& tris, size_t vertices) {
   // Triangles around each vertex (a triangle repeating a vertex is listed once per corner).
   const CompressedLists stars = vertex_triangle_lists(vertices, tris);
   struct Scratch {
@@ -100,7 +98,7 @@ size_t count_nonmanifold_vertices(const std::vector<Tri>& tris, size_t vertices,
           for (size_t i = 0; i < s.by_other.size();) {
             size_t j = i + 1;
             while (j < s.by_other.size() && s.by_other[j].first == s.by_other[i].first) ++j;
-            if (j - i > 1 && edges.count_of(uint32_t(v), s.by_other[i].first) == 2)
+            if (j - i == 2)
               for (size_t k = i + 1; k < j; ++k) s.uf.unite(s.by_other[k].second, s.by_other[i].second);
             i = j;
           }
@@ -163,7 +161,7 @@ MeshDiagnostics check::diagnose_welded(const Mesh& mesh, const ExactWeld& weld, 
     if (edges.count[i] > 2) ++d.nonmanifold_edges;
     if (edges.count[i] == 2 && edges.forward[i] != 1) ++d.misoriented_edges;
   }
-  d.nonmanifold_vertices = count_nonmanifold_vertices(tris, pts.size(), edges);
+  d.nonmanifold_vertices = count_nonmanifold_vertices(tris, pts.size());
 
   // Connected components through shared vertices.
   {
