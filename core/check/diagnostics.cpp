@@ -12,6 +12,8 @@
 #include "check/intersections.h"
 #include "common/compressed_lists.h"
 #include "common/exact_weld.h"
+#include "common/fill_vector.h"
+#include "common/radix_sort.h"
 #include "common/edge_key.h"
 #include "common/vec.h"
 #include "prep/prepare.h"
@@ -41,16 +43,23 @@ struct EdgeUses {
 EdgeUses count_edge_uses(const std::vector<Tri>& tris) {
   // One word per use: (smaller << 33) | (larger << 1) | forward, so that sorting groups the
   // uses of an edge. Vertex indices below 2^31 leave room for the direction bit.
-  std::vector<uint64_t> uses;
-  uses.reserve(tris.size() * 3);
-  for (const Tri& t : tris)
-    for (int e = 0; e < 3; ++e) {
-      const uint32_t a = t[e], b = t[(e + 1) % 3];
-      if (a == b) continue;
-      if (std::max(a, b) >= (1u << 31)) throw std::length_error("diagnose: more than 2^31 vertices");
-      uses.push_back((uint64_t(std::min(a, b)) << 33) | (uint64_t(std::max(a, b)) << 1) | (a < b ? 1 : 0));
-    }
-  tbb::parallel_sort(uses.begin(), uses.end());
+  // Sorted by a radix sort on the smaller vertex, then each vertex's few uses on their own.
+  uint64_t vertices = 0;
+  for (const Tri& t : tris) vertices = std::max({vertices, uint64_t(t[0]) + 1, uint64_t(t[1]) + 1, uint64_t(t[2]) + 1});
+  if (vertices > (uint64_t(1) << 31)) throw std::length_error("diagnose: more than 2^31 vertices");
+  constexpr size_t kChunk = 65536;
+  std::vector<std::vector<uint64_t>> parts((tris.size() + kChunk - 1) / kChunk);
+  tbb::parallel_for(size_t(0), parts.size(), [&](size_t k) {
+    const size_t end = std::min(tris.size(), (k + 1) * kChunk);
+    parts[k].reserve(3 * (end - k * kChunk));
+    for (size_t f = k * kChunk; f < end; ++f)
+      for (int e = 0; e < 3; ++e) {
+        const uint32_t a = tris[f][e], b = tris[f][(e + 1) % 3];
+        if (a != b) parts[k].push_back((uint64_t(std::min(a, b)) << 33) | (uint64_t(std::max(a, b)) << 1) | (a < b ? 1 : 0));
+      }
+  });
+  const FillVector<uint64_t> uses =
+      radix_then_sort(parts, [](uint64_t u) { return u >> 33; }, bits_for(vertices), std::less<uint64_t>());
   EdgeUses out;
   for (size_t i = 0; i < uses.size();) {
     const uint64_t edge = uses[i] >> 1;

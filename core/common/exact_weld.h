@@ -6,13 +6,14 @@
 #include <cstdint>
 #include <algorithm>
 #include <cstring>
+#include <functional>
 #include <utility>
 #include <vector>
 
 #include <tbb/parallel_for.h>
-#include <tbb/parallel_sort.h>
 
 #include "common/fill_vector.h"
+#include "common/radix_sort.h"
 #include "vdbwrap/mesh.h"
 
 namespace vdbwrap {
@@ -38,11 +39,16 @@ inline std::vector<uint32_t> exact_weld(const std::vector<Vec3>& points, std::ve
     uint32_t point;
     bool operator<(const Key& o) const { return hash != o.hash ? hash < o.hash : point < o.point; }
   };
-  FillVector<Key> keys(n);
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 8192), [&](const tbb::blocked_range<size_t>& r) {
-    for (size_t i = r.begin(); i != r.end(); ++i) keys[i] = {point_hash(points[i]), uint32_t(i)};
+  // Sorted by (hash, point): radix-sorted by the hash's top 24 bits, then each bucket (about
+  // one distinct point's copies) sorted on its own.
+  constexpr size_t kChunk = 65536;
+  std::vector<std::vector<Key>> parts((n + kChunk - 1) / kChunk);
+  tbb::parallel_for(size_t(0), parts.size(), [&](size_t k) {
+    const size_t end = std::min(n, (k + 1) * kChunk);
+    parts[k].reserve(end - k * kChunk);
+    for (size_t i = k * kChunk; i < end; ++i) parts[k].push_back({point_hash(points[i]), uint32_t(i)});
   });
-  tbb::parallel_sort(keys.begin(), keys.end());
+  const FillVector<Key> keys = radix_then_sort(parts, [](const Key& k) { return k.hash >> 40; }, 24, std::less<Key>());
   // first[i]: the first point equal to point i (itself when none is before it). Within a run
   // of one hash the points come in input order; runs are short (a point's copies, and the rare
   // collision), so each is compared with the earlier firsts of its run. Runs are independent:

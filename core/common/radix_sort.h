@@ -91,4 +91,31 @@ FillVector<T> radix_sort_joined(std::vector<std::vector<T>>& parts, Key&& key, i
   return items;
 }
 
+// The items of `parts` joined and sorted by `less`, for keys too wide for a radix sort alone:
+// `bucket(item)` (below 2^bucket_bits) must follow `less` (less(a, b) implies bucket(a) <=
+// bucket(b)), so a stable radix sort by bucket and then a sort of each bucket by `less`
+// give the order of one sort by `less`. Buckets are cut into slices at bucket starts and
+// sorted in parallel: for many small buckets (the high bits of a hash, the smaller vertex
+// of an edge), where a parallel comparison sort of millions of items took most of a second.
+template <typename T, typename Bucket, typename Less>
+FillVector<T> radix_then_sort(std::vector<std::vector<T>>& parts, Bucket&& bucket, int bucket_bits, Less&& less) {
+  FillVector<T> items = radix_sort_joined(parts, bucket, bucket_bits);
+  const size_t n = items.size();
+  auto bucket_start_at_or_after = [&](size_t k) {
+    while (k > 0 && k < n && bucket(items[k]) == bucket(items[k - 1])) ++k;
+    return k;
+  };
+  const size_t slices = std::max<size_t>(1, n / 65536);
+  tbb::parallel_for(size_t(0), slices, [&](size_t slice) {
+    const size_t end = bucket_start_at_or_after(n * (slice + 1) / slices);
+    for (size_t s = bucket_start_at_or_after(n * slice / slices); s < end;) {
+      size_t e = s + 1;
+      while (e < end && bucket(items[e]) == bucket(items[s])) ++e;
+      if (e - s > 1) std::sort(items.begin() + s, items.begin() + e, less);
+      s = e;
+    }
+  });
+  return items;
+}
+
 }  // namespace vdbwrap
