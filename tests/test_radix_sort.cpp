@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cstdint>
+#include <functional>
 #include <random>
 #include <vector>
 
@@ -54,4 +55,25 @@ TEST(RadixSort, NothingToSort) {
   EXPECT_EQ(bits_for(2), 1);
   EXPECT_EQ(bits_for(4096), 12);
   EXPECT_EQ(bits_for(4097), 13);
+}
+
+// Radix sort by a key's top bits, then each bucket by the whole order: the order of one
+// comparison sort, with buckets of one item, of many, and one bucket crossing slices.
+TEST(RadixSort, TopBitsThenBucketsGiveTheFullOrder) {
+  std::mt19937_64 random(11);
+  for (int top_bits : {0, 4, 24}) {
+    std::vector<std::vector<uint64_t>> parts;
+    for (size_t size : {size_t(0), size_t(90000), size_t(3), size_t(200000)}) {
+      std::vector<uint64_t>& part = parts.emplace_back();
+      for (size_t i = 0; i < size; ++i) part.push_back(random() % 3 == 0 ? (uint64_t(7) << 40) | (random() & 0xFF) : random());
+    }
+    std::vector<uint64_t> expected;
+    for (const auto& part : parts) expected.insert(expected.end(), part.begin(), part.end());
+    std::sort(expected.begin(), expected.end());
+    const int shift = 64 - top_bits;
+    const FillVector<uint64_t> sorted = radix_then_sort(
+        parts, [&](uint64_t x) { return top_bits == 0 ? uint64_t(0) : x >> shift; }, top_bits, std::less<uint64_t>());
+    ASSERT_EQ(sorted.size(), expected.size()) << top_bits << " top bits";
+    EXPECT_TRUE(std::equal(sorted.begin(), sorted.end(), expected.begin())) << top_bits << " top bits";
+  }
 }
