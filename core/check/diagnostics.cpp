@@ -107,8 +107,7 @@ size_t count_nonmanifold_vertices(const std::vector<Tri>& tris, size_t vertices)
           for (size_t i = 0; i < s.by_other.size();) {
             size_t j = i + 1;
             while (j < s.by_other.size() && s.by_other[j].first == s.by_other[i].first) ++j;
-            if (j - i == 2)
-              for (size_t k = i + 1; k < j; ++k) s.uf.unite(s.by_other[k].second, s.by_other[i].second);
+            if (j - i == 2) s.uf.unite(s.by_other[i + 1].second, s.by_other[i].second);
             i = j;
           }
           const uint32_t root = s.uf.find(0);

@@ -332,7 +332,7 @@ class Coarsener {
         parts[k].push_back({numbers.number(b.x, b.y, b.z), edges[i]});
       }
     });
-    const FillVector<Owned> owned = radix_sort_joined(parts, [](const Owned& o) { return o.block; }, bits_for(numbers.count));
+    FillVector<Owned> owned = radix_sort_joined(parts, [](const Owned& o) { return o.block; }, bits_for(numbers.count));
     std::vector<Block> blocks;
     std::vector<size_t> starts;
     for (size_t i = 0; i < owned.size(); ++i)
@@ -348,6 +348,7 @@ class Coarsener {
       for (size_t i = starts[b]; i < starts[b + 1]; ++i) run.push_back(owned[i].e);
       std::sort(run.begin(), run.end(), [](const Entry& x, const Entry& y) { return y < x; });  // longest first
     });
+    FillVector<Owned>().swap(owned);  // freed before the blocks run
     size_t collapses = 0;
     for (int colour = 0; colour < 8; ++colour) {
       if (progress && progress->cancelled()) throw Error(ErrorKind::Cancelled, "cancelled");
