@@ -7,7 +7,6 @@
 #include <chrono>
 #include <cmath>
 #include <memory>
-#include <optional>
 #include <set>
 
 #include "check/diagnostics.h"
@@ -108,31 +107,12 @@ WrapResult run_pipeline(const Mesh& input, const WrapParams& params, ProgressSin
   }
   check_cancel(progress);
 
-  // Once the prepared mesh is final, the size controls are checked (bad parameters fail
-  // before the long steps) and the nearest-point index starts building in the background,
-  // beside the feature edges, the self-intersection search and the voxel stage: its build
-  // is serial in part (CGAL's tree), and on a 1M-triangle body the projection had waited
-  // for it with one core idle. It builds from its own copy of the mesh (the result moves).
-  double base = 0;
-  std::optional<grid::SizeControls> controls_made;
-  using IndexBuild = InBackground<std::unique_ptr<fit::SurfaceIndex>>;
-  std::unique_ptr<IndexBuild> index_builder;
-  auto start_on_mesh = [&](const prep::PreparedInput& p) {
-    base = params.base_size.resolve(p.diagonal);
-    if (p.diagonal / base > 20000)
-      throw Error(ErrorKind::InvalidArgument, "base size " + params.base_size.to_string() +
-                                                  " is too small for this model (over 20000 cells across its diagonal)");
-    controls_made = grid::make_size_controls(params, p.mesh, p.origin, p.diagonal, base);
-    auto mesh = std::make_shared<const std::pair<std::vector<Vec3>, std::vector<Tri>>>(p.mesh.points, p.mesh.triangles);
-    index_builder = std::make_unique<IndexBuild>([mesh] { return std::make_unique<fit::SurfaceIndex>(mesh->first, mesh->second); });
-  };
   prep::PreparedInput prepared;
   {
     StageTimer timer("prepare", report.stages);
-    prepared = prep::prepare(input, params, progress, &input_weld, start_on_mesh);
+    prepared = prep::prepare(input, params, progress, &input_weld);
     input_weld = ExactWeld();  // its memory back
   }
-  if (!index_builder) start_on_mesh(prepared);  // only if prepare returned without a final mesh call
   {
     const prep::InputIntersections crossing =
         prep::input_intersections(prepared.intersecting_pairs, prepared.input_to_mesh, prepared.mesh.triangles.size());
@@ -147,19 +127,26 @@ WrapResult run_pipeline(const Mesh& input, const WrapParams& params, ProgressSin
   }
   report.features.intersection_segments = prepared.intersections.size();
   report.diagonal = prepared.diagonal;
+  const double base = params.base_size.resolve(prepared.diagonal);
   report.base_size = base;
-  const grid::SizeControls& controls = *controls_made;
+  if (prepared.diagonal / base > 20000)
+    throw Error(ErrorKind::InvalidArgument, "base size " + params.base_size.to_string() +
+                                                " is too small for this model (over 20000 cells across its diagonal)");
+  const grid::SizeControls controls =
+      grid::make_size_controls(params, prepared.mesh, prepared.origin, prepared.diagonal, base);
   report.finest_size = base / double(1 << controls.max_level);
   report.control_sizes = controls.described;
   check_cancel(progress);
 
-  // The nearest-point index (started above): for the clearance of gap closure and leaks, then
-  // projection.
+  // The nearest-point index: for the clearance of gap closure and leaks, then projection. Its
+  // build is serial in part (CGAL's tree), seconds on millions of triangles.
+  InBackground<std::unique_ptr<fit::SurfaceIndex>> index_builder(
+      [&] { return std::make_unique<fit::SurfaceIndex>(prepared.mesh.points, prepared.mesh.triangles); });
   const fit::SurfaceIndex* index_ready = nullptr;
   auto wait_for_index = [&]() -> const fit::SurfaceIndex& {
     if (!index_ready) {
       StageTimer timer("index", report.stages);  // what is left of the build when first needed
-      index_ready = index_builder->get().get();
+      index_ready = index_builder.get().get();
     }
     return *index_ready;
   };
@@ -200,7 +187,7 @@ WrapResult run_pipeline(const Mesh& input, const WrapParams& params, ProgressSin
     // Clearances are measured for gap closure and for a seed's leak only.
     if (request.gap_closure > 0 || !request.seeds.empty()) wait_for_index();
     grid::VolumeSelection sel = grid::select_volume(
-        g, request, [&](const Vec3& p) { return std::sqrt(index_builder->get()->squared_distance(p)); }, progress);
+        g, request, [&](const Vec3& p) { return std::sqrt(index_builder.get()->squared_distance(p)); }, progress);
     report.volumes = sel.report;
     if (sel.leak.detected) {
       report.leak = sel.leak;

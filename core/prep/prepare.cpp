@@ -199,8 +199,7 @@ InputIntersections input_intersections(const std::vector<check::TrianglePair>& m
   return counts;
 }
 
-PreparedInput prepare(const Mesh& input, const WrapParams& params, ProgressSink* progress, const ExactWeld* input_weld,
-                      const MeshReady& mesh_ready) {
+PreparedInput prepare(const Mesh& input, const WrapParams& params, ProgressSink* progress, const ExactWeld* input_weld) {
   PreparedInput out;
   if (input.triangles.empty()) throw Error(ErrorKind::InvalidInput, "input contains no triangles");
   Box3 box;
@@ -299,7 +298,6 @@ PreparedInput prepare(const Mesh& input, const WrapParams& params, ProgressSink*
   // One edge listing for orienting and for the feature edges: flips change no triangle's edges.
   const EdgeTriangles edges = edge_triangles(m.triangles);
   out.flipped_triangles = orient_pieces(m.points, m.triangles, &edges);
-  if (mesh_ready) mesh_ready(out);
 
   out.normals.resize(m.triangles.size());
   tbb::parallel_for(tbb::blocked_range<size_t>(0, m.triangles.size(), 4096), [&](const tbb::blocked_range<size_t>& r) {

@@ -1,7 +1,6 @@
 // Stage 1: pre-processing of the input (spec: weld, orient, drop degenerate triangles,
 // find feature curves). Works in a local frame centred on the bounding box for precision.
 #pragma once
-#include <functional>
 #include <array>
 #include <cstdint>
 #include <vector>
@@ -69,15 +68,9 @@ struct InputIntersections {
 InputIntersections input_intersections(const std::vector<check::TrianglePair>& mesh_pairs,
                                        const std::vector<uint32_t>& input_to_mesh, size_t mesh_triangles);
 
-// Called once the prepared mesh is final (welded, cleaned, oriented; `mesh`, `origin` and
-// `diagonal` are set), before the feature edges and the self-intersection search: the caller
-// may start work on the mesh beside them (it must copy what it keeps: the result moves).
-using MeshReady = std::function<void(const PreparedInput&)>;
-
 // The whole stage. Throws Error(InvalidInput) when nothing usable is left. `input_weld`, when
 // given, is the exact weld of input.points (the input's diagnosis makes one): the welding
 // starts from its distinct points instead of all of them, with the same result.
-PreparedInput prepare(const Mesh& input, const WrapParams& params, ProgressSink* progress, const ExactWeld* input_weld = nullptr,
-                      const MeshReady& mesh_ready = {});
+PreparedInput prepare(const Mesh& input, const WrapParams& params, ProgressSink* progress, const ExactWeld* input_weld = nullptr);
 
 }  // namespace vdbwrap::prep
