@@ -2,6 +2,7 @@
 #include <cmath>
 
 #include "check/distance_stats.h"
+#include "common/edge_triangles.h"
 #include "common/vec.h"
 #include "prep/prepare.h"
 #include "vdbwrap/wrap.h"
@@ -26,10 +27,12 @@ DistanceStats sharp_edge_distance(const Mesh& input, const Mesh& surface, double
     tris.push_back(w);
     normals.push_back(normalized(n));
   }
-  // Orientation matters for the dihedral angle: make it consistent first.
-  prep::orient_pieces(welded, tris);
+  // Orientation matters for the dihedral angle: make it consistent first. One edge listing
+  // serves both (flips change no triangle's edges), as in prepare.
+  const EdgeTriangles listing = edge_triangles(tris);
+  prep::orient_pieces(welded, tris, &listing);
   for (size_t t = 0; t < tris.size(); ++t) normals[t] = normalized(area_vector(welded[tris[t][0]], welded[tris[t][1]], welded[tris[t][2]]));
-  auto edges = prep::find_feature_edges(welded, tris, normals, angle_deg);
+  auto edges = prep::find_feature_edges(welded, tris, normals, angle_deg, &listing);
   const double spacing = spacing_fraction * s.diagonal;
   std::vector<Vec3> samples;
   for (const auto& e : edges) {
