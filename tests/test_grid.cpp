@@ -124,8 +124,8 @@ TEST(TriangleBox, OctantsAtOnceMatchTestingEachOctant) {
   EXPECT_GT(partly, 300u);
 }
 
-// Level-0 cells numbered past 32 bits (two small boxes 2000 cells apart on each axis) take
-// the wide hits: each box must touch and refine the cells it does alone.
+// A level-0 grid of more than 2^32 cells (two small boxes 2000 cells apart on each axis):
+// each box must touch and refine the cells it does alone.
 TEST(Refine, GridsNumberedPast32BitsFindTheSameCells) {
   const Mesh one = box_mesh({0, 0, 0}, {1, 1, 1});
   Mesh two = one;
@@ -143,6 +143,42 @@ TEST(Refine, GridsNumberedPast32BitsFindTheSameCells) {
     EXPECT_EQ(apart.touched_per_level[level], 2 * alone.touched_per_level[level]) << "level " << level;
     EXPECT_EQ(apart.refined_per_level[level], 2 * alone.refined_per_level[level]) << "level " << level;
   }
+}
+
+// Level 0 finds its cells block by block: large slanted triangles crossing many blocks must
+// touch exactly the cells that a test of each cell against each triangle finds.
+TEST(Refine, LevelZeroCellsAreThoseEachCellTestFinds) {
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> coord(0.0, 1.0);
+  Mesh soup;
+  for (uint32_t t = 0; t < 40; ++t) {
+    for (int k = 0; k < 3; ++k) soup.points.push_back({coord(rng), coord(rng), coord(rng)});
+    soup.triangles.push_back({3 * t, 3 * t + 1, 3 * t + 2});
+  }
+  soup.triangle_part.assign(soup.triangles.size(), 0);
+  WrapParams params;
+  params.levels = 0;
+  const auto prepared = prep::prepare(soup, params, nullptr);
+  const double base = 0.01 * prepared.diagonal;  // about 58 cells a side: 4 blocks
+  const auto controls = grid::make_size_controls(params, prepared.mesh, prepared.origin, prepared.diagonal, base);
+  const auto r = grid::build_refined_grid(prepared, params, base, controls, nullptr);
+  const auto& g = *r.grid;
+  const auto& pts = prepared.mesh.points;
+  const double half = base * (0.5 + 1e-3);  // refinement's margin
+  size_t touched = 0, mismatched = 0;
+  for (int x = -1; x <= g.dims0().x(); ++x)
+    for (int y = -1; y <= g.dims0().y(); ++y)
+      for (int z = -1; z <= g.dims0().z(); ++z) {
+        const Vec3 centre = g.origin() + Vec3{(x + 0.5) * base, (y + 0.5) * base, (z + 0.5) * base};
+        bool meets = false;
+        for (const Tri& t : prepared.mesh.triangles)
+          meets = meets || grid::triangle_overlaps_box(pts[t[0]], pts[t[1]], pts[t[2]], centre, {half, half, half});
+        touched += meets;
+        mismatched += meets != (g.get(0, Coord(x, y, z)) == grid::kTouched);
+      }
+  EXPECT_GT(touched, 5000u);
+  EXPECT_EQ(r.touched_per_level[0], touched);
+  EXPECT_EQ(mismatched, 0u);
 }
 
 TEST(Refine, FeaturesRefineAndFlatFacesDoNot) {
