@@ -7,6 +7,7 @@
 
 #include "check/intersections.h"
 #include "common/closest_point.h"
+#include "common/triangle_buckets.h"
 #include "common/vec.h"
 #include "extract/extract_surface.h"
 #include "fit/fit_surface.h"
@@ -384,6 +385,41 @@ TEST(SurfaceIndex, TouchesAgreesWithEveryTriangleTestedDirectly) {
     const Vec3 on = centre + (rim - centre) * t;
     EXPECT_FALSE(index.in_view(on - up * 0.5, on + up * 0.5, 0.01)) << t;
     EXPECT_TRUE(index.in_view(on - up * 0.5, on - up * 0.01, 0.001)) << t;
+  }
+}
+
+// The triangle buckets (the validity loop's and coarsening's neighbour look-ups) find every
+// triangle whose box overlaps a query box: near the origin, where the cells are numbered and
+// sorted, and 1e18 away, where the cell numbers do not fit and the triangles go in one by one.
+TEST(TriangleBuckets, FindEveryTriangleWhoseBoxOverlapsNearAndFarFromTheOrigin) {
+  for (const double offset : {0.0, 1e18}) {
+    std::mt19937 rng(9);
+    std::uniform_real_distribution<double> coord(0.0, 100000.0), step(-3000.0, 3000.0);
+    std::vector<Vec3> p;
+    std::vector<Tri> t;
+    for (uint32_t k = 0; k < 400; ++k) {
+      const Vec3 a{offset + coord(rng), offset + coord(rng), offset + coord(rng)};
+      p.push_back(a), p.push_back(a + Vec3{step(rng), step(rng), step(rng)}), p.push_back(a + Vec3{step(rng), step(rng), step(rng)});
+      t.push_back({3 * k, 3 * k + 1, 3 * k + 2});
+    }
+    TriangleBuckets buckets(p, t, 1000.0);
+    size_t found_total = 0;
+    for (int q = 0; q < 200; ++q) {
+      Box3 query;
+      const Vec3 c{offset + coord(rng), offset + coord(rng), offset + coord(rng)};
+      query.add(c), query.add(c + Vec3{15000, 15000, 15000});
+      std::vector<uint32_t> found, expected;
+      buckets.for_each_in_box(query, [&](uint32_t g) { found.push_back(g); });
+      for (uint32_t f = 0; f < t.size(); ++f) {
+        Box3 b;
+        for (uint32_t v : t[f]) b.add(p[v]);
+        if (b.overlaps(query)) expected.push_back(f);
+      }
+      std::sort(found.begin(), found.end());
+      ASSERT_EQ(found, expected) << "offset " << offset << ", query " << q;
+      found_total += found.size();
+    }
+    EXPECT_GT(found_total, 100u) << "offset " << offset;  // the queries are not all empty
   }
 }
 

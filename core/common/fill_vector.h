@@ -6,6 +6,7 @@
 #pragma once
 #include <memory>
 #include <new>
+#include <type_traits>
 #include <utility>
 #include <vector>
 
@@ -33,5 +34,32 @@ struct DefaultInitAllocator : std::allocator<T> {
 // Every element must be written before it is read.
 template <typename T>
 using FillVector = std::vector<T, DefaultInitAllocator<T>>;
+
+// The same for plain structs with default member initialisers (a Box3 starts empty): resize
+// leaves new elements unwritten, so that a parallel loop faults their pages in. (Making the
+// 2.8M boxes of a triangle bucket grid empty first cost the 2.37M assembly a serial 0.1 s
+// of page clearing, four times.) resize(n, value) still writes them.
+template <typename T>
+struct NoInitAllocator : std::allocator<T> {
+  template <typename U>
+  struct rebind {
+    using other = NoInitAllocator<U>;
+  };
+  NoInitAllocator() = default;
+  template <typename U>
+  NoInitAllocator(const NoInitAllocator<U>&) noexcept {}
+  template <typename U>
+  void construct(U*) noexcept {
+    static_assert(std::is_trivially_copyable_v<U> && std::is_trivially_destructible_v<U>, "plain data only");
+  }
+  template <typename U, typename... Args>
+  void construct(U* p, Args&&... args) {
+    ::new (static_cast<void*>(p)) U(std::forward<Args>(args)...);
+  }
+};
+
+// Every element must be written before it is read, initialisers or not.
+template <typename T>
+using RawFillVector = std::vector<T, NoInitAllocator<T>>;
 
 }  // namespace vdbwrap

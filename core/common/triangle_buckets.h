@@ -12,6 +12,7 @@
 #include <tbb/parallel_for.h>
 
 #include "common/dense_numbers.h"
+#include "common/fill_vector.h"
 #include "common/grid_key.h"
 #include "common/radix_sort.h"
 #include "common/vec.h"
@@ -24,10 +25,11 @@ namespace vdbwrap {
 class TriangleBuckets {
  public:
   TriangleBuckets(const std::vector<Vec3>& p, const std::vector<Tri>& tris, double cell) : p_(p), tris_(tris), inv_(1.0 / cell) {
-    boxes_.resize(tris.size());
-    seen_.assign(tris.size(), 0);
-    if (!build_sorted())
+    boxes_.resize(tris.size());  // written by build_sorted, in parallel
+    if (!build_sorted()) {
+      std::fill(boxes_.begin(), boxes_.end(), Box3{});  // none inserted yet
       for (uint32_t f = 0; f < tris.size(); ++f) insert(f);
+    }
   }
   // After triangle f moved, or was appended to the triangle list.
   void update(uint32_t f) { insert(f); }
@@ -115,7 +117,7 @@ class TriangleBuckets {
   // to it get an entry. (Appending to all of them again made most entries duplicates: on a
   // 2.4M-triangle wrap, 6 billion entries read for 300 million distinct triangles.)
   void insert(uint32_t f) {
-    if (f >= boxes_.size()) boxes_.resize(f + 1), seen_.resize(f + 1, 0);
+    if (f >= boxes_.size()) boxes_.resize(f + 1, Box3{});
     Box3 b;
     for (uint32_t v : tris_[f]) b.add(p_[v]);
     const bool had = !boxes_[f].empty();
@@ -195,8 +197,8 @@ class TriangleBuckets {
   const std::vector<Vec3>& p_;
   const std::vector<Tri>& tris_;
   double inv_;
-  std::vector<Box3> boxes_;
-  std::vector<uint32_t> seen_;
+  RawFillVector<Box3> boxes_;
+  std::vector<uint32_t> seen_;  // for_each_in_box's marks, sized when first used
   uint32_t stamp_ = 0;
   std::unordered_map<Key, std::vector<uint32_t>, GridKeyHash> cells_;
 };
