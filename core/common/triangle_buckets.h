@@ -25,6 +25,9 @@ namespace vdbwrap {
 class TriangleBuckets {
  public:
   TriangleBuckets(const std::vector<Vec3>& p, const std::vector<Tri>& tris, double cell) : p_(p), tris_(tris), inv_(1.0 / cell) {
+    // Room for the triangles feature insertion appends (tens of thousands on a large wrap),
+    // reserved, not touched: each growth had copied every box into fresh pages.
+    boxes_.reserve(tris.size() + tris.size() / 8 + 64);
     boxes_.resize(tris.size());  // written by build_sorted, in parallel
     if (!build_sorted()) {
       std::fill(boxes_.begin(), boxes_.end(), Box3{});  // none inserted yet
