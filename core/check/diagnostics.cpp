@@ -6,7 +6,9 @@
 
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_reduce.h>
+#include <tbb/parallel_for.h>
 #include <tbb/parallel_sort.h>
+#include <tbb/task_group.h>
 
 #include "check/diagnostics.h"
 #include "check/intersections.h"
@@ -133,51 +135,59 @@ MeshDiagnostics check::diagnose_welded(const Mesh& mesh, const ExactWeld& weld, 
   // Exact weld: only bit-identical coordinates merge, so the counts describe the file as it is.
   const std::vector<Vec3>& pts = weld.unique;
   const std::vector<uint32_t>& remap = weld.remap;
-  Box3 box;
-  std::vector<Tri> tris;
-  tris.reserve(mesh.triangles.size());
-  for (const Tri& t : mesh.triangles) tris.push_back({remap[t[0]], remap[t[1]], remap[t[2]]});
-  std::vector<uint8_t> used(pts.size(), 0);
-  for (const Tri& t : tris)
-    for (uint32_t v : t) used[v] = 1;
-  for (size_t i = 0; i < pts.size(); ++i)
-    if (used[i]) box.add(pts[i]), ++d.vertices;
+  std::vector<Tri> tris(mesh.triangles.size());
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, tris.size(), 16384), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t i = r.begin(); i != r.end(); ++i) {
+      const Tri& t = mesh.triangles[i];
+      tris[i] = {remap[t[0]], remap[t[1]], remap[t[2]]};
+    }
+  });
   d.triangles = tris.size();
-  if (!box.empty()) {
-    d.bbox_min = box.lo;
-    d.bbox_max = box.hi;
-    d.diagonal = box.diagonal();
-  }
+  // The serial sums and the components (a union-find) run beside the parallel edge and
+  // vertex counts: alone they left a core idle for a fifth of a second on 2.4M triangles.
+  tbb::task_group serial_part;
+  serial_part.run([&] {
+    std::vector<uint8_t> used(pts.size(), 0);
+    for (const Tri& t : tris)
+      for (uint32_t v : t) used[v] = 1;
+    Box3 box;
+    for (size_t i = 0; i < pts.size(); ++i)
+      if (used[i]) box.add(pts[i]), ++d.vertices;
+    if (!box.empty()) {
+      d.bbox_min = box.lo;
+      d.bbox_max = box.hi;
+      d.diagonal = box.diagonal();
+    }
+    const Vec3 c = box.empty() ? Vec3{0, 0, 0} : box.center();
+    for (const Tri& t : tris) {
+      if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2] || norm2(area_vector(pts[t[0]], pts[t[1]], pts[t[2]])) == 0.0) {
+        ++d.degenerate_triangles;
+      }
+      d.area += 0.5 * norm(area_vector(pts[t[0]], pts[t[1]], pts[t[2]]));
+      d.volume += dot(pts[t[0]] - c, cross(pts[t[1]] - c, pts[t[2]] - c)) / 6.0;
+    }
+    // Connected components through shared vertices.
+    UnionFind uf(pts.size());
+    for (const Tri& t : tris) uf.unite(t[0], t[1]), uf.unite(t[1], t[2]);
+    for (uint32_t v = 0; v < pts.size(); ++v)
+      if (used[v] && uf.find(v) == v) ++d.components;
+  });
   {
     std::vector<int32_t> parts(mesh.triangle_part.begin(), mesh.triangle_part.end());
     tbb::parallel_sort(parts.begin(), parts.end());
     d.parts = parts.empty() ? (tris.empty() ? 0 : 1) : size_t(std::unique(parts.begin(), parts.end()) - parts.begin());
   }
-
-  const Vec3 c = box.empty() ? Vec3{0, 0, 0} : box.center();
-  for (const Tri& t : tris) {
-    if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2] ||
-        norm2(area_vector(pts[t[0]], pts[t[1]], pts[t[2]])) == 0.0) {
-      ++d.degenerate_triangles;
-    }
-    d.area += 0.5 * norm(area_vector(pts[t[0]], pts[t[1]], pts[t[2]]));
-    d.volume += dot(pts[t[0]] - c, cross(pts[t[1]] - c, pts[t[2]] - c)) / 6.0;
-  }
+  size_t border = 0, nonmanifold = 0, misoriented = 0;
   const EdgeUses edges = count_edge_uses(tris);
   for (size_t i = 0; i < edges.keys.size(); ++i) {
-    if (edges.count[i] == 1) ++d.border_edges;
-    if (edges.count[i] > 2) ++d.nonmanifold_edges;
-    if (edges.count[i] == 2 && edges.forward[i] != 1) ++d.misoriented_edges;
+    if (edges.count[i] == 1) ++border;
+    if (edges.count[i] > 2) ++nonmanifold;
+    if (edges.count[i] == 2 && edges.forward[i] != 1) ++misoriented;
   }
-  d.nonmanifold_vertices = count_nonmanifold_vertices(tris, pts.size());
-
-  // Connected components through shared vertices.
-  {
-    UnionFind uf(pts.size());
-    for (const Tri& t : tris) uf.unite(t[0], t[1]), uf.unite(t[1], t[2]);
-    for (uint32_t v = 0; v < pts.size(); ++v)
-      if (used[v] && uf.find(v) == v) ++d.components;
-  }
+  const size_t nonmanifold_vertices = count_nonmanifold_vertices(tris, pts.size());
+  serial_part.wait();
+  d.border_edges = border, d.nonmanifold_edges = nonmanifold, d.misoriented_edges = misoriented;
+  d.nonmanifold_vertices = nonmanifold_vertices;
 
   d.closed = !tris.empty() && d.border_edges == 0 && d.nonmanifold_edges == 0;
   d.manifold = d.nonmanifold_edges == 0 && d.nonmanifold_vertices == 0;
