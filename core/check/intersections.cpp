@@ -75,6 +75,18 @@ int side(const V2& dir, const V2& p, double err) {
   const double c = cross2(dir, p), m = kMargin * ld * lp + err * (ld + lp + err);
   return c > m ? 1 : c < -m ? -1 : 0;
 }
+// A vector in the plane with its length, for the proofs below that test each vector against
+// several lines: each length is taken once (the same answers as side(); its square roots were
+// a third of the proofs' time on flat wraps).
+struct Dir2 {
+  V2 v;
+  double len;
+  explicit Dir2(const V2& p) : v(p), len(len2(p)) {}
+};
+int side(const Dir2& dir, const Dir2& p, double err) {
+  const double c = cross2(dir.v, p.v), m = kMargin * dir.len * p.len + err * (dir.len + p.len + err);
+  return c > m ? 1 : c < -m ? -1 : 0;
+}
 
 // Is q nearly in the plane of (o, a, b)? (Doubles, generous: it only picks which test runs
 // first.) The proofs in the plane pay off for nearly coplanar pairs; for the others CGAL's
@@ -95,8 +107,8 @@ bool nearly_coplanar(const P3& o, const P3& a, const P3& b, const P3& q) {
 bool apart_at_shared_vertex_2d(const P3& c, const P3& a, const P3& b, const P3& d, const P3& e) {
   Plane2 pl(c, a, b);
   pl.covers({&c, &a, &b, &d, &e});
-  const V2 va = pl(a, c), vb = pl(b, c), vd = pl(d, c), ve = pl(e, c);
-  auto separates = [&](const V2& side_dir, const V2& other, const V2& p, const V2& q) {
+  const Dir2 va(pl(a, c)), vb(pl(b, c)), vd(pl(d, c)), ve(pl(e, c));
+  auto separates = [&](const Dir2& side_dir, const Dir2& other, const Dir2& p, const Dir2& q) {
     const int inside = side(side_dir, other, pl.err);
     return inside != 0 && side(side_dir, p, pl.err) == -inside && side(side_dir, q, pl.err) == -inside;
   };
@@ -108,8 +120,8 @@ bool apart_at_shared_vertex_2d(const P3& c, const P3& a, const P3& b, const P3& 
 bool apart_at_shared_edge_2d(const P3& s, const P3& t, const P3& a, const P3& b) {
   Plane2 pl(s, t, a);
   pl.covers({&s, &t, &a, &b});
-  const V2 dir = pl(t, s);
-  const int sa = side(dir, pl(a, s), pl.err), sb = side(dir, pl(b, s), pl.err);
+  const Dir2 dir(pl(t, s));
+  const int sa = side(dir, Dir2(pl(a, s)), pl.err), sb = side(dir, Dir2(pl(b, s)), pl.err);
   return sa != 0 && sb == -sa;
 }
 
@@ -121,11 +133,11 @@ bool apart_2d(const std::array<P3, 3>& x, const std::array<P3, 3>& y) {
   auto splits = [&](const std::array<P3, 3>& own, const std::array<P3, 3>& other) {
     for (int i = 0; i < 3; ++i) {
       const P3& o = own[i];
-      const V2 dir = pl(own[(i + 1) % 3], o);
-      const int inside = side(dir, pl(own[(i + 2) % 3], o), pl.err);
+      const Dir2 dir(pl(own[(i + 1) % 3], o));
+      const int inside = side(dir, Dir2(pl(own[(i + 2) % 3], o)), pl.err);
       if (inside == 0) continue;
       bool all = true;
-      for (int k = 0; k < 3 && all; ++k) all = side(dir, pl(other[k], o), pl.err) == -inside;
+      for (int k = 0; k < 3 && all; ++k) all = side(dir, Dir2(pl(other[k], o)), pl.err) == -inside;
       if (all) return true;
     }
     return false;
