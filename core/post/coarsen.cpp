@@ -51,6 +51,16 @@ class Coarsener {
     for (size_t i = 0; i < p.size(); ++i) witness_[i].store(UINT32_MAX, std::memory_order_relaxed);
     cos_turn_ = std::cos(prm_.max_normal_turn_deg * M_PI / 180.0);
     cos_min_angle_ = std::cos(prm_.min_angle_deg * M_PI / 180.0);
+    // No edge is ever longer than this: the longest one now, or the longest a collapse may make.
+    const double longest2 = tbb::parallel_reduce(
+        tbb::blocked_range<size_t>(0, t_.size(), 16384), 0.0,
+        [&](const tbb::blocked_range<size_t>& r, double m) {
+          for (size_t f = r.begin(); f != r.end(); ++f)
+            for (int i = 0; i < 3; ++i) m = std::max(m, norm2(p_[t_[f][i]] - p_[t_[f][(i + 1) % 3]]));
+          return m;
+        },
+        [](double a, double b) { return std::max(a, b); });
+    edge_bound_ = std::max(std::sqrt(longest2), prm_.max_edge);
     live_edges([](uint32_t, uint32_t) { return true; }, start_edges_);
   }
 
@@ -261,11 +271,18 @@ class Coarsener {
         continue;
       }
       if (!vertex_alive_[e.a] || !vertex_alive_[e.b]) continue;
-      for (uint32_t x : {e.a, e.b})
-        for (uint32_t f : vf_[x]) ring.add(box_of(t_[f]));
-      if (!in_reach(ring, blk.key)) {
-        blk.left.push_back(e);
-        continue;
+      // The 1-rings lie within an edge of the ends: when that is in the reach, so are they
+      // (the same answer, without reading them here).
+      const Vec3 grow{edge_bound_, edge_bound_, edge_bound_};
+      Box3 around;
+      around.add(ring.lo - grow), around.add(ring.hi + grow);
+      if (!in_reach(around, blk.key)) {
+        for (uint32_t x : {e.a, e.b})
+          for (uint32_t f : vf_[x]) ring.add(box_of(t_[f]));
+        if (!in_reach(ring, blk.key)) {
+          blk.left.push_back(e);
+          continue;
+        }
       }
       ++step;
       plan_either_way(e, pl);
@@ -694,6 +711,7 @@ class Coarsener {
   std::vector<std::vector<uint32_t>> vf_;
   EdgeQueue queue_;
   double cos_turn_ = 0, cos_min_angle_ = 0;
+  double edge_bound_ = 0;  // no edge is longer
 };
 
 }  // namespace
