@@ -97,6 +97,28 @@ TEST(TriangleBox, BlockSearchFindsTheSameCellsAsTestingEach) {
 // The eight octants at once must be the octants a test of each one finds, for long slivers,
 // small triangles and triangles lying on the cell's mid-planes, and a subset asked for must
 // be that subset of them.
+// The prepared tester (refinement's and the nearest-point index's cell tests) gives the
+// separating-axis test's answers, for boxes and, through its shortcut, for cubes.
+TEST(TriangleBox, PreparedTesterMatchesTheSeparatingAxisTest) {
+  std::mt19937 rng(17);
+  std::uniform_real_distribution<double> coord(-1.0, 1.0), size(0.01, 0.6);
+  size_t met = 0;
+  for (int n = 0; n < 3000; ++n) {
+    const Vec3 a{coord(rng), coord(rng), coord(rng)}, b{coord(rng), coord(rng), coord(rng)}, c{coord(rng), coord(rng), coord(rng)};
+    const TriangleBoxTester tester(a, b, c);
+    const Vec3 centre{coord(rng), coord(rng), coord(rng)};
+    const double h = size(rng);
+    const Vec3 half{h, size(rng), size(rng)};
+    const bool cube = grid::triangle_overlaps_box(a, b, c, centre, {h, h, h});
+    ASSERT_EQ(tester.overlaps_cube(centre, h), cube) << "triangle " << n;
+    ASSERT_EQ(tester.overlaps(centre, {h, h, h}), cube) << "triangle " << n;
+    ASSERT_EQ(tester.overlaps(centre, half), grid::triangle_overlaps_box(a, b, c, centre, half)) << "triangle " << n;
+    met += cube;
+  }
+  EXPECT_GT(met, 300u);
+  EXPECT_LT(met, 2700u);
+}
+
 TEST(TriangleBox, OctantsAtOnceMatchTestingEachOctant) {
   std::mt19937 rng(11);
   std::uniform_real_distribution<double> coord(-1.2, 1.2), small(-0.3, 0.3);

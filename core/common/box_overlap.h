@@ -61,6 +61,20 @@ class TriangleBoxTester {
         add_axis(cross(unit, e[i]), v, n++);
       }
   }
+  // Does the triangle meet the cube of this centre and half-width? The same test for a cube,
+  // with each axis's sum of absolute components taken once for all the cubes tested.
+  bool overlaps_cube(const Vec3& center, double half) const {
+    const Vec3 d = center - ref_;
+    for (int k = 0; k < 3; ++k)
+      if (lo_[k] - d[k] > half || hi_[k] - d[k] < -half) return false;
+    for (int i = 0; i < kAxes; ++i) {
+      const Vec3& u = axis_[i];
+      const double s = u[0] * d[0] + u[1] * d[1] + u[2] * d[2];
+      const double r = half * abs_sum_[i];
+      if (min_[i] - s > r || max_[i] - s < -r) return false;
+    }
+    return true;
+  }
   // Does the triangle meet the box of this centre and half-widths?
   bool overlaps(const Vec3& center, const Vec3& half) const {
     const Vec3 d = center - ref_;
@@ -79,12 +93,14 @@ class TriangleBoxTester {
   static constexpr int kAxes = 10;  // the normal, then nine edge crosses
   void add_axis(const Vec3& u, const Vec3 (&v)[3], int i) {
     axis_[i] = u;
+    abs_sum_[i] = std::fabs(u[0]) + std::fabs(u[1]) + std::fabs(u[2]);
     const double p0 = dot(v[0], u), p1 = dot(v[1], u), p2 = dot(v[2], u);
     min_[i] = std::min({p0, p1, p2}), max_[i] = std::max({p0, p1, p2});
   }
   Vec3 ref_, lo_, hi_;
   Vec3 axis_[kAxes];
   double min_[kAxes], max_[kAxes];
+  double abs_sum_[kAxes];
 };
 
 // Which of the eight octant boxes of a cell (those in `among`) triangle abc meets: bit k is
@@ -139,12 +155,11 @@ void for_cells_overlapping(const TriangleBoxTester& triangle, const Vec3& origin
   const int64_t count = int64_t(hi[0] - lo[0] + 1) * (hi[1] - lo[1] + 1) * (hi[2] - lo[2] + 1);
   if (count <= 0) return;
   if (count <= 8) {
-    const Vec3 half{half_cell, half_cell, half_cell};
     for (int z = lo[2]; z <= hi[2]; ++z)
       for (int y = lo[1]; y <= hi[1]; ++y)
         for (int x = lo[0]; x <= hi[0]; ++x) {
           const Vec3 center{origin[0] + (x + 0.5) * cell, origin[1] + (y + 0.5) * cell, origin[2] + (z + 0.5) * cell};
-          if (triangle.overlaps(center, half)) fn(x, y, z);
+          if (triangle.overlaps_cube(center, half_cell)) fn(x, y, z);
         }
     return;
   }
