@@ -12,18 +12,23 @@
 
 namespace vdbwrap {
 
-template <typename T>
+// Plain: default-initialised (no zeroing for plain types). kSkipInitialisers: not even
+// the default member initialisers run (plain structs only).
+template <typename T, bool kSkipInitialisers = false>
 struct DefaultInitAllocator : std::allocator<T> {
   template <typename U>
   struct rebind {
-    using other = DefaultInitAllocator<U>;
+    using other = DefaultInitAllocator<U, kSkipInitialisers>;
   };
   DefaultInitAllocator() = default;
   template <typename U>
-  DefaultInitAllocator(const DefaultInitAllocator<U>&) noexcept {}
+  DefaultInitAllocator(const DefaultInitAllocator<U, kSkipInitialisers>&) noexcept {}
   template <typename U>
   void construct(U* p) noexcept {
-    ::new (static_cast<void*>(p)) U;  // default-initialised: no zeroing for plain types
+    if constexpr (kSkipInitialisers)
+      static_assert(std::is_trivially_copyable_v<U> && std::is_trivially_destructible_v<U>, "plain data only");
+    else
+      ::new (static_cast<void*>(p)) U;
   }
   template <typename U, typename... Args>
   void construct(U* p, Args&&... args) {
@@ -38,28 +43,9 @@ using FillVector = std::vector<T, DefaultInitAllocator<T>>;
 // The same for plain structs with default member initialisers (a Box3 starts empty): resize
 // leaves new elements unwritten, so that a parallel loop faults their pages in. (Making the
 // 2.8M boxes of a triangle bucket grid empty first cost the 2.37M assembly a serial 0.1 s
-// of page clearing, four times.) resize(n, value) still writes them.
+// of page clearing, four times.) resize(n, value) still writes them. Every element must be
+// written before it is read, initialisers or not.
 template <typename T>
-struct NoInitAllocator : std::allocator<T> {
-  template <typename U>
-  struct rebind {
-    using other = NoInitAllocator<U>;
-  };
-  NoInitAllocator() = default;
-  template <typename U>
-  NoInitAllocator(const NoInitAllocator<U>&) noexcept {}
-  template <typename U>
-  void construct(U*) noexcept {
-    static_assert(std::is_trivially_copyable_v<U> && std::is_trivially_destructible_v<U>, "plain data only");
-  }
-  template <typename U, typename... Args>
-  void construct(U* p, Args&&... args) {
-    ::new (static_cast<void*>(p)) U(std::forward<Args>(args)...);
-  }
-};
-
-// Every element must be written before it is read, initialisers or not.
-template <typename T>
-using RawFillVector = std::vector<T, NoInitAllocator<T>>;
+using RawFillVector = std::vector<T, DefaultInitAllocator<T, true>>;
 
 }  // namespace vdbwrap
