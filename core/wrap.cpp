@@ -4,6 +4,7 @@
 #include <tbb/parallel_for.h>
 #include <tbb/task_group.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <memory>
@@ -320,12 +321,20 @@ WrapResult run_pipeline(const Mesh& input, const WrapParams& params, ProgressSin
   }
   check_cancel(progress);
 
-  // Every output triangle carries the part of the input triangle nearest its centroid.
+  // Every output triangle carries the part of the input triangle nearest its centroid. An
+  // input of one part (an STL file) gives it to every triangle without asking (a nearest
+  // point per output triangle: 0.24 s on the 2.37M assembly at 0.5 %).
+  const std::vector<int32_t>& input_parts = prepared.mesh.triangle_part;
+  const bool one_part = std::all_of(input_parts.begin(), input_parts.end(), [&](int32_t p) { return p == input_parts.front(); });
   auto label_parts = [&]() {
     Mesh out;
     out.points = surface.points;
     out.triangles = surface.triangles;
     out.part_names = prepared.mesh.part_names;
+    if (one_part) {
+      out.triangle_part.assign(out.triangles.size(), prepared.mesh.triangles.empty() ? 0 : prepared.mesh.part_of(0));
+      return out;
+    }
     out.triangle_part.resize(out.triangles.size());
     tbb::parallel_for(tbb::blocked_range<size_t>(0, out.triangles.size(), 1024), [&](const tbb::blocked_range<size_t>& r) {
       for (size_t t = r.begin(); t != r.end(); ++t) {
