@@ -573,6 +573,11 @@ TEST_F(IoTest, NonFiniteCoordinatesInBinaryStl) {
   std::string bytes =
       binary_stl_header(2) + binary_stl_record(1) + binary_stl_record(std::nanf(""));
   expect_read_error(write_file("nan_bin.stl", bytes), {"triangle 1 has a non-finite coordinate"});
+  // Records are parsed in parallel chunks: of several bad triangles far apart, the first in
+  // the file is named.
+  std::string many = binary_stl_header(60000);
+  for (int t = 0; t < 60000; ++t) many += binary_stl_record(t == 20001 || t == 55555 || t == 41000 ? std::nanf("") : 1.0f);
+  expect_read_error(write_file("nan_many.stl", many), {"triangle 20001 has a non-finite coordinate"});
 }
 
 TEST_F(IoTest, NonFiniteCoordinatesInObj) {
