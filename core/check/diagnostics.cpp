@@ -16,7 +16,6 @@
 #include "common/exact_weld.h"
 #include "common/fill_vector.h"
 #include "common/radix_sort.h"
-#include "common/edge_key.h"
 #include "common/vec.h"
 #include "prep/prepare.h"
 #include "vdbwrap/wrap.h"
@@ -34,21 +33,19 @@ struct UnionFind {
   void unite(uint32_t a, uint32_t b) { parent[find(a)] = find(b); }
 };
 
-// Every edge of a triangle set once, sorted by key, with how many triangles use it and how
-// many of those traverse it from the smaller to the larger index. Built by a parallel sort of
-// the edge uses: a hash map of edges was the serial bulk of diagnosing millions of triangles.
-struct EdgeUses {
-  std::vector<uint64_t> keys;  // edge_key
-  std::vector<uint32_t> count, forward;
+// The edges of a triangle set by how they are used: by one triangle (a border), by more than
+// two (non-manifold), or by two that traverse it the same way (misoriented). Counted from a
+// sort of the edge uses: a hash map of edges was the serial bulk of diagnosing millions of
+// triangles. `vertices`: above every vertex index.
+struct EdgeCounts {
+  size_t border = 0, nonmanifold = 0, misoriented = 0;
 };
 
-EdgeUses count_edge_uses(const std::vector<Tri>& tris) {
+EdgeCounts count_edges(const std::vector<Tri>& tris, size_t vertices) {
   // One word per use: (smaller << 33) | (larger << 1) | forward, so that sorting groups the
   // uses of an edge. Vertex indices below 2^31 leave room for the direction bit.
   // Sorted by a radix sort on the smaller vertex, then each vertex's few uses on their own.
-  uint64_t vertices = 0;
-  for (const Tri& t : tris) vertices = std::max({vertices, uint64_t(t[0]) + 1, uint64_t(t[1]) + 1, uint64_t(t[2]) + 1});
-  if (vertices > (uint64_t(1) << 31)) throw std::length_error("diagnose: more than 2^31 vertices");
+  if (vertices > (size_t(1) << 31)) throw std::length_error("diagnose: more than 2^31 vertices");
   constexpr size_t kChunk = 65536;
   std::vector<std::vector<uint64_t>> parts((tris.size() + kChunk - 1) / kChunk);
   tbb::parallel_for(size_t(0), parts.size(), [&](size_t k) {
@@ -62,14 +59,14 @@ EdgeUses count_edge_uses(const std::vector<Tri>& tris) {
   });
   const FillVector<uint64_t> uses =
       radix_then_sort(parts, [](uint64_t u) { return u >> 33; }, bits_for(vertices), std::less<uint64_t>());
-  EdgeUses out;
+  EdgeCounts out;
   for (size_t i = 0; i < uses.size();) {
     const uint64_t edge = uses[i] >> 1;
     uint32_t count = 0, forward = 0;
     for (; i < uses.size() && (uses[i] >> 1) == edge; ++i) ++count, forward += uint32_t(uses[i] & 1);
-    out.keys.push_back(edge);  // (smaller << 32) | larger: edge_key
-    out.count.push_back(count);
-    out.forward.push_back(forward);
+    if (count == 1) ++out.border;
+    if (count > 2) ++out.nonmanifold;
+    if (count == 2 && forward != 1) ++out.misoriented;
   }
   return out;
 }
@@ -177,16 +174,10 @@ MeshDiagnostics check::diagnose_welded(const Mesh& mesh, const ExactWeld& weld, 
     tbb::parallel_sort(parts.begin(), parts.end());
     d.parts = parts.empty() ? (tris.empty() ? 0 : 1) : size_t(std::unique(parts.begin(), parts.end()) - parts.begin());
   }
-  size_t border = 0, nonmanifold = 0, misoriented = 0;
-  const EdgeUses edges = count_edge_uses(tris);
-  for (size_t i = 0; i < edges.keys.size(); ++i) {
-    if (edges.count[i] == 1) ++border;
-    if (edges.count[i] > 2) ++nonmanifold;
-    if (edges.count[i] == 2 && edges.forward[i] != 1) ++misoriented;
-  }
+  const EdgeCounts edges = count_edges(tris, pts.size());
   const size_t nonmanifold_vertices = count_nonmanifold_vertices(tris, pts.size());
   serial_part.wait();
-  d.border_edges = border, d.nonmanifold_edges = nonmanifold, d.misoriented_edges = misoriented;
+  d.border_edges = edges.border, d.nonmanifold_edges = edges.nonmanifold, d.misoriented_edges = edges.misoriented;
   d.nonmanifold_vertices = nonmanifold_vertices;
 
   d.closed = !tris.empty() && d.border_edges == 0 && d.nonmanifold_edges == 0;
