@@ -436,9 +436,88 @@ TEST(Intersections, FlatFansSkipOnlyPairsProvedApart) {
         folded += a >= fold_start && b < spiral_end;
       }
   ASSERT_GT(folded, 100u) << "the folded fans must overlap themselves";
-  std::vector<std::pair<uint32_t, uint32_t>> found;
-  for (const auto& p : check::find_intersecting_pairs(m.points, m.triangles)) found.push_back({p.a, p.b});
-  EXPECT_EQ(found, expected);
+  // As an input (large fans only, gaps allowed) and as a wrap (closed fans of any size).
+  for (const auto kind : {check::SoupKind::kInput, check::SoupKind::kWrap}) {
+    std::vector<std::pair<uint32_t, uint32_t>> found;
+    for (const auto& p : check::find_intersecting_pairs(m.points, m.triangles, kind)) found.push_back({p.a, p.b});
+    EXPECT_EQ(found, expected) << (kind == check::SoupKind::kWrap ? "wrap" : "input");
+  }
+}
+
+// A fan of `spokes` triangles round the origin (closed unless `open`), its spokes at the
+// given angles (radians, in fan order) and heights, in a plane tilted by `tilt`, moved by
+// `shift`: the points (centre first) and each triangle's corners after the centre.
+struct TestFan {
+  std::vector<Vec3> points;
+  std::vector<std::array<uint32_t, 2>> corners;
+  std::vector<Tri> triangles() const {
+    std::vector<Tri> out;
+    for (const auto& c : corners) out.push_back({0, c[0], c[1]});
+    return out;
+  }
+};
+static TestFan make_fan(const std::vector<double>& angle, const std::vector<double>& height, bool open, const Vec3& tilt,
+                        const Vec3& shift) {
+  const Vec3 up = normalized(tilt), e1 = normalized(cross(up, Vec3{0.3, 0.5, 0.7})), e2 = cross(up, e1);
+  TestFan fan;
+  fan.points.push_back(shift);
+  for (size_t j = 0; j < angle.size(); ++j)
+    fan.points.push_back(shift + e1 * std::cos(angle[j]) * (1 + 0.1 * j) + e2 * std::sin(angle[j]) * (1 + 0.1 * j) + up * height[j]);
+  const uint32_t n = uint32_t(angle.size());
+  for (uint32_t j = 0; j + (open ? 1 : 0) < n; ++j) fan.corners.push_back({1 + j, 1 + (j + 1) % n});
+  return fan;
+}
+
+TEST(Intersections, ClosedUnfoldedFansAreTheOnesWhosePairsMeetOnlyWhereTheyShare) {
+  auto unfolded = [](const TestFan& f) { return check::closed_fan_unfolded(f.points, 0, f.corners.data(), f.corners.size()); };
+  auto regular = [](int n, double turns) {
+    std::vector<double> a(size_t(n), 0.0);
+    for (int j = 0; j < n; ++j) a[size_t(j)] = 2 * M_PI * turns * j / n;
+    return a;
+  };
+  const Vec3 tilt{0.2, -0.4, 1}, far{1e4, -3e4, 2e3};
+  EXPECT_TRUE(unfolded(make_fan(regular(6, 1), std::vector<double>(6, 0.0), false, tilt, {})));     // flat
+  EXPECT_TRUE(unfolded(make_fan(regular(7, 1), std::vector<double>(7, -0.8), false, tilt, far)));   // a cone, far out
+  EXPECT_FALSE(unfolded(make_fan(regular(6, 1), std::vector<double>(6, 0.0), true, tilt, {})));     // open
+  EXPECT_FALSE(unfolded(make_fan(regular(12, 2), std::vector<double>(12, 0.0), false, tilt, {})));  // round twice
+  std::vector<double> folded = regular(8, 1);
+  std::swap(folded[2], folded[3]);  // one sector turns back
+  EXPECT_FALSE(unfolded(make_fan(folded, std::vector<double>(8, 0.0), false, tilt, {})));
+  TestFan reversed = make_fan(regular(5, 1), std::vector<double>(5, 0.1), false, tilt, far);
+  for (auto& c : reversed.corners) std::swap(c[0], c[1]);  // the other way round: still unfolded
+  EXPECT_TRUE(unfolded(reversed));
+
+  // Random fans: flat on a lattice (exactly coplanar), nearly flat, cones, wild heights,
+  // folded, turning twice, open, far from the origin. Every fan called unfolded has no pair
+  // that meets beyond what it shares, by the exact tests alone.
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  size_t called_unfolded = 0, with_crossings = 0;
+  for (int trial = 0; trial < 3000; ++trial) {
+    const int n = 3 + int(u(rng) * 10);
+    const double turns = u(rng) < 0.2 ? 2.0 : 1.0;
+    std::vector<double> angle(static_cast<size_t>(n)), height(static_cast<size_t>(n));
+    for (int j = 0; j < n; ++j) angle[size_t(j)] = 2 * M_PI * turns * (j + 0.8 * u(rng)) / n;
+    if (u(rng) < 0.3) std::swap(angle[0], angle[1]);
+    const int shape = trial % 4;
+    for (double& h : height) h = shape == 0 ? 0.0 : shape == 1 ? 1e-9 * (u(rng) - 0.5) : shape == 2 ? 0.5 : 4 * (u(rng) - 0.5);
+    const Vec3 axis = trial % 3 == 0 ? Vec3{0, 0, 1} : Vec3{u(rng) - 0.5, u(rng) - 0.5, 1};
+    TestFan fan = make_fan(angle, height, u(rng) < 0.1, axis, trial % 5 == 0 ? far : Vec3{});
+    if (shape == 0 && trial % 3 == 0)  // exactly on a lattice in the plane z = 0
+      for (Vec3& q : fan.points) q = {std::round(q[0] * 8) / 8, std::round(q[1] * 8) / 8, 0.0};
+    const std::vector<Tri> tris = fan.triangles();
+    bool degenerate = false, crossing = false;
+    for (const Tri& t : tris) degenerate = degenerate || check::triangle_is_degenerate(fan.points, t);
+    if (degenerate) continue;
+    for (size_t a = 0; a < tris.size(); ++a)
+      for (size_t b = a + 1; b < tris.size(); ++b) crossing = crossing || check::triangle_pair_intersects(fan.points, tris[a], tris[b], false);
+    const bool called = unfolded(fan);
+    ASSERT_FALSE(called && crossing) << "trial " << trial;
+    called_unfolded += called;
+    with_crossings += crossing;
+  }
+  EXPECT_GT(called_unfolded, 600u);
+  EXPECT_GT(with_crossings, 300u);
 }
 
 TEST(Intersections, TheFastProofsInDoublesNeverChangeTheExactAnswer) {

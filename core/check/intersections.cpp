@@ -494,6 +494,27 @@ std::vector<uint8_t> unfolded_fan_vertices(const std::vector<P3>& p, const std::
   return fan;
 }
 
+// Vertices whose triangles close one unfolded fan round them (see closed_fan_unfolded): every
+// vertex of a wrap nearly, where unfolded_fan_vertices looks only at large fans. Two triangles
+// with such a corner meet only where they share, so a wrap's neighbouring pairs, most of its
+// candidate pairs, need no test.
+std::vector<uint8_t> closed_fan_vertices(const std::vector<Vec3>& points, const std::vector<Tri>& triangles, const VertexStars& stars) {
+  std::vector<uint8_t> fan(points.size(), 0);
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, points.size(), 4096), [&](const tbb::blocked_range<size_t>& r) {
+    std::vector<std::array<uint32_t, 2>> corners;
+    for (size_t c = r.begin(); c != r.end(); ++c) {
+      corners.clear();
+      for (uint32_t t : stars[c]) {
+        const Tri& tri = triangles[t];
+        const int k = tri[0] == c ? 0 : tri[1] == c ? 1 : 2;
+        corners.push_back({tri[(k + 1) % 3], tri[(k + 2) % 3]});
+      }
+      fan[c] = closed_fan_unfolded(points, uint32_t(c), corners.data(), corners.size());
+    }
+  });
+  return fan;
+}
+
 // Star-shaped pieces: the triangles of each such piece get its number, the others none. Two
 // triangles of such a piece meet only at their common vertices and edge, so their pairs need
 // no test. A CAD assembly is mostly such pieces (cylinders, pins, boxes, spheres), and their
@@ -947,6 +968,7 @@ std::vector<TrianglePair> find_intersecting_pairs(const std::vector<Vec3>& point
   SlabBoxes slabs = slab_boxes(p, triangles, usable);
   const VertexStars stars = vertex_stars(p.size(), triangles, usable);
   const std::vector<uint8_t> fan = unfolded_fan_vertices(p, triangles, stars);
+  const std::vector<uint8_t> closed_fan = kind == SoupKind::kWrap ? closed_fan_vertices(points, triangles, stars) : std::vector<uint8_t>();
   const std::vector<uint32_t> piece =
       kind == SoupKind::kInput ? star_shaped_pieces(p, triangles, usable, edges) : std::vector<uint32_t>(triangles.size(), kNoPiece);
   const std::vector<PlaneBound> planes = plane_bounds(points, triangles, usable);
@@ -963,10 +985,12 @@ std::vector<TrianglePair> find_intersecting_pairs(const std::vector<Vec3>& point
     const Tri &tx = triangles[x], &ty = triangles[y];
     int shared = 0;
     uint32_t common = 0;
+    bool in_closed_fan = false;
     for (uint32_t a : tx)
       for (uint32_t b : ty)
-        if (a == b) ++shared, common = a;
+        if (a == b) ++shared, common = a, in_closed_fan = in_closed_fan || (!closed_fan.empty() && closed_fan[a]);
     if (shared == 1 && fan[common]) return;  // apart: see unfolded_fan_vertices
+    if (in_closed_fan && shared < 3) return;  // they meet only where they share: see closed_fan_vertices
     if (shared <= 1 && (clearly_beside(points, planes[x], tx, ty) || clearly_beside(points, planes[y], ty, tx))) return;
     // The cheap proofs above may run once per pair of slabs that meet; the exact test, once.
     if (met_earlier(slabs, p, triangles, x, box_x, y, box_y)) return;
@@ -976,6 +1000,55 @@ std::vector<TrianglePair> find_intersecting_pairs(const std::vector<Vec3>& point
   for (const auto& local : found) out.insert(out.end(), local.begin(), local.end());
   std::sort(out.begin(), out.end(), [](const TrianglePair& u, const TrianglePair& v) { return u.a != v.a ? u.a < v.a : u.b < v.b; });
   return out;
+}
+
+bool closed_fan_unfolded(const std::vector<Vec3>& points, uint32_t c, const std::array<uint32_t, 2>* corners, size_t count) {
+  constexpr size_t kMost = 64;
+  if (count < 3 || count > kMost) return false;
+  // Closed: each triangle's second corner is the first corner of exactly one triangle, and
+  // the first corners differ (so the triangles link into cycles; the turn count below allows
+  // only one).
+  std::array<uint8_t, kMost> next;
+  for (size_t i = 0; i < count; ++i) {
+    size_t as_first = 0, as_second = 0;
+    for (size_t j = 0; j < count; ++j) {
+      as_first += corners[j][0] == corners[i][0];
+      if (corners[j][0] == corners[i][1]) ++as_second, next[i] = uint8_t(j);
+    }
+    if (as_first != 1 || as_second != 1) return false;
+  }
+  const Vec3& o = points[c];
+  Vec3 normal{0, 0, 0};
+  for (size_t i = 0; i < count; ++i) normal = normal + cross(points[corners[i][0]] - o, points[corners[i][1]] - o);
+  if (!(norm2(normal) > 0)) return false;
+  // Any two independent axes across the normal give a linear map to the plane; the proof is
+  // for that map, so they need not be exactly orthonormal.
+  const Vec3 n = normalized(normal);
+  const Vec3 least = std::fabs(n[0]) <= std::fabs(n[1]) && std::fabs(n[0]) <= std::fabs(n[2]) ? Vec3{1, 0, 0}
+                     : std::fabs(n[1]) <= std::fabs(n[2])                                   ? Vec3{0, 1, 0}
+                                                                                          : Vec3{0, 0, 1};
+  const Vec3 e1 = normalized(cross(n, least)), e2 = cross(n, e1);
+  // Each spoke projected once, so that a spoke two sectors share is the same numbers in both.
+  std::array<std::array<double, 2>, kMost> ray;
+  std::array<double, kMost> length2;
+  for (size_t i = 0; i < count; ++i) {
+    const Vec3 d = points[corners[i][0]] - o;
+    ray[i] = {dot(e1, d), dot(e2, d)};
+    length2[i] = norm2(d);
+  }
+  // Each sector must turn forwards by clearly more than the rounding (the differences to c
+  // are exact to a relative epsilon, the projections to a few more): then its exact
+  // projection turns forwards too, and each spoke's direction is off by under a millionth of
+  // a radian, so the exact sectors wind as often as the computed ones. Winding: the sectors
+  // that cross the first axis upwards (half-open on the computed numbers, so once each).
+  int turns = 0;
+  for (size_t i = 0; i < count; ++i) {
+    const auto &ra = ray[i], &rb = ray[next[i]];
+    const double turn = ra[0] * rb[1] - ra[1] * rb[0];
+    if (!(turn > 0 && turn * turn > 1e-18 * length2[i] * length2[next[i]])) return false;
+    turns += ra[1] <= 0 && rb[1] > 0;
+  }
+  return turns == 1;
 }
 
 std::vector<uint32_t> star_shaped_pieces(const std::vector<Vec3>& points, const std::vector<Tri>& triangles) {

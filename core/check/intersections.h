@@ -57,6 +57,14 @@ using Corners = std::array<Vec3, 3>;
 bool triangle_pair_intersects(const Corners& a_at, const Tri& a, const Corners& b_at, const Tri& b, bool use_proofs_2d = true);
 bool triangle_is_degenerate(const Corners& at, const Tri& t);
 
+// Triangles (c, a, b) round vertex c, given by their corners after c in each one's own order
+// (`corners`: (a, b) per triangle). True when they close one fan round c that lies unfolded as
+// seen along their mean normal: each covers an angular sector at c turning the same way, and
+// the sectors follow one another once round. Then two of them meet only at c and along the
+// edge they share, if any: a pair of them needs no intersection test. (Doubles with a margin
+// far above their rounding; false whenever that is too close to call.)
+bool closed_fan_unfolded(const std::vector<Vec3>& points, uint32_t c, const std::array<uint32_t, 2>* corners, size_t count);
+
 struct Segment {
   Vec3 a, b;
   uint32_t tri_a, tri_b;

@@ -520,13 +520,26 @@ class Coarsener {
       if (!near_input((p_[v] + p_[w]) * 0.5, std::array<uint32_t, 2>{w, v})) return false;
     // No intersection among the new triangles, nor with the rest of the surface: one bucket
     // scan over the box of all new triangles (one scan each read mostly the same cells again).
+    // A pair with a corner whose new fan lies unfolded needs no test (see
+    // closed_fan_unfolded): most pairs here are a new triangle and a neighbour, or two new
+    // ones, and those share a corner. (spokes and v are the new triangles' corners.)
+    std::vector<uint32_t>& unfolded = scratch.unfolded;
+    unfolded.clear();
+    if (fan_unfolded_after(v, v, out, scratch.fan)) unfolded.push_back(v);
+    for (uint32_t w : spokes)
+      if (fan_unfolded_after(w, v, out, scratch.fan)) unfolded.push_back(w);
+    auto settled = [&](const Tri& a, const Tri& b) {
+      for (uint32_t x : a)
+        if ((b[0] == x || b[1] == x || b[2] == x) && std::find(unfolded.begin(), unfolded.end(), x) != unfolded.end()) return true;
+      return false;
+    };
     std::vector<Box3>& boxes = scratch.boxes;
     boxes.clear();
     Box3 all;
     for (size_t i = 0; i < out.fresh.size(); ++i) {
       if (check::triangle_is_degenerate(p_, out.fresh[i])) return false;
       for (size_t j = 0; j < i; ++j)
-        if (check::triangle_pair_intersects(p_, out.fresh[i], out.fresh[j])) return false;
+        if (!settled(out.fresh[i], out.fresh[j]) && check::triangle_pair_intersects(p_, out.fresh[i], out.fresh[j])) return false;
       boxes.push_back(box_of(out.fresh[i]));
       all.add(boxes.back().lo), all.add(boxes.back().hi);
     }
@@ -537,7 +550,7 @@ class Coarsener {
       if (other[0] == u || other[1] == u || other[2] == u) return;  // replaced or removed
       const Box3& box = buckets_.box(g);
       for (size_t i = 0; i < out.fresh.size() && !hit; ++i)
-        hit = boxes[i].overlaps(box) && check::triangle_pair_intersects(p_, out.fresh[i], other);
+        hit = boxes[i].overlaps(box) && !settled(out.fresh[i], other) && check::triangle_pair_intersects(p_, out.fresh[i], other);
     });
     if (hit) {
       out.hit_other = true;
@@ -545,6 +558,24 @@ class Coarsener {
     }
     out.u = u, out.v = v, out.ok = true;
     return true;
+  }
+
+  // Is the fan of x after the planned collapse into v (u's faces rewritten, the two on u-v gone)
+  // closed and unfolded? `fan`: scratch for its triangles' corners after x.
+  bool fan_unfolded_after(uint32_t x, uint32_t v, const Plan& pl, std::vector<std::array<uint32_t, 2>>& fan) const {
+    fan.clear();
+    auto add = [&](const Tri& tri) {
+      const int k = tri[0] == x ? 0 : tri[1] == x ? 1 : 2;
+      fan.push_back({tri[(k + 1) % 3], tri[(k + 2) % 3]});
+    };
+    for (uint32_t f : vf_[x]) {
+      if (f == pl.shared[0] || f == pl.shared[1]) continue;
+      const auto moved = std::find(pl.moved.begin(), pl.moved.end(), f);
+      add(moved == pl.moved.end() ? t_[f] : pl.fresh[size_t(moved - pl.moved.begin())]);
+    }
+    if (x == v)  // u's rewritten faces were not v's yet
+      for (const Tri& n : pl.fresh) add(n);
+    return check::closed_fan_unfolded(p_, x, fan.data(), fan.size());
   }
 
   // The plans of one batch were checked against the mesh before the batch: each must also
@@ -703,6 +734,8 @@ class Coarsener {
     std::vector<uint32_t> nu, nv;
     std::vector<Box3> boxes;      // of a plan's new triangles
     std::vector<uint32_t> spokes;  // the other ends of its new edges
+    std::vector<uint32_t> unfolded;  // corners of its new triangles whose new fans lie unfolded
+    std::vector<std::array<uint32_t, 2>> fan;  // fan_unfolded_after()'s
     std::vector<uint32_t> made_ends;  // apply()'s: the other ends of the edges a collapse makes
   };
   std::vector<Plan> plans_;
