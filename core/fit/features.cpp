@@ -1,7 +1,6 @@
 #include "fit/features.h"
 
 #include <algorithm>
-#include <atomic>
 #include <cmath>
 #include <limits>
 #include <map>
@@ -15,9 +14,9 @@
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_reduce.h>
 #include <tbb/parallel_sort.h>
-#include <tbb/task_group.h>
 
 #include "common/closest_point.h"
+#include "common/dependency_order.h"
 #include "common/fill_vector.h"
 #include "common/grid_key.h"
 #include "common/vec.h"
@@ -89,6 +88,7 @@ class SortedNodeCells {
 struct Piece {
   std::vector<Vec3> points;
   std::vector<double> arc;
+  Box3 box;  // of the points
   bool start_corner = false, end_corner = false;
 
   // Nearest point on the piece: point, distance and arc parameter.
@@ -107,6 +107,33 @@ struct Piece {
       }
     }
     return best;
+  }
+  // The same distance when it is at most r, else a number above r. Squares are compared and
+  // one root taken (the root of the least square is the least root); a piece or segment whose
+  // box lies farther than r, or than the nearest segment so far, is passed over (with a margin
+  // far above the rounding of a distance, so that one it would have given is never the answer).
+  double distance_within(const Vec3& p, double r) const {
+    constexpr double kMargin = 1 + 1e-6;
+    const double reach2 = r * r * kMargin;
+    auto gap2 = [&](const Vec3& lo, const Vec3& hi) {  // from p to the box [lo, hi]
+      double sum = 0;
+      for (int k = 0; k < 3; ++k) {
+        const double gap = std::max(lo[k] - p[k], p[k] - hi[k]);
+        if (gap > 0) sum += gap * gap;
+      }
+      return sum;
+    };
+    double least = std::numeric_limits<double>::infinity();
+    if (gap2(box.lo, box.hi) > reach2) return least;
+    for (size_t i = 0; i + 1 < points.size(); ++i) {
+      const Vec3 &a = points[i], &b = points[i + 1];
+      const double g2 = gap2({std::min(a[0], b[0]), std::min(a[1], b[1]), std::min(a[2], b[2])},
+                             {std::max(a[0], b[0]), std::max(a[1], b[1]), std::max(a[2], b[2])});
+      if (g2 > reach2 || g2 > least * kMargin) continue;
+      double t;
+      least = std::min(least, norm2(closest_on_segment(a, b, p, t) - p));
+    }
+    return std::sqrt(least);
   }
 };
 
@@ -132,6 +159,7 @@ std::vector<Piece> split_into_pieces(const FeatureCurve& c, double piece_length)
     bool last = i + 1 == dense.size();
     if (run >= piece_length || last) {
       cur.end_corner = last && c.end_corner;
+      for (const Vec3& q : cur.points) cur.box.add(q);
       pieces.push_back(cur);
       cur = Piece{};
       cur.points.push_back(dense[i]);
@@ -261,19 +289,15 @@ std::vector<std::pair<uint32_t, uint32_t>> snap_to_curves(const std::vector<Feat
   // node stays close to it). Scanned cell by cell (cells numbered in scan order), each cell's
   // nodes in increasing order, so a region is listed in (cell, node) order.
   auto for_region_cells = [&](const Piece& piece, double r, auto&& fn) {
-    Box3 box;
-    for (const Vec3& q : piece.points) box.add(q);
-    const Key lo = key(box.lo - Vec3{r, r, r}), hi = key(box.hi + Vec3{r, r, r});
+    const Key lo = key(piece.box.lo - Vec3{r, r, r}), hi = key(piece.box.hi + Vec3{r, r, r});
     uint32_t cell = 0;
     for (int64_t x = lo.x; x <= hi.x; ++x)
       for (int64_t y = lo.y; y <= hi.y; ++y)
         for (int64_t z = lo.z; z <= hi.z; ++z) fn(cell++, Key{x, y, z});
   };
-  auto distance_to = [&](const Piece& piece, uint32_t v) {
-    double d, dl, at;
-    piece.closest(target[v], d, at);
-    piece.closest(lattice[v], dl, at);
-    return std::min(d, dl);
+  // The nearer of a node's two positions to the piece when within r, else a number above r.
+  auto distance_to = [&](const Piece& piece, double r, uint32_t v) {
+    return std::min(piece.distance_within(target[v], r), piece.distance_within(lattice[v], r));
   };
   // The nodes of `cells` (buckets of nodes: a NodeCells or SortedNodeCells) within r of the
   // piece, in scan order.
@@ -291,7 +315,7 @@ std::vector<std::pair<uint32_t, uint32_t>> snap_to_curves(const std::vector<Feat
     std::vector<Candidate> out;
     for_region_cells(piece, r, [&](uint32_t cell, const Key& k) {
       for_each_in(cells, k, [&](uint32_t v) {
-        const double d = distance_to(piece, v);
+        const double d = distance_to(piece, r, v);
         if (d <= r) out.push_back({cell, v, d});
       });
     });
@@ -536,7 +560,7 @@ std::vector<std::pair<uint32_t, uint32_t>> snap_to_curves(const std::vector<Feat
   // Each curve waits for the last earlier curve in each of its cells (that one waits for the
   // ones before it there).
   std::vector<std::vector<uint32_t>> successors(curves.size());
-  std::unique_ptr<std::atomic<uint32_t>[]> waiting(new std::atomic<uint32_t>[curves.size()]);
+  std::vector<uint32_t> waits(curves.size());
   {
     std::unordered_map<Key, uint32_t, KeyHash> last_in_cell;
     std::vector<Key> cells;
@@ -544,10 +568,8 @@ std::vector<std::pair<uint32_t, uint32_t>> snap_to_curves(const std::vector<Feat
     for (uint32_t ci = 0; ci < curves.size(); ++ci) {
       cells.clear(), before.clear();
       for (const Piece& piece : pieces_of[ci]) {
-        Box3 box;
-        for (const Vec3& q : piece.points) box.add(q);
-        const Key lo = grid_key(box.lo - Vec3{reach, reach, reach}, inv_claim_cell);
-        const Key hi = grid_key(box.hi + Vec3{reach, reach, reach}, inv_claim_cell);
+        const Key lo = grid_key(piece.box.lo - Vec3{reach, reach, reach}, inv_claim_cell);
+        const Key hi = grid_key(piece.box.hi + Vec3{reach, reach, reach}, inv_claim_cell);
         for (int64_t x = lo.x; x <= hi.x; ++x)
           for (int64_t y = lo.y; y <= hi.y; ++y)
             for (int64_t z = lo.z; z <= hi.z; ++z) cells.push_back({x, y, z});
@@ -559,22 +581,12 @@ std::vector<std::pair<uint32_t, uint32_t>> snap_to_curves(const std::vector<Feat
       std::sort(before.begin(), before.end());
       before.erase(std::unique(before.begin(), before.end()), before.end());
       for (uint32_t b : before) successors[b].push_back(ci);
-      waiting[ci].store(uint32_t(before.size()), std::memory_order_relaxed);
+      waits[ci] = uint32_t(before.size());
     }
   }
   std::vector<SnapStats> curve_stats(curves.size());
   std::vector<std::vector<std::pair<uint32_t, uint32_t>>> curve_traced(curves.size());
-  {
-    tbb::task_group tasks;
-    std::function<void(uint32_t)> trace = [&](uint32_t ci) {
-      trace_curve(ci, scratch_of.local(), curve_stats[ci], curve_traced[ci]);
-      for (uint32_t next : successors[ci])
-        if (waiting[next].fetch_sub(1, std::memory_order_acq_rel) == 1) tasks.run([&trace, next] { trace(next); });
-    };
-    for (uint32_t ci = 0; ci < curves.size(); ++ci)
-      if (waiting[ci].load(std::memory_order_relaxed) == 0) tasks.run([&trace, ci] { trace(ci); });
-    tasks.wait();
-  }
+  run_in_dependency_order(successors, waits, [&](uint32_t ci) { trace_curve(ci, scratch_of.local(), curve_stats[ci], curve_traced[ci]); });
   std::vector<std::pair<uint32_t, uint32_t>> traced;
   stats.curves = curves.size();
   for (size_t ci = 0; ci < curves.size(); ++ci) {
