@@ -1,5 +1,6 @@
 // Small 3D vector helpers on vdbwrap::Vec3 (double precision).
 #pragma once
+#include <algorithm>
 #include <cmath>
 
 #include "vdbwrap/mesh.h"
@@ -43,6 +44,15 @@ struct Box3 {
     for (int k = 0; k < 3; ++k)
       if (lo[k] > b.hi[k] || b.lo[k] > hi[k]) return false;
     return true;
+  }
+  // From p to the nearest point of the box (0 inside).
+  double squared_distance(const Vec3& p) const {
+    double sum = 0;
+    for (int k = 0; k < 3; ++k) {
+      const double gap = std::max(lo[k] - p[k], p[k] - hi[k]);
+      if (gap > 0) sum += gap * gap;
+    }
+    return sum;
   }
   Vec3 center() const { return (lo + hi) * 0.5; }
   double diagonal() const { return empty() ? 0 : norm(hi - lo); }

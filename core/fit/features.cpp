@@ -115,20 +115,13 @@ struct Piece {
   double distance_within(const Vec3& p, double r) const {
     constexpr double kMargin = 1 + 1e-6;
     const double reach2 = r * r * kMargin;
-    auto gap2 = [&](const Vec3& lo, const Vec3& hi) {  // from p to the box [lo, hi]
-      double sum = 0;
-      for (int k = 0; k < 3; ++k) {
-        const double gap = std::max(lo[k] - p[k], p[k] - hi[k]);
-        if (gap > 0) sum += gap * gap;
-      }
-      return sum;
-    };
     double least = std::numeric_limits<double>::infinity();
-    if (gap2(box.lo, box.hi) > reach2) return least;
+    if (box.squared_distance(p) > reach2) return least;
     for (size_t i = 0; i + 1 < points.size(); ++i) {
       const Vec3 &a = points[i], &b = points[i + 1];
-      const double g2 = gap2({std::min(a[0], b[0]), std::min(a[1], b[1]), std::min(a[2], b[2])},
-                             {std::max(a[0], b[0]), std::max(a[1], b[1]), std::max(a[2], b[2])});
+      Box3 segment;
+      segment.add(a), segment.add(b);
+      const double g2 = segment.squared_distance(p);
       if (g2 > reach2 || g2 > least * kMargin) continue;
       double t;
       least = std::min(least, norm2(closest_on_segment(a, b, p, t) - p));
