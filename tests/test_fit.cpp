@@ -278,6 +278,58 @@ TEST(SurfaceIndex, NearestPointsAreExactBesideThousandsOfSliversFarFromTheOrigin
   }
 }
 
+// touches() looks only at the slivers of a sorted piece whose keys lie within reach of the
+// query along the lane (see MeetsTraits), with float margins. Far from the origin, a cylinder
+// side of 1500 slivers among many tiny triangles (so the slivers are long, cut by cells and
+// sorted): tiny and small triangles beside the slivers must get the answer of every triangle
+// tested directly. (Exact contact is left out: touches() is a floating-point test, and there it
+// may go either way.)
+TEST(SurfaceIndex, TouchesAgreesWithEveryTriangleOnSortedSliversFarFromTheOrigin) {
+  Mesh m;
+  const Vec3 far{1000.0, -2000.0, 500.0};
+  const int n = 1500;
+  for (int end = 0; end < 2; ++end)
+    for (int i = 0; i < n; ++i) {
+      const double a = 2 * M_PI * i / n;
+      const Vec3 p{0.5 * std::cos(a), 0.5 * std::sin(a), 2.0 * end};
+      m.points.push_back(far + Vec3{p[0], p[1] * std::cos(0.6) - p[2] * std::sin(0.6), p[1] * std::sin(0.6) + p[2] * std::cos(0.6)});
+    }
+  for (uint32_t i = 0; i < uint32_t(n); ++i) {
+    const uint32_t a = i, b = (i + 1) % n;
+    m.triangles.push_back({a, b, b + n});
+    m.triangles.push_back({a, b + n, a + n});
+  }
+  Uniform uniform(4242);
+  for (int k = 0; k < 8000; ++k) {  // tiny triangles off to one side
+    const Vec3 c = far + Vec3{uniform(2, 4), uniform(-1, 1), uniform(-1, 1)};
+    const uint32_t a = uint32_t(m.points.size());
+    m.points.push_back(c);
+    m.points.push_back(c + Vec3{0.01, uniform(0, 0.01), 0});
+    m.points.push_back(c + Vec3{0, uniform(0, 0.01), 0.01});
+    m.triangles.push_back({a, a + 1, a + 2});
+  }
+  fit::SurfaceIndex index(m.points, m.triangles);
+  size_t touching = 0;
+  std::vector<Vec3> pts = m.points;
+  const uint32_t a = uint32_t(pts.size());
+  pts.resize(pts.size() + 3);
+  for (int k = 0; k < 2000; ++k) {
+    const Tri& t = m.triangles[uint32_t(uniform(0, 2 * n))];
+    const double s = k % 3 == 0 ? 1e-5 : (k % 3 == 1 ? 2e-4 : 2e-3);
+    const Vec3 on = lerp(lerp(m.points[t[0]], m.points[t[1]], uniform(0, 1)), m.points[t[2]], uniform(0, 1));
+    const Vec3 p0 = on + Vec3{uniform(-s, s), uniform(-s, s), uniform(-s, s)};
+    pts[a] = p0, pts[a + 1] = p0 + Vec3{uniform(-s, s), uniform(-s, s), uniform(-s, s)},
+    pts[a + 2] = p0 + Vec3{uniform(-s, s), uniform(-s, s), uniform(-s, s)};
+    bool expected = false;
+    for (const Tri& u : m.triangles)
+      if (!expected && check::triangle_pair_intersects(pts, u, Tri{a, a + 1, a + 2})) expected = true;
+    ASSERT_EQ(index.touches(pts[a], pts[a + 1], pts[a + 2]), expected) << "triangle " << k;
+    touching += expected;
+  }
+  EXPECT_GT(touching, 400u);
+  EXPECT_GT(2000 - touching, 400u);
+}
+
 // Each query starts from the triangle the thread found last, so answers must not depend on
 // the order of queries: the nearest triangle, the lowest index among equally near ones. On a
 // grid of exactly coplanar triangles, many queries are equally near several triangles.
