@@ -5,8 +5,11 @@
 #include <algorithm>
 #include <cerrno>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
+#include <memory>
 #include <new>
+#include <string_view>
 #include <system_error>
 
 #include "io/readers.h"
@@ -102,22 +105,36 @@ Mesh parse(std::string_view bytes, Format format, const std::string& name) {
   fail(name, "unknown format (expected STL, OBJ, OFF or PLY)");
 }
 
-std::string read_whole_file(const std::string& path) {
+// A file's bytes in a buffer that is never zero-filled first: the read writes every byte
+// used (a std::string's resize cleared 118 MB on one core before the read filled them again).
+struct FileBytes {
+  std::unique_ptr<char[]> data;
+  size_t size = 0;
+  std::string_view view() const { return {data.get(), size}; }
+};
+
+FileBytes read_whole_file(const std::string& path) {
   std::error_code ec;
   if (std::filesystem::is_directory(path, ec)) fail(path, "cannot open: is a directory");
   std::FILE* f = std::fopen(path.c_str(), "rb");
   if (!f) fail(path, std::string("cannot open file (") + std::strerror(errno) + ")");
   // Read straight into a buffer of the expected size; keep reading in case the file grew.
-  std::string bytes;
-  uintmax_t size = std::filesystem::file_size(path, ec);
-  size_t used = 0;
-  bytes.resize(ec ? size_t(1) << 16 : size_t(size) + 1);
-  for (;;) {
-    used += std::fread(&bytes[used], 1, bytes.size() - used, f);
-    if (used < bytes.size()) break;  // end of file or error
-    bytes.resize(bytes.size() * 2);
+  const uintmax_t expected = std::filesystem::file_size(path, ec);
+  size_t capacity = ec ? size_t(1) << 16 : size_t(expected) + 1;
+  FileBytes bytes;
+  try {
+    bytes.data.reset(new char[capacity]);
+    for (;;) {
+      bytes.size += std::fread(bytes.data.get() + bytes.size, 1, capacity - bytes.size, f);
+      if (bytes.size < capacity) break;  // end of file or error
+      std::unique_ptr<char[]> larger(new char[2 * capacity]);
+      std::memcpy(larger.get(), bytes.data.get(), bytes.size);
+      bytes.data = std::move(larger), capacity *= 2;
+    }
+  } catch (...) {
+    std::fclose(f);
+    throw;
   }
-  bytes.resize(used);
   bool failed = std::ferror(f);
   std::fclose(f);
   if (failed) fail(path, "read error");
@@ -172,13 +189,13 @@ Format format_from_extension(std::string_view path) {
 }
 
 Mesh read_mesh(const std::string& path) {
-  std::string bytes;
+  FileBytes bytes;
   try {
     bytes = read_whole_file(path);
   } catch (const std::bad_alloc&) {
     fail(path, "too large to load into memory");
   }
-  return read_mesh_from_bytes(bytes, format_from_extension(path), path);
+  return read_mesh_from_bytes(bytes.view(), format_from_extension(path), path);
 }
 
 Mesh read_mesh_from_bytes(std::string_view bytes, Format format, const std::string& display_name) {
