@@ -64,6 +64,9 @@ struct Lane {
   double reach, low, high;   // the largest half extent along the axis (and the keys' float
                              // rounding); the piece's extent along the normal
   double slack;              // rounding of the projections: 1e-10 of the coordinates' size
+  // The margin for a query's projections onto the axes: the piece's own rounding and that of
+  // a query whose coordinates sum (in absolute value) to `coordinates`.
+  double slack_at(double coordinates) const { return slack + 1e-10 * coordinates; }
 };
 
 // A triangle's own box: three orthonormal axes (along its longest edge, across it in its
@@ -391,7 +394,7 @@ void scan_piece(const Store& store, const Piece& piece, const Vec3& q, const dou
   const Lane& lane = store.lanes[piece.lane];
   const float* keys = store.keys.data() + piece.first;
   const double at = dot(lane.axis, q) - lane.centre;
-  const double slack = lane.slack + 1e-10 * (std::fabs(q[0]) + std::fabs(q[1]) + std::fabs(q[2]));
+  const double slack = lane.slack_at(std::fabs(q[0]) + std::fabs(q[1]) + std::fabs(q[2]));
   const double reach = lane.reach + slack;
   const double at_height = dot(lane.normal, q) - lane.level;
   const double height = std::max(lane.low - at_height, at_height - lane.high) - slack;
@@ -509,7 +512,7 @@ class MeetsTraits {
   // A sorted piece (see Lane): a triangle meets the query only where their extents along the
   // lane's axis overlap, and along its normal the query must reach the piece's extent. So only
   // the triangles whose keys lie within the lane's reach of the query's extent need a test
-  // ([k, end) narrowed to them; false when none can meet). Margins as in scan_piece.
+  // ([k, end) narrowed to them; false when none can meet).
   bool lane_range(const Piece& piece, uint32_t& k, uint32_t& end) const {
     const Lane& lane = store_.lanes[piece.lane];
     double low = INFINITY, high = -INFINITY, below = INFINITY, above = -INFINITY;
@@ -517,7 +520,7 @@ class MeetsTraits {
       const double at = dot(lane.axis, corner_[v]) - lane.centre, height = dot(lane.normal, corner_[v]) - lane.level;
       low = std::min(low, at), high = std::max(high, at), below = std::min(below, height), above = std::max(above, height);
     }
-    const double slack = lane.slack + 1e-10 * size_;
+    const double slack = lane.slack_at(size_);
     if (above < lane.low - slack || below > lane.high + slack) return false;
     const double reach = lane.reach + slack;
     const float* keys = store_.keys.data();
