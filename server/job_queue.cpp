@@ -1,22 +1,25 @@
 #include "job_queue.h"
 
-#include <malloc.h>
+#include <signal.h>
+#include <sys/wait.h>
 
 #include <algorithm>
 #include <cstdio>
 #include <ctime>
 #include <optional>
 
-#include "io/mesh_io.h"
+#include "job_process.h"
 #include "params_mapping.h"
-#include "vdbwrap/repair.h"
-#include "vdbwrap/wrap.h"
 
 namespace vdbwrap::server {
 
 namespace {
 
 constexpr size_t kMaxEventsPerJob = 20000;  // beyond this only state changes are kept
+// A job process asked to stop (SIGTERM) gets this long to unwind before SIGKILL.
+constexpr auto kStopGrace = std::chrono::seconds(2);
+// How often a running job's process is looked at (cancel, timeout, shutdown).
+constexpr auto kPollInterval = std::chrono::milliseconds(100);
 
 std::string short_name(const pb::JobStatus& r) {
   std::string name = r.spec().file_name();
@@ -47,43 +50,6 @@ int64_t unix_ms_now() {
       .count();
 }
 
-// The core's window on a job: progress goes to the job's events, cancelled() answers true
-// once a client cancelled it, its time is up, or the server stops.
-class JobQueue::Sink : public ProgressSink {
- public:
-  Sink(JobQueue& queue, Job& job, double timeout_seconds) : queue_(queue), job_(job) {
-    if (timeout_seconds > 0)
-      deadline_ = job.started + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
-                                    std::chrono::duration<double>(timeout_seconds));
-  }
-  void progress(const std::string& stage, double fraction, const std::string& message) override {
-    bool new_stage = false;
-    {
-      std::lock_guard<std::mutex> g(job_.lock);
-      new_stage = stage != last_stage_;
-      last_stage_ = stage;
-      queue_.add_event_locked(job_, stage, fraction, message);
-    }
-    if (new_stage) log_line("job " + job_.record.job_id() + " stage \"" + stage + "\": " + message);
-  }
-  bool cancelled() override {
-    if (job_.cancel_requested.load() || queue_.interrupt_.load()) return true;
-    if (deadline_ && std::chrono::steady_clock::now() > *deadline_) {
-      timed_out_ = true;
-      return true;
-    }
-    return false;
-  }
-  bool timed_out() const { return timed_out_.load(); }
-
- private:
-  JobQueue& queue_;
-  Job& job_;
-  std::optional<std::chrono::steady_clock::time_point> deadline_;
-  std::atomic<bool> timed_out_{false};
-  std::string last_stage_;
-};
-
 JobQueue::JobQueue(JobStore& store, Options options) : store_(store), options_(std::move(options)) {
   options_.workers = std::max(1, options_.workers);
 }
@@ -106,18 +72,30 @@ void JobQueue::restore() {
     auto job = std::make_shared<Job>();
     const bool unfinished = !api::is_final(record.state());
     if (unfinished) {
+      // Running on disk: the server (and with it the job's process) stopped while it ran.
+      const bool was_running = record.state() == pb::JOB_STATE_RUNNING;
+      const int attempts = store_.attempts(record.job_id());
       std::error_code ec;
-      if (!std::filesystem::exists(store_.input_path(record), ec)) {
+      auto fail = [&](const std::string& why) {
         record.set_state(pb::JOB_STATE_FAILED);
         record.set_error_kind(pb::ERROR_KIND_INTERNAL);
-        record.set_error_message("the job's input is missing from the spool");
+        record.set_error_message(why);
         record.set_finished_unix_ms(unix_ms_now());
+        log_line("job " + record.job_id() + " failed: " + why);
+      };
+      if (!std::filesystem::exists(store_.input_path(record), ec)) {
+        fail("the job's input is missing from the spool");
+      } else if (was_running && attempts >= options_.max_attempts) {
+        fail("the server stopped " + std::to_string(attempts) + " times while this job ran (--max-attempts " +
+             std::to_string(options_.max_attempts) + "); it is not run again");
       } else {
         record.set_state(pb::JOB_STATE_QUEUED);
         record.set_started_unix_ms(0);
         record.set_stage("");
         record.set_fraction(0);
-        record.set_message("queued again after a server restart");
+        record.set_message(was_running ? "queued again: the server stopped while it ran (" + std::to_string(attempts) +
+                                             " of " + std::to_string(options_.max_attempts) + " attempts used)"
+                                       : std::string("queued again after a server restart"));
       }
       try {
         store_.save(record);
@@ -150,6 +128,34 @@ void JobQueue::restore() {
 
 void JobQueue::start() {
   for (int i = 0; i < options_.workers; ++i) workers_.emplace_back([this] { worker(); });
+  if (options_.retain_seconds > 0) janitor_ = std::thread([this] { janitor(); });
+}
+
+// Prunes at start, then every tenth of the retention (between a second and ten minutes).
+void JobQueue::janitor() {
+  const double period = std::clamp(options_.retain_seconds / 10, 1.0, 600.0);
+  std::unique_lock<std::mutex> g(lock_);
+  while (!stop_) {
+    g.unlock();
+    try {
+      prune(unix_ms_now() - int64_t(options_.retain_seconds * 1000));
+    } catch (const std::exception& e) {
+      log_line(std::string("warning: pruning the spool: ") + e.what());
+    }
+    g.lock();
+    janitor_wake_.wait_for(g, std::chrono::duration<double>(period), [&] { return stop_; });
+  }
+}
+
+size_t JobQueue::prune(int64_t cutoff_unix_ms) {
+  std::lock_guard<std::mutex> g(lock_);
+  std::vector<std::shared_ptr<Job>> old;
+  for (const auto& job : order_) {
+    const pb::JobStatus r = job->snapshot();
+    if (api::is_final(r.state()) && r.finished_unix_ms() > 0 && r.finished_unix_ms() < cutoff_unix_ms) old.push_back(job);
+  }
+  for (const auto& job : old) remove_locked(job, "pruned (ended longer ago than --retain)");
+  return old.size();
 }
 
 bool JobQueue::try_reserve() {
@@ -232,14 +238,18 @@ JobQueue::CancelResult JobQueue::cancel(const std::shared_ptr<Job>& job) {
 
 bool JobQueue::remove(const std::shared_ptr<Job>& job) {
   std::lock_guard<std::mutex> g(lock_);
+  if (!api::is_final(job->snapshot().state())) return false;
+  remove_locked(job, "deleted");
+  return true;
+}
+
+void JobQueue::remove_locked(const std::shared_ptr<Job>& job, const std::string& why) {
   pb::JobStatus r = job->snapshot();
-  if (!api::is_final(r.state())) return false;
   store_.remove(r.job_id());
   jobs_.erase(r.job_id());
   order_.erase(std::remove(order_.begin(), order_.end(), job), order_.end());
   if (!r.spec().idempotency_key().empty()) by_key_.erase(r.spec().idempotency_key());
-  log_line("job " + r.job_id() + " deleted");
-  return true;
+  log_line("job " + r.job_id() + " " + why);
 }
 
 void JobQueue::shutdown(double grace_seconds) {
@@ -248,6 +258,7 @@ void JobQueue::shutdown(double grace_seconds) {
     if (stopped_) return;
     stop_ = true;
     work_.notify_all();
+    janitor_wake_.notify_all();
     auto deadline = std::chrono::steady_clock::now() +
                     std::chrono::duration_cast<std::chrono::steady_clock::duration>(
                         std::chrono::duration<double>(std::max(0.0, grace_seconds)));
@@ -262,6 +273,7 @@ void JobQueue::shutdown(double grace_seconds) {
   for (auto& t : workers_)
     if (t.joinable()) t.join();
   workers_.clear();
+  if (janitor_.joinable()) janitor_.join();
   stopped_ = true;
   // Wake every watcher so that it notices the stop.
   for (auto& job : list()) job->changed.notify_all();
@@ -323,7 +335,6 @@ void JobQueue::worker() {
       ++running_;
     }
     run(job);
-    ::malloc_trim(0);  // give the job's memory back to the system
     {
       std::lock_guard<std::mutex> g(lock_);
       --running_;
@@ -332,109 +343,173 @@ void JobQueue::worker() {
   }
 }
 
+
+// Runs one job in its own process and turns how that process ended into the job's state.
 void JobQueue::run(const std::shared_ptr<Job>& job) {
   const pb::JobStatus spec_record = job->snapshot();
   const std::string id = spec_record.job_id();
-  job->started = std::chrono::steady_clock::now();
-  set_state(*job, pb::JOB_STATE_RUNNING);
-  log_line("job " + id + " started (\"" + short_name(spec_record) + "\")");
-  Sink sink(*this, *job, options_.job_timeout_seconds);
+  const char* process_name = api::is_repair(spec_record.spec()) ? "the repair process" : "the wrap process";
   auto fail = [&](pb::ErrorKind kind, const std::string& why) {
     set_state(*job, kind == pb::ERROR_KIND_CANCELLED ? pb::JOB_STATE_CANCELLED : pb::JOB_STATE_FAILED, kind, why);
     log_line("job " + id + (kind == pb::ERROR_KIND_CANCELLED ? " cancelled: " : " failed: ") + why);
   };
+  // Counted before the start, durably: if the server dies while the job runs, the next start
+  // knows (restore()).
+  const int attempt = store_.attempts(id) + 1;
   try {
-    const pb::JobSpec& spec = spec_record.spec();
-    // Binary STL stores floats: validate (or repair) what will be written.
-    const bool float_coordinates = spec.output_format() == pb::MESH_FORMAT_STL;
-    WrapParams params;
-    RepairParams repair_params;
-    if (api::is_repair(spec)) {
-      repair_params = api::to_repair_params(spec.repair_params());
-      repair_params.float_coordinates = float_coordinates;
-    } else {
-      params = api::to_wrap_params(spec.params());
-      params.float_coordinates = float_coordinates;
+    store_.set_attempts(id, attempt);
+  } catch (const std::exception& e) {
+    log_line("job " + id + " warning: cannot record the attempt: " + e.what());
+  }
+  job->started = std::chrono::steady_clock::now();
+  set_state(*job, pb::JOB_STATE_RUNNING);
+  log_line("job " + id + " started (\"" + short_name(spec_record) + "\"" +
+           (attempt > 1 ? ", attempt " + std::to_string(attempt) : std::string()) + ")");
+  if (job->cancel_requested) {
+    fail(pb::ERROR_KIND_CANCELLED, "cancelled by a client");
+    return;
+  }
+
+  std::optional<std::chrono::steady_clock::time_point> deadline;
+  if (options_.job_timeout_seconds > 0)
+    deadline = job->started + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                                  std::chrono::duration<double>(options_.job_timeout_seconds));
+  enum class Stop { None, Cancel, Timeout, Shutdown };
+  Stop stop = Stop::None;
+  std::chrono::steady_clock::time_point stop_asked{};
+  bool killed = false;
+  std::optional<pb::JobStatus> verdict;
+  std::string last_stage, protocol_error;
+
+  std::unique_ptr<JobProcess> process;
+  try {
+    process = std::make_unique<JobProcess>(
+        std::vector<std::string>{options_.worker_command, "--worker", store_.job_dir(id).string()}, options_.job_memory);
+  } catch (const std::exception& e) {
+    fail(pb::ERROR_KIND_INTERNAL, e.what());
+    return;
+  }
+  auto on_frame = [&](const pb::JobStatus& frame) {
+    if (frame.state() != pb::JOB_STATE_RUNNING) {
+      verdict = frame;
+      return;
     }
-    if (sink.cancelled()) throw Error(ErrorKind::Cancelled, "cancelled");
-    Mesh input;
-    {
-      sink.progress("read", 0.0, "reading the upload");
-      std::string bytes = JobStore::read_file(store_.input_path(spec_record));
-      input = io::read_mesh_from_bytes(bytes, api::to_io_format(spec.input_format()),
-                                       spec.file_name().empty() ? "upload" : spec.file_name());
-      sink.progress("read", 1.0, std::to_string(input.triangles.size()) + " triangles");
-    }
-    // The job's work: a wrap, or a repair (whose result is written even with intersections
-    // left, as `vdbwrap repair` does; the status says how many).
-    Mesh surface;
-    std::string report;
-    double seconds = 0;
-    uint64_t pairs_left = 0;
-    if (api::is_repair(spec)) {
-      RepairResult result = repair(input, repair_params, &sink);
-      surface = std::move(result.mesh);
-      report = to_json(result.report);
-      seconds = result.report.total_seconds;
-      pairs_left = result.report.after.intersecting_pairs;
-    } else {
-      WrapResult result = wrap(input, params, &sink);
-      surface = std::move(result.surface);
-      report = to_json(result.report);
-      seconds = result.report.total_seconds;
-    }
-    input = Mesh{};  // frees the input before writing
-    sink.progress("write", 0.0, "writing the result");
-    const pb::MeshFormat out_format = spec.output_format();
-    std::string ply = io::write_mesh_to_bytes(surface, io::Format::Ply);
-    store_.write_file_atomic(store_.result_path(id, pb::MESH_FORMAT_PLY), ply);
-    uint64_t result_bytes = ply.size();
-    ply = std::string();
-    if (out_format != pb::MESH_FORMAT_PLY) {
-      std::string bytes = io::write_mesh_to_bytes(surface, api::to_io_format(out_format));
-      store_.write_file_atomic(store_.result_path(id, out_format), bytes);
-      result_bytes = bytes.size();
-    }
-    store_.write_file_atomic(store_.report_path(id), report + "\n");
+    const bool new_stage = frame.stage() != last_stage;
+    last_stage = frame.stage();
     {
       std::lock_guard<std::mutex> g(job->lock);
-      job->record.set_result_bytes(result_bytes);
-      job->record.set_output_triangles(surface.triangles.size());
-      job->record.set_intersecting_pairs_left(pairs_left);
+      add_event_locked(*job, frame.stage(), frame.fraction(), frame.message());
     }
-    sink.progress("write", 1.0, std::to_string(result_bytes) + " bytes");
-    set_state(*job, pb::JOB_STATE_SUCCEEDED);
-    char line[256];
-    std::snprintf(line, sizeof line, " finished: %zu triangles, %.2f s", surface.triangles.size(), seconds);
-    std::string text = "job " + id + line;
-    if (api::is_repair(spec)) text += ", " + std::to_string(pairs_left) + " intersecting pairs left";
-    log_line(text);
-  } catch (const WrapFailure& f) {
-    // A leak or a failed validation: the report says where, so it is kept with the job.
+    if (new_stage) log_line("job " + id + " stage \"" + frame.stage() + "\": " + frame.message());
+  };
+  std::vector<pb::JobStatus> frames;
+  while (!process->reap()) {
+    frames.clear();
     try {
-      store_.write_file_atomic(store_.report_path(id), to_json(f.report()) + "\n");
-    } catch (const std::exception&) {
+      if (process->pipe_open()) process->read_frames(kPollInterval, frames);
+      else std::this_thread::sleep_for(kPollInterval / 2);
+    } catch (const std::exception& e) {
+      if (protocol_error.empty()) protocol_error = e.what();
+      process->signal(SIGKILL);
+      killed = true;
     }
-    fail(api::to_proto(f.kind()), f.what());
-  } catch (const Error& e) {
-    if (e.kind() == ErrorKind::Cancelled && interrupt_) {
+    for (const auto& f : frames) on_frame(f);
+    const auto now = std::chrono::steady_clock::now();
+    if (stop == Stop::None) {
+      if (interrupt_) stop = Stop::Shutdown;
+      else if (job->cancel_requested) stop = Stop::Cancel;
+      else if (deadline && now > *deadline) stop = Stop::Timeout;
+      if (stop != Stop::None) {
+        process->signal(SIGTERM);
+        stop_asked = now;
+      }
+    } else if (!killed && now - stop_asked > kStopGrace) {
+      process->signal(SIGKILL);
+      killed = true;
+    }
+  }
+  // What the process wrote before it ended (the verdict among it).
+  try {
+    frames.clear();
+    while (process->pipe_open() && process->read_frames(std::chrono::milliseconds(0), frames) > 0) {
+    }
+    for (const auto& f : frames) on_frame(f);
+  } catch (const std::exception& e) {
+    if (protocol_error.empty()) protocol_error = e.what();
+  }
+  const int status = process->wait_status();
+  process.reset();
+
+  const bool succeeded = verdict && verdict->state() == pb::JOB_STATE_SUCCEEDED && WIFEXITED(status) &&
+                         WEXITSTATUS(status) == 0 && protocol_error.empty();
+  if (!succeeded) {
+    // A killed process may leave a half-written file behind.
+    std::error_code ec;
+    for (const auto& entry : fs::directory_iterator(store_.job_dir(id), ec))
+      if (entry.path().extension() == ".tmp") fs::remove(entry.path(), ec);
+  }
+  if (succeeded) {
+    {
+      std::lock_guard<std::mutex> g(job->lock);
+      job->record.set_result_bytes(verdict->result_bytes());
+      job->record.set_output_triangles(verdict->output_triangles());
+      job->record.set_intersecting_pairs_left(verdict->intersecting_pairs_left());
+    }
+    set_state(*job, pb::JOB_STATE_SUCCEEDED);
+    log_line("job " + id + " finished: " + verdict->message());
+    return;
+  }
+  const std::string where = last_stage.empty() ? " before it reported any progress" : " in stage " + last_stage;
+  switch (stop) {
+    case Stop::Shutdown:
+      // Not counted as an attempt: the job did nothing wrong, the server was asked to stop.
+      try {
+        store_.set_attempts(id, attempt - 1);
+      } catch (const std::exception&) {
+      }
       set_state(*job, pb::JOB_STATE_QUEUED, pb::ERROR_KIND_UNSPECIFIED, "");
       log_line("job " + id + " interrupted by the shutdown; it stays queued on disk");
-    } else if (e.kind() == ErrorKind::Cancelled && sink.timed_out()) {
-      char why[128];
+      return;
+    case Stop::Cancel:
+      fail(pb::ERROR_KIND_CANCELLED, "cancelled by a client");
+      return;
+    case Stop::Timeout: {
+      char why[160];
       std::snprintf(why, sizeof why, "timed out: ran longer than the server's job timeout of %g s",
                     options_.job_timeout_seconds);
       fail(pb::ERROR_KIND_TIMED_OUT, why);
-    } else if (e.kind() == ErrorKind::Cancelled) {
-      fail(pb::ERROR_KIND_CANCELLED, "cancelled by a client");
-    } else {
-      fail(api::to_proto(e.kind()), e.what());
+      return;
     }
-  } catch (const std::bad_alloc&) {
-    fail(pb::ERROR_KIND_INTERNAL, "out of memory");
-  } catch (const std::exception& e) {
-    fail(pb::ERROR_KIND_INTERNAL, std::string("internal error: ") + e.what());
+    case Stop::None:
+      break;
   }
+  if (!protocol_error.empty()) {
+    fail(pb::ERROR_KIND_INTERNAL, std::string(process_name) + " broke the worker protocol" + where + ": " + protocol_error);
+    return;
+  }
+  const bool exited_cleanly = WIFEXITED(status) && WEXITSTATUS(status) == 0;
+  if (verdict && exited_cleanly && verdict->state() == pb::JOB_STATE_FAILED) {
+    // The pipeline's own verdict: bad input, a leak, out of memory under --job-memory...
+    fail(verdict->error_kind() == pb::ERROR_KIND_UNSPECIFIED ? pb::ERROR_KIND_INTERNAL : verdict->error_kind(),
+         verdict->error_message());
+    return;
+  }
+  // A crash: failed at once, not retried (a deterministic crash would only repeat).
+  std::string why;
+  if (WIFSIGNALED(status)) {
+    why = std::string(process_name) + " ended with " + describe_wait_status(status) + where;
+    if (verdict && !verdict->error_message().empty()) why += ": " + verdict->error_message();
+    if (WTERMSIG(status) == SIGKILL)
+      why += " (killed from outside the server: the system may have run out of memory)";
+    else if (WTERMSIG(status) == SIGTERM)
+      why += " (stopped from outside the server)";
+  } else if (WIFEXITED(status) && WEXITSTATUS(status) == 127 && last_stage.empty()) {
+    why = std::string(process_name) + " could not be started (" + options_.worker_command + ")";
+  } else {
+    why = std::string(process_name) + " ended with " + describe_wait_status(status) + where + " without a result";
+    if (verdict && !verdict->error_message().empty()) why += ": " + verdict->error_message();
+  }
+  fail(pb::ERROR_KIND_INTERNAL, why);
 }
 
 }  // namespace vdbwrap::server

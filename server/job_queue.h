@@ -1,6 +1,7 @@
-// Jobs in memory: the queue, the worker threads that run the core's wrap(), cancellation
-// (client cancel, --job-timeout, shutdown) and progress events for watchers. Every state
-// change is written to the JobStore before it is visible to clients.
+// Jobs in memory: the queue, the worker threads that each run one job at a time in a worker
+// process (job_process.h, worker.h), cancellation (client cancel, --job-timeout, shutdown),
+// progress events for watchers, attempts across restarts and the pruning of old jobs
+// (--retain). Every state change is written to the JobStore before it is visible to clients.
 #pragma once
 #include <atomic>
 #include <chrono>
@@ -43,13 +44,21 @@ class JobQueue {
     size_t queue_limit = 16;   // most jobs waiting (not counting running ones)
     double job_timeout_seconds = 0;  // 0: none
     std::string advertise;     // copied into each job's record.server
+    // The job process: worker_command --worker <job dir>, with RLIMIT_DATA job_memory (0: none).
+    std::string worker_command;
+    uint64_t job_memory = 0;
+    // A job the server stopped (died) under this many times is failed instead of run again.
+    int max_attempts = 2;
+    double retain_seconds = 0;  // ended jobs older than this are deleted; 0: kept forever
   };
   JobQueue(JobStore& store, Options options);
   ~JobQueue();
 
   // Loads the spool: unfinished jobs (queued or running when the last server stopped) are
-  // queued again, oldest first; finished ones are served. Call once, before start().
+  // queued again, oldest first, unless the server already stopped max_attempts times while
+  // one ran (then it fails); finished ones are served. Call once, before start().
   void restore();
+  // Starts the worker threads, and with retain_seconds the pruning (now and periodically).
   void start();
 
   // A slot in the queue for an upload about to be received; false when the queue is full.
@@ -70,6 +79,8 @@ class JobQueue {
   CancelResult cancel(const std::shared_ptr<Job>& job);
   // Deletes an ended job and its files; false (nothing done) for a queued or running job.
   bool remove(const std::shared_ptr<Job>& job);
+  // Deletes the ended jobs that finished before cutoff_unix_ms; returns how many.
+  size_t prune(int64_t cutoff_unix_ms);
 
   // Graceful stop: no new job starts; running jobs get grace_seconds to finish, then they are
   // interrupted and left queued on disk for the next start. Joins the workers.
@@ -80,9 +91,10 @@ class JobQueue {
   const Options& options() const { return options_; }
 
  private:
-  class Sink;
   void worker();
+  void janitor();
   void run(const std::shared_ptr<Job>& job);
+  void remove_locked(const std::shared_ptr<Job>& job, const std::string& why);
   // Under job->lock: appends an event and notifies watchers.
   void add_event_locked(Job& job, const std::string& stage, double fraction, const std::string& message);
   // Sets a new state, persists the record, appends an event and notifies.
@@ -105,6 +117,8 @@ class JobQueue {
   std::atomic<bool> interrupt_{false};
   std::atomic<bool> stopped_{false};
   std::vector<std::thread> workers_;
+  std::thread janitor_;
+  std::condition_variable janitor_wake_;  // stop
 };
 
 }  // namespace vdbwrap::server

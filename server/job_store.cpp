@@ -100,14 +100,12 @@ std::unique_ptr<JobStore::Upload> JobStore::begin_upload() {
   return up;
 }
 
-fs::path JobStore::input_path(const pb::JobStatus& record) const {
+std::string JobStore::input_file_name(const pb::JobStatus& record) {
   std::string ext = api::extension_of(record.spec().input_format());
-  return job_dir(record.job_id()) / ("input." + (ext.empty() ? std::string("bin") : ext));
+  return "input." + (ext.empty() ? std::string("bin") : ext);
 }
 
-fs::path JobStore::result_path(const std::string& id, pb::MeshFormat format) const {
-  return job_dir(id) / ("result." + api::extension_of(format));
-}
+std::string JobStore::result_file_name(pb::MeshFormat format) { return "result." + api::extension_of(format); }
 
 void JobStore::write_file_atomic(const fs::path& path, std::string_view bytes) {
   fs::path tmp = path;
@@ -162,7 +160,7 @@ void JobStore::commit(Upload& upload, const pb::JobStatus& record) {
   fs::rename(upload.file_, input, ec);
   if (ec) fail("cannot rename the upload: " + ec.message());
   upload.file_ = input;
-  write_file_atomic(upload.dir_ / "job.json", to_json(record));  // also syncs the folder
+  write_file_atomic(upload.dir_ / kRecordFile, to_json(record));  // also syncs the folder
   fs::rename(upload.dir_, final_dir, ec);
   if (ec) fail("cannot move the job to " + final_dir.string() + ": " + ec.message());
   upload.committed_ = true;
@@ -171,7 +169,27 @@ void JobStore::commit(Upload& upload, const pb::JobStatus& record) {
 }
 
 void JobStore::save(const pb::JobStatus& record) {
-  write_file_atomic(job_dir(record.job_id()) / "job.json", to_json(record));
+  write_file_atomic(job_dir(record.job_id()) / kRecordFile, to_json(record));
+}
+
+pb::JobStatus JobStore::read_record(const fs::path& dir) {
+  pb::JobStatus record;
+  std::string json = read_file(dir / kRecordFile);
+  google::protobuf::util::JsonParseOptions opts;
+  opts.ignore_unknown_fields = true;
+  auto st = google::protobuf::util::JsonStringToMessage(json, &record, opts);
+  if (!st.ok()) fail(st.ToString());
+  return record;
+}
+
+int JobStore::attempts(const std::string& id) const {
+  std::ifstream in(job_dir(id) / "attempts");
+  int n = 0;
+  return (in >> n) && n > 0 ? n : 0;
+}
+
+void JobStore::set_attempts(const std::string& id, int attempts) {
+  write_file_atomic(job_dir(id) / "attempts", std::to_string(attempts) + "\n");
 }
 
 std::vector<pb::JobStatus> JobStore::load_all() {
@@ -181,11 +199,7 @@ std::vector<pb::JobStatus> JobStore::load_all() {
     if (!entry.is_directory() || !valid_id(id)) continue;
     pb::JobStatus record;
     try {
-      std::string json = read_file(entry.path() / "job.json");
-      google::protobuf::util::JsonParseOptions opts;
-      opts.ignore_unknown_fields = true;
-      auto st = google::protobuf::util::JsonStringToMessage(json, &record, opts);
-      if (!st.ok()) fail(st.ToString());
+      record = read_record(entry.path());
     } catch (const std::exception& e) {
       std::fprintf(stderr, "vdbwrap-server: skipping %s: unreadable job record (%s)\n", entry.path().c_str(), e.what());
       continue;

@@ -4,6 +4,7 @@
 //   <spool>/jobs/<id>/result.ply    the wrap, lossless (double coordinates, parts)
 //   <spool>/jobs/<id>/result.<ext>  the wrap in the job's output format, when not PLY
 //   <spool>/jobs/<id>/report.json   the JSON report
+//   <spool>/jobs/<id>/attempts      how many times the job was started (a decimal number)
 //   <spool>/incoming/<random>/      uploads being received; emptied at start
 // A job directory appears in jobs/ by one rename, complete with its input and record, so a
 // crash never leaves half a job. Every file is written to a temporary name, fsync'ed and
@@ -67,10 +68,23 @@ class JobStore {
   std::vector<pb::JobStatus> load_all();
   void remove(const std::string& id);
 
+  // How many times the job was started (0 when never); set before each start, durably, so
+  // that a restart knows how often the server stopped while the job ran.
+  int attempts(const std::string& id) const;
+  void set_attempts(const std::string& id, int attempts);  // throws std::runtime_error
+
   fs::path job_dir(const std::string& id) const { return spool_ / "jobs" / id; }
-  fs::path input_path(const pb::JobStatus& record) const;
-  fs::path result_path(const std::string& id, pb::MeshFormat format) const;
-  fs::path report_path(const std::string& id) const { return job_dir(id) / "report.json"; }
+  fs::path input_path(const pb::JobStatus& record) const { return job_dir(record.job_id()) / input_file_name(record); }
+  fs::path result_path(const std::string& id, pb::MeshFormat format) const { return job_dir(id) / result_file_name(format); }
+  fs::path report_path(const std::string& id) const { return job_dir(id) / kReportFile; }
+
+  // The names of a job's files inside its folder (the worker process knows only the folder).
+  static constexpr const char* kRecordFile = "job.json";
+  static constexpr const char* kReportFile = "report.json";
+  static std::string input_file_name(const pb::JobStatus& record);  // input.<ext>
+  static std::string result_file_name(pb::MeshFormat format);       // result.<ext>
+  // Parses a job folder's job.json. Throws std::runtime_error.
+  static pb::JobStatus read_record(const fs::path& job_dir);
 
   // tmp + fsync + rename + fsync of the folder. Throws std::runtime_error.
   static void write_file_atomic(const fs::path& path, std::string_view bytes);

@@ -1,10 +1,12 @@
 // vdbwrap-server: the gRPC job service (vdbwrap.v1.Jobs, see proto/vdbwrap/v1/jobs.proto).
-// Flags, wiring, signals. The jobs live in --spool; see job_store.h for the layout.
+// Flags, wiring, signals. The jobs live in --spool; see job_store.h for the layout. Each job
+// runs in a child process, this binary in worker mode (worker.h).
 #include <CLI/CLI.hpp>
 #include <grpcpp/ext/proto_server_reflection_plugin.h>
 #include <grpcpp/grpcpp.h>
 #include <grpcpp/health_check_service_interface.h>
 #include <signal.h>
+#include <unistd.h>
 
 #include <cctype>
 #include <cstdio>
@@ -14,6 +16,7 @@
 #include "job_queue.h"
 #include "job_store.h"
 #include "service.h"
+#include "worker.h"
 
 using namespace vdbwrap::server;
 
@@ -50,13 +53,37 @@ uint64_t parse_size(const std::string& text) {
   return uint64_t(v * mult);
 }
 
+// "7d", "12h", "30m", "45s", "90" (seconds), "0" (forever): seconds.
+double parse_duration(const std::string& text) {
+  size_t pos = 0;
+  double v = std::stod(text, &pos);
+  const std::string unit = trim(text.substr(pos));
+  const double mult = unit.empty() || unit == "s" ? 1 : unit == "m" ? 60 : unit == "h" ? 3600 : unit == "d" ? 86400 : -1;
+  if (mult < 0) throw std::invalid_argument("unknown unit \"" + unit + "\" (use s, m, h or d)");
+  if (!(v >= 0)) throw std::invalid_argument("a duration cannot be negative");
+  return v * mult;
+}
+
+// This very binary: the default worker command.
+std::string own_executable(const char* argv0) {
+  char path[4096];
+  ssize_t n = ::readlink("/proc/self/exe", path, sizeof path - 1);
+  if (n <= 0) return argv0;
+  path[n] = '\0';
+  return path;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
+  // Worker mode: the server starts itself so for each job (never a client; not in --help).
+  if (argc == 3 && std::string(argv[1]) == "--worker") return run_worker(argv[2]);
+
   CLI::App app{"vdbwrap-server: the vdbwrap gRPC job service (vdbwrap.v1.Jobs, health, reflection)"};
   app.set_version_flag("--version", "vdbwrap-server 0.1.0");
   std::string listen = "127.0.0.1:50051", spool = "spool", max_upload = "1G", token_file, tls_cert, tls_key, advertise;
-  int workers = 1, queue = 16;
+  std::string job_memory = "0", retain = "0", worker_command = own_executable(argv[0]);
+  int workers = 1, queue = 16, max_attempts = 2;
   double job_timeout = 0, grace = 10;
   app.add_option("--listen", listen, "Address to listen on, HOST:PORT (port 0: any free port, printed at start)")
       ->capture_default_str();
@@ -71,6 +98,20 @@ int main(int argc, char** argv) {
   app.add_option("--job-timeout", job_timeout, "Seconds a job may run before it is stopped (0: no limit)")
       ->capture_default_str()
       ->check(CLI::NonNegativeNumber);
+  app.add_option("--job-memory", job_memory,
+                 "Memory each job's process may allocate (RLIMIT_DATA), bytes with suffixes k, M, G; 0: no limit. "
+                 "A job over it fails alone with an out-of-memory message")
+      ->capture_default_str();
+  app.add_option("--max-attempts", max_attempts,
+                 "Times a job may be started; a job the server stopped (died) under that often is failed, not run again")
+      ->capture_default_str()
+      ->check(CLI::Range(1, 1000));
+  app.add_option("--retain", retain,
+                 "Delete ended jobs and their files this long after they ended (e.g. 7d, 12h, 30m; 0: keep them)")
+      ->capture_default_str();
+  // Operator-level and for tests only (a stand-in that crashes on purpose): the program run as
+  // `PATH --worker JOB_DIR` for each job. Not in --help; no client can set it.
+  app.add_option("--worker-command", worker_command, "")->group("");
   app.add_option("--token-file", token_file, "File holding a token: every call must carry 'authorization: Bearer TOKEN'");
   app.add_option("--tls-cert", tls_cert, "PEM certificate chain: serve TLS (with --tls-key)");
   app.add_option("--tls-key", tls_key, "PEM private key of --tls-cert");
@@ -96,9 +137,22 @@ int main(int argc, char** argv) {
 
   JobsService::Options service_options;
   std::shared_ptr<grpc::ServerCredentials> credentials;
-  uint64_t upload_limit = 0;
+  uint64_t upload_limit = 0, job_memory_limit = 0;
+  double retain_seconds = 0;
   try {
     upload_limit = parse_size(max_upload);
+    try {
+      job_memory_limit = job_memory == "0" ? 0 : parse_size(job_memory);
+    } catch (const std::exception& e) {
+      throw std::runtime_error("--job-memory " + job_memory + ": " + e.what());
+    }
+    try {
+      retain_seconds = parse_duration(retain);
+    } catch (const std::exception& e) {
+      throw std::runtime_error("--retain " + retain + ": " + e.what());
+    }
+    if (::access(worker_command.c_str(), X_OK) != 0)
+      throw std::runtime_error("--worker-command " + worker_command + " is not an executable file");
     if (!token_file.empty()) {
       service_options.token = trim(read_text(token_file, "token file"));
       if (service_options.token.empty()) throw std::runtime_error("the token file " + token_file + " is empty");
@@ -130,6 +184,10 @@ int main(int argc, char** argv) {
   queue_options.queue_limit = size_t(queue);
   queue_options.job_timeout_seconds = job_timeout;
   queue_options.advertise = advertise;
+  queue_options.worker_command = worker_command;
+  queue_options.job_memory = job_memory_limit;
+  queue_options.max_attempts = max_attempts;
+  queue_options.retain_seconds = retain_seconds;
   JobQueue jobs(*store, queue_options);
   jobs.restore();
   JobsService service(jobs, service_options);
@@ -157,7 +215,11 @@ int main(int argc, char** argv) {
                 actual.c_str(), tls_cert.empty() ? "plaintext" : "TLS", spool.c_str(), workers, queue,
                 static_cast<unsigned long long>(upload_limit), service_options.token.empty() ? "" : ", token required",
                 job_timeout > 0 ? (", job timeout " + std::to_string(int(job_timeout)) + " s").c_str() : "");
-  log_line(summary);
+  std::string limits = std::string(summary) + ", job memory " +
+                       (job_memory_limit ? std::to_string(job_memory_limit) + " bytes" : std::string("unlimited")) +
+                       ", max attempts " + std::to_string(max_attempts) + ", retain " +
+                       (retain_seconds > 0 ? std::to_string(int64_t(retain_seconds)) + " s" : std::string("forever"));
+  log_line(limits);
 
   int sig = 0;
   sigwait(&signals, &sig);

@@ -1,0 +1,60 @@
+// A stand-in for the server's worker process, for the crash-isolation tests only (started
+// with vdbwrap-server's hidden --worker-command; no client can reach it). When the job's file
+// name holds a marker it misbehaves after reporting a stage, as a broken pipeline would:
+//   "crash-segv"  reports "read" and "extract", then raise(SIGSEGV)
+//   "hang"        reports "read", then sleeps forever and ignores SIGTERM (the server must
+//                 SIGKILL it)
+// Any other job runs the real worker (VDBWRAP_SERVER --worker JOB_DIR).
+#include <signal.h>
+#include <unistd.h>
+
+#include <cstdio>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+#include "worker_protocol.h"
+
+#ifndef VDBWRAP_SERVER
+#define VDBWRAP_SERVER "vdbwrap-server"
+#endif
+
+namespace {
+
+void report_stage(const char* stage) {
+  vdbwrap::v1::JobStatus frame;
+  frame.set_state(vdbwrap::v1::JOB_STATE_RUNNING);
+  frame.set_stage(stage);
+  frame.set_message("test worker");
+  vdbwrap::server::write_frame(vdbwrap::server::kWorkerEventsFd, frame);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  if (argc != 3 || std::string(argv[1]) != "--worker") {
+    std::fprintf(stderr, "usage: %s --worker JOB_DIR\n", argv[0]);
+    return 2;
+  }
+  std::ifstream in(std::string(argv[2]) + "/job.json");
+  std::stringstream record;
+  record << in.rdbuf();
+  // The marker is looked for in the file name only ("file_name": "...").
+  const std::string text = record.str();
+  const size_t at = text.find("\"file_name\"");
+  const std::string name = at == std::string::npos ? "" : text.substr(at, text.find('\n', at) - at);
+  if (name.find("crash-segv") != std::string::npos) {
+    report_stage("read");
+    report_stage("extract");
+    ::raise(SIGSEGV);
+  }
+  if (name.find("hang") != std::string::npos) {
+    report_stage("read");
+    ::signal(SIGTERM, SIG_IGN);
+    for (;;) ::pause();
+  }
+  char* real[] = {const_cast<char*>(VDBWRAP_SERVER), argv[1], argv[2], nullptr};
+  ::execv(real[0], real);
+  std::perror("execv " VDBWRAP_SERVER);
+  return 127;
+}
