@@ -1376,12 +1376,17 @@ TEST_F(Service, CrashingJobFailsAloneWhileTheServerServesOn) {
 }
 
 TEST_F(Service, JobOverTheMemoryLimitFailsAlone) {
-  // A coarse wrap of fuze.obj stays far below 100 MiB; at 0.3 % it needs more.
-  ServerProcess& s = server({"--workers", "2", "--job-memory", "100M"});
+  // On one thread, a coarse wrap of fuze.obj fits in about 100 MiB; at 0.3 % it needs over 200.
+  auto one_thread = [](double percent) {
+    pb::WrapParameters p = coarse(percent);
+    p.set_threads(1);
+    return p;
+  };
+  ServerProcess& s = server({"--workers", "2", "--job-memory", "150M"});
   HealthWatch health_watch(s.address());
   Client c(s.address());
-  std::string big = c.submit_ok("fuze.obj", coarse(0.3));
-  std::string small = c.submit_ok("fuze.obj", coarse(3));
+  std::string big = c.submit_ok("fuze.obj", one_thread(0.3));
+  std::string small = c.submit_ok("fuze.obj", one_thread(3));
   pb::JobStatus over = c.wait_done(big, 120s);
   EXPECT_EQ(over.state(), pb::JOB_STATE_FAILED);
   EXPECT_EQ(over.error_kind(), pb::ERROR_KIND_INTERNAL);
@@ -1393,7 +1398,7 @@ TEST_F(Service, JobOverTheMemoryLimitFailsAlone) {
   // The limit is what failed it: the same job succeeds on a server without one.
   ServerProcess& unlimited = server({}, "b");
   Client u(unlimited.address());
-  EXPECT_EQ(u.wait_done(u.submit_ok("fuze.obj", coarse(0.3)), 120s).state(), pb::JOB_STATE_SUCCEEDED);
+  EXPECT_EQ(u.wait_done(u.submit_ok("fuze.obj", one_thread(0.3)), 120s).state(), pb::JOB_STATE_SUCCEEDED);
 }
 
 TEST_F(Service, CancelAndTimeoutKillAJobProcessThatIgnoresThem) {
