@@ -124,6 +124,14 @@ void JobQueue::restore() {
     }
   }
   log_line("spool: " + std::to_string(requeued) + " job(s) queued again, " + std::to_string(ended) + " ended job(s) kept");
+  // Before the server listens, so that no client sees a job older than --retain.
+  if (options_.retain_seconds > 0) {
+    try {
+      prune(unix_ms_now() - int64_t(options_.retain_seconds * 1000));
+    } catch (const std::exception& e) {
+      log_line(std::string("warning: pruning the spool: ") + e.what());
+    }
+  }
 }
 
 void JobQueue::start() {
@@ -131,11 +139,12 @@ void JobQueue::start() {
   if (options_.retain_seconds > 0) janitor_ = std::thread([this] { janitor(); });
 }
 
-// Prunes at start, then every tenth of the retention (between a second and ten minutes).
+// Prunes every tenth of the retention (between a second and ten minutes); restore() did at start.
 void JobQueue::janitor() {
   const double period = std::clamp(options_.retain_seconds / 10, 1.0, 600.0);
   std::unique_lock<std::mutex> g(lock_);
-  while (!stop_) {
+  for (;;) {
+    if (janitor_wake_.wait_for(g, std::chrono::duration<double>(period), [&] { return stop_; })) return;
     g.unlock();
     try {
       prune(unix_ms_now() - int64_t(options_.retain_seconds * 1000));
@@ -143,7 +152,6 @@ void JobQueue::janitor() {
       log_line(std::string("warning: pruning the spool: ") + e.what());
     }
     g.lock();
-    janitor_wake_.wait_for(g, std::chrono::duration<double>(period), [&] { return stop_; });
   }
 }
 

@@ -56,9 +56,10 @@ class JobQueue {
 
   // Loads the spool: unfinished jobs (queued or running when the last server stopped) are
   // queued again, oldest first, unless the server already stopped max_attempts times while
-  // one ran (then it fails); finished ones are served. Call once, before start().
+  // one ran (then it fails); finished ones are served, or deleted when older than
+  // retain_seconds. Call once, before start().
   void restore();
-  // Starts the worker threads, and with retain_seconds the pruning (now and periodically).
+  // Starts the worker threads, and with retain_seconds the periodic pruning.
   void start();
 
   // A slot in the queue for an upload about to be received; false when the queue is full.

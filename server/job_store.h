@@ -47,6 +47,7 @@ class JobStore {
     // Flushes and fsyncs the data; afterwards the bytes can be read back.
     void close();
     std::string read_all() const;
+    const fs::path& path() const { return file_; }
 
    private:
     friend class JobStore;

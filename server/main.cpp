@@ -16,6 +16,7 @@
 #include "job_queue.h"
 #include "job_store.h"
 #include "service.h"
+#include "upload_check.h"
 #include "worker.h"
 
 using namespace vdbwrap::server;
@@ -76,8 +77,10 @@ std::string own_executable(const char* argv0) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  // Worker mode: the server starts itself so for each job (never a client; not in --help).
+  // Worker modes: the server starts itself so for each job and each upload's check (never a
+  // client; not in --help).
   if (argc == 3 && std::string(argv[1]) == "--worker") return run_worker(argv[2]);
+  if (argc == 5 && std::string(argv[1]) == "--check-upload") return run_upload_check(argv[2], argv[3], argv[4]);
 
   CLI::App app{"vdbwrap-server: the vdbwrap gRPC job service (vdbwrap.v1.Jobs, health, reflection)"};
   app.set_version_flag("--version", "vdbwrap-server 0.1.0");

@@ -5,6 +5,7 @@
 #include "common/float_round.h"
 #include "io/mesh_io.h"
 #include "params_mapping.h"
+#include "upload_check.h"
 
 namespace vdbwrap::server {
 
@@ -131,18 +132,24 @@ grpc::Status JobsService::Submit(grpc::ServerContext* ctx, grpc::ServerReader<pb
   }
   if (upload->size() == 0) return reject(status(grpc::StatusCode::INVALID_ARGUMENT, name + ": file is empty"));
 
-  // The mesh must be readable before the job is accepted.
+  // The mesh must be readable before the job is accepted. It is read in a process of its own,
+  // under the jobs' memory limit: a reader that crashes on a hostile file ends that process only.
   size_t triangles = 0;
-  try {
-    std::string bytes = upload->read_all();
-    Mesh mesh = io::read_mesh_from_bytes(bytes, api::to_io_format(spec.input_format()), name);
-    triangles = mesh.triangles.size();
-  } catch (const Error& e) {
-    return reject(core_error(ctx, e));
-  } catch (const std::bad_alloc&) {
-    return reject(status(grpc::StatusCode::RESOURCE_EXHAUSTED, name + ": not enough memory on the server to read this mesh"));
-  } catch (const std::exception& e) {
-    return reject(status(grpc::StatusCode::INTERNAL, std::string("cannot read the upload back: ") + e.what()));
+  {
+    const pb::JobStatus check =
+        check_upload(queue_.options().worker_command, queue_.options().job_memory, upload->path().string(),
+                     spec.input_format(), name, [&] { return ctx->IsCancelled() || !accepting_; });
+    if (check.state() == pb::JOB_STATE_CANCELLED)
+      return status(grpc::StatusCode::CANCELLED, "upload abandoned: the client went away or the server is stopping");
+    if (check.state() != pb::JOB_STATE_SUCCEEDED) {
+      const std::string& why = check.error_message();
+      if (check.error_kind() == pb::ERROR_KIND_INVALID_INPUT || check.error_kind() == pb::ERROR_KIND_INVALID_ARGUMENT)
+        return reject(core_error(ctx, Error(api::to_error_kind(check.error_kind()), why)));
+      if (why.rfind("out of memory", 0) == 0)
+        return reject(status(grpc::StatusCode::RESOURCE_EXHAUSTED, name + ": not enough memory on the server to read this mesh"));
+      return reject(status(grpc::StatusCode::INTERNAL, why));
+    }
+    triangles = check.output_triangles();
   }
 
   pb::JobStatus record;

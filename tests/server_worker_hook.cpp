@@ -4,11 +4,14 @@
 //   "crash-segv"  reports "read" and "extract", then raise(SIGSEGV)
 //   "hang"        reports "read", then sleeps forever and ignores SIGTERM (the server must
 //                 SIGKILL it)
-// Any other job runs the real worker (VDBWRAP_SERVER --worker JOB_DIR).
+// and for an upload's check (--check-upload FILE FORMAT NAME):
+//   "crash-read"  raise(SIGSEGV), as a mesh reader crashing on a hostile file would
+// Anything else runs the real worker (VDBWRAP_SERVER with the same arguments).
 #include <signal.h>
 #include <unistd.h>
 
 #include <cstdio>
+#include <cstdlib>
 #include <fstream>
 #include <sstream>
 #include <string>
@@ -31,7 +34,18 @@ void report_stage(const char* stage) {
 
 }  // namespace
 
+[[noreturn]] void run_the_real_worker(char** argv) {
+  argv[0] = const_cast<char*>(VDBWRAP_SERVER);
+  ::execv(argv[0], argv);
+  std::perror("execv " VDBWRAP_SERVER);
+  std::_Exit(127);
+}
+
 int main(int argc, char** argv) {
+  if (argc == 5 && std::string(argv[1]) == "--check-upload") {
+    if (std::string(argv[4]).find("crash-read") != std::string::npos) ::raise(SIGSEGV);
+    run_the_real_worker(argv);
+  }
   if (argc != 3 || std::string(argv[1]) != "--worker") {
     std::fprintf(stderr, "usage: %s --worker JOB_DIR\n", argv[0]);
     return 2;
@@ -53,8 +67,5 @@ int main(int argc, char** argv) {
     ::signal(SIGTERM, SIG_IGN);
     for (;;) ::pause();
   }
-  char* real[] = {const_cast<char*>(VDBWRAP_SERVER), argv[1], argv[2], nullptr};
-  ::execv(real[0], real);
-  std::perror("execv " VDBWRAP_SERVER);
-  return 127;
+  run_the_real_worker(argv);
 }

@@ -1341,6 +1341,13 @@ TEST_F(Service, CrashingJobFailsAloneWhileTheServerServesOn) {
   SubmitOutcome crash = c.submit(data("fuze.obj"), "crash-segv.obj", coarse());
   ASSERT_TRUE(crash.status.ok()) << crash.status.error_message();
   good.push_back(c.submit_ok("unit_sphere.STL"));
+  // An upload whose check crashes the mesh reader is refused, and no job is created.
+  SubmitOutcome unreadable = c.submit(data("fuze.obj"), "crash-read.obj", coarse());
+  EXPECT_EQ(unreadable.status.error_code(), grpc::StatusCode::INTERNAL);
+  EXPECT_NE(unreadable.status.error_message().find("crash-read.obj: the mesh reader's process ended with signal 11 (SIGSEGV)"),
+            std::string::npos)
+      << unreadable.status.error_message();
+  EXPECT_EQ(s.jobs_on_disk(), 4u);
 
   pb::JobStatus crashed = c.wait_done(crash.job_id, 60s);
   EXPECT_EQ(crashed.state(), pb::JOB_STATE_FAILED);
