@@ -29,6 +29,7 @@
 #include "post/quality.h"
 #include "post/remesh.h"
 #include "post/repair_wrap.h"
+#include "prep/check_input.h"
 #include "prep/prepare.h"
 #include "vdbwrap/wrap.h"
 
@@ -83,6 +84,7 @@ WrapResult run_pipeline(const Mesh& input, const WrapParams& params, ProgressSin
 
 WrapResult wrap(const Mesh& input, const WrapParams& params, ProgressSink* progress) {
   check_params(params);
+  prep::check_input_mesh(input);
   // A task arena per job: its thread limit holds for this job only, so a server running
   // several jobs at once does not let one job's limit throttle the others.
   if (params.threads <= 0) return run_pipeline(input, params, progress);

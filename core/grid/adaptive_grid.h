@@ -106,7 +106,14 @@ class AdaptiveGrid {
     }
     void set(int level, const Coord& c, int32_t value) { acc_[size_t(level)].setValue(c, value); }
     // Every cell of the level-0 block at `lo` takes `value`: one VDB tile, no leaf node.
-    void set_block(const Coord& lo, int32_t value) { acc_[0].addTile(1, lo, value, true); }
+    // Putting a tile where a leaf node was deletes the leaf, but OpenVDB does not tell the
+    // accessor, whose leaf cache would then hand out the freed node on the next read of that
+    // block: the caches are dropped in that case.
+    void set_block(const Coord& lo, int32_t value) {
+      const bool had_leaf = acc_[0].probeConstLeaf(lo) != nullptr;
+      acc_[0].addTile(1, lo, value, true);
+      if (had_leaf) acc_[0].clear();
+    }
   };
 
   // Level 0 is stored in blocks of a VDB leaf node's size. Most of the padded box is free

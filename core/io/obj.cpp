@@ -1,4 +1,5 @@
-// Wavefront OBJ: positions, faces (any polygon) and o/g groups as parts.
+// Wavefront OBJ: positions, faces (any polygon) and o/g groups as parts. A line ending in a
+// backslash continues on the next, as the OBJ specification allows (long faces are split so).
 #include <unordered_map>
 
 #include "io/readers.h"
@@ -12,12 +13,40 @@ class ObjReader {
 
   Mesh read() {
     std::string_view line;
-    while (lines_.next(line)) handle(line);
+    while (lines_.next(line)) {
+      first_line_ = lines_.line_number();
+      if (!continued(line)) {
+        handle(line);
+        continue;
+      }
+      joined_.assign(line);
+      bool more = true;
+      while (more && lines_.next(line)) {
+        more = continued(line);
+        joined_ += ' ';
+        joined_.append(line);
+      }
+      handle(joined_);
+    }
     return std::move(mesh_);
   }
 
  private:
-  [[noreturn]] void error(const std::string& what) { fail_line(name_, lines_.line_number(), what); }
+  // Errors name the line where the statement starts (a continued one spans several).
+  [[noreturn]] void error(const std::string& what) { fail_line(name_, first_line_, what); }
+
+  // Does the line end in a continuation backslash? If so, drops it from `line`. Comments never
+  // continue: a Windows path at the end of one must not swallow the next statement.
+  static bool continued(std::string_view& line) {
+    size_t end = line.size();
+    while (end > 0 && is_space(line[end - 1])) --end;
+    if (end == 0 || line[end - 1] != '\\') return false;
+    size_t start = 0;
+    while (start < end && is_space(line[start])) ++start;
+    if (line[start] == '#') return false;
+    line = line.substr(0, end - 1);
+    return true;
+  }
 
   void handle(std::string_view line) {
     Tokens tokens(line);
@@ -80,6 +109,8 @@ class ObjReader {
   }
 
   LineReader lines_;
+  size_t first_line_ = 0;
+  std::string joined_;  // a statement continued over several lines
   const std::string& name_;
   Mesh mesh_;
   std::string group_ = "default";

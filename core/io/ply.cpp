@@ -1,5 +1,7 @@
 // PLY: ascii, binary_little_endian and binary_big_endian. Reads vertex x/y/z, face
-// vertex_indices (or vertex_index) and an optional integer face property "part"; skips the rest.
+// vertex_indices (or vertex_index) and an optional integer face property "part", and triangle
+// strips (element "tristrips", as many scanned models in the Stanford repository are stored);
+// skips the rest.
 // Part names survive a round trip through "comment vdbwrap_part INDEX NAME" header lines.
 #include <algorithm>
 #include <unordered_map>
@@ -331,6 +333,8 @@ class BodyReader {
         read_vertices(e);
       else if (e.name == "face")
         read_faces(e);
+      else if (e.name == "tristrips")
+        read_strips(e);
       else
         skip_element(e);
     }
@@ -409,6 +413,52 @@ class BodyReader {
       }
       add_face(part >= 0, part_value);
     }
+  }
+
+  // Each element is one list of vertex indices: a strip, where -1 starts a new strip. Triangle
+  // k of a strip is (k, k+1, k+2), every other one turned so that all keep one orientation.
+  // Triangles that repeat an index are the strip's joins, not geometry: they are dropped but
+  // still count for the turn.
+  void read_strips(const Element& e) {
+    int list = find_property(e, "vertex_indices", true);
+    if (list < 0) list = find_property(e, "vertex_index", true);
+    if (list < 0) fail_line(name_, e.header_line, "tristrips element has no vertex_indices list");
+    if (!is_integer(e.props[size_t(list)].type))
+      fail_line(name_, e.header_line, "tristrips vertex indices must have an integer type");
+    if (e.count > 0 && !vertices_read_)
+      fail_line(name_, e.header_line, "tristrips element before the vertex element is not supported");
+    for (uint64_t i = 0; i < e.count; ++i) {
+      begin(e, i);
+      for (size_t j = 0; j < e.props.size(); ++j) {
+        if (int(j) != list) {
+          skip_property(e.props[j]);
+          continue;
+        }
+        const Property& p = e.props[j];
+        const int64_t n = src_.integer(p.count_type);
+        if (n < 0 || !src_.can_hold(uint64_t(n), p.type)) error(e, i, "has a list longer than the file (truncated)");
+        uint32_t a = 0, b = 0;
+        int64_t in_strip = 0;
+        for (int64_t k = 0; k < n; ++k) {
+          const int64_t v = src_.integer(p.type);
+          if (v == -1) {
+            in_strip = 0;
+            continue;
+          }
+          if (v < 0 || uint64_t(v) >= vertex_count_)
+            error(e, i,
+                  "has out-of-range vertex index " + std::to_string(v) + " (the file has " +
+                      std::to_string(vertex_count_) + " vertices)");
+          const uint32_t c = uint32_t(v);
+          if (in_strip >= 2 && a != b && b != c && a != c)
+            mesh_.triangles.push_back(in_strip % 2 == 0 ? Tri{a, b, c} : Tri{b, a, c});
+          a = b;
+          b = c;
+          ++in_strip;
+        }
+      }
+    }
+    if (!mesh_.triangle_part.empty()) mesh_.triangle_part.resize(mesh_.triangles.size(), 0);
   }
 
   void read_polygon(const Element& e, uint64_t i, const Property& p) {

@@ -18,6 +18,7 @@
 #include <unordered_map>
 #include <unordered_set>
 
+#include "prep/check_input.h"
 #include "check/distance_stats.h"
 #include "check/intersections.h"
 #include "common/edge_key.h"
@@ -1213,6 +1214,7 @@ RepairResult run_repair(const Mesh& input, const RepairParams& params, ProgressS
 }  // namespace
 
 RepairResult repair(const Mesh& input, const RepairParams& params, ProgressSink* progress) {
+  prep::check_input_mesh(input, "repair input");
   // A task arena per job, as in wrap(): its thread limit holds for this job only.
   if (params.threads <= 0) return run_repair(input, params, progress);
   tbb::task_arena arena(params.threads);

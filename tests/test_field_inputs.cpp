@@ -1,0 +1,294 @@
+// Inputs of the kinds that crashed or were refused in the field (issue 33), each rebuilt here
+// with the same defect: PLY triangle strips, OBJ line continuations, a CSG export with a
+// degenerate triangle among thousands of intersecting pairs, and an open scan wrapped with the
+// gap closures that made extraction read freed memory.
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "check/intersections.h"
+#include "grid/adaptive_grid.h"
+#include "io/mesh_io.h"
+#include "test_meshes.h"
+#include "vdbwrap/errors.h"
+#include "vdbwrap/wrap.h"
+
+namespace {
+
+namespace fs = std::filesystem;
+using namespace vdbwrap;
+
+class FieldInputs : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() / ("vdbwrap_field_" + std::to_string(::getpid()) + "_" +
+                                        ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::create_directories(dir_);
+  }
+  void TearDown() override {
+    std::error_code ec;
+    fs::remove_all(dir_, ec);
+  }
+  std::string write_file(const std::string& name, const std::string& bytes) const {
+    const std::string p = (dir_ / name).string();
+    std::ofstream(p, std::ios::binary).write(bytes.data(), std::streamsize(bytes.size()));
+    return p;
+  }
+  fs::path dir_;
+};
+
+// Every edge of a closed, consistently oriented surface is used once in each direction.
+void expect_consistent_orientation(const Mesh& m, bool closed) {
+  std::map<std::pair<uint32_t, uint32_t>, int> uses;
+  for (const Tri& t : m.triangles)
+    for (int k = 0; k < 3; ++k) ++uses[{t[k], t[(k + 1) % 3]}];
+  for (const auto& [e, n] : uses) {
+    EXPECT_EQ(n, 1) << "directed edge " << e.first << "->" << e.second << " used " << n << " times";
+    if (closed) EXPECT_EQ(uses.count({e.second, e.first}), 1u) << "edge without its twin";
+  }
+}
+
+// ---- PLY triangle strips ------------------------------------------------------------------
+
+// An n x n sheet of quads in the plane z = 0, as one strip per row with -1 between rows
+// (the Stanford scans' layout), optionally in one element per row.
+std::string strip_sheet_ply(int n, bool binary, bool element_per_row) {
+  std::vector<std::vector<int32_t>> strips(1);
+  for (int row = 0; row < n; ++row) {
+    if (element_per_row && row > 0) strips.emplace_back();
+    else if (row > 0) strips.back().push_back(-1);
+    for (int col = 0; col <= n; ++col) {
+      strips.back().push_back(row * (n + 1) + col);
+      strips.back().push_back((row + 1) * (n + 1) + col);
+    }
+  }
+  std::string h = std::string("ply\nformat ") + (binary ? "binary_little_endian" : "ascii") +
+                  " 1.0\nelement vertex " + std::to_string((n + 1) * (n + 1)) +
+                  "\nproperty float x\nproperty float y\nproperty float z\nelement tristrips " +
+                  std::to_string(strips.size()) + "\nproperty list int int vertex_indices\nend_header\n";
+  std::string body;
+  for (int row = 0; row <= n; ++row)
+    for (int col = 0; col <= n; ++col) {
+      const float p[3] = {float(col), float(row), 0.0f};
+      if (binary)
+        body.append(reinterpret_cast<const char*>(p), sizeof p);
+      else
+        body += std::to_string(p[0]) + " " + std::to_string(p[1]) + " 0\n";
+    }
+  for (const auto& s : strips) {
+    const int32_t count = int32_t(s.size());
+    if (binary) {
+      body.append(reinterpret_cast<const char*>(&count), 4);
+      body.append(reinterpret_cast<const char*>(s.data()), s.size() * 4);
+    } else {
+      body += std::to_string(count);
+      for (int32_t v : s) body += " " + std::to_string(v);
+      body += "\n";
+    }
+  }
+  return h + body;
+}
+
+TEST_F(FieldInputs, PlyTriangleStripsAreReadWithOneOrientation) {
+  const int n = 6;
+  for (bool binary : {false, true})
+    for (bool per_row : {false, true}) {
+      SCOPED_TRACE(std::string(binary ? "binary" : "ascii") + (per_row ? ", a strip per element" : ", -1 restarts"));
+      const Mesh m = io::read_mesh(write_file("strips.ply", strip_sheet_ply(n, binary, per_row)));
+      ASSERT_EQ(m.triangles.size(), size_t(2 * n * n));
+      expect_consistent_orientation(m, false);
+      // One sign for all of them: the strip's turn is undone.
+      int positive = 0;
+      for (const Tri& t : m.triangles) {
+        const Vec3 &a = m.points[t[0]], &b = m.points[t[1]], &c = m.points[t[2]];
+        positive += (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]) > 0;
+      }
+      EXPECT_TRUE(positive == 0 || positive == int(m.triangles.size())) << positive << " of " << m.triangles.size();
+    }
+}
+
+TEST_F(FieldInputs, PlyStripJoinsAreDroppedAndBadStripsNamed) {
+  // 0 1 2 3 3 4 4 5 6: the repeated 3 and 4 join two strips; their triangles have no area.
+  const std::string head =
+      "ply\nformat ascii 1.0\nelement vertex 7\nproperty float x\nproperty float y\nproperty float z\n"
+      "element tristrips 1\nproperty list int int vertex_indices\nend_header\n"
+      "0 0 0\n1 0 0\n0 1 0\n1 1 0\n5 5 0\n6 5 0\n5 6 0\n";
+  const Mesh m = io::read_mesh(write_file("join.ply", head + "9 0 1 2 3 3 4 4 5 6\n"));
+  for (const Tri& t : m.triangles) EXPECT_TRUE(t[0] != t[1] && t[1] != t[2] && t[0] != t[2]);
+  EXPECT_EQ(m.triangles.size(), 3u);
+  try {
+    io::read_mesh(write_file("bad.ply", head + "4 0 1 2 9\n"));
+    ADD_FAILURE() << "no error for an out-of-range strip index";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("tristrips 0 has out-of-range vertex index 9"), std::string::npos) << e.what();
+  }
+}
+
+// ---- OBJ line continuations ---------------------------------------------------------------
+
+TEST_F(FieldInputs, ObjLineContinuationsJoinTheStatement) {
+  const std::string text =
+      "# a comment that ends in a path C:\\models\\\n"
+      "v 0 0 0\n"
+      "v 1 0 \\\n"
+      "  0\n"
+      "v 0 1 0\n"
+      "v 0 0 1\n"
+      "f 1 3 \\\n"
+      "2\n"
+      "f 1 2 \\  \n"
+      " \\\n"
+      " 4\n"
+      "f 1 4 3\n"
+      "f 2 3 4\n";
+  const Mesh m = io::read_mesh(write_file("cont.obj", text));
+  ASSERT_EQ(m.points.size(), 4u);
+  EXPECT_EQ(m.points[1], (Vec3{1, 0, 0}));
+  ASSERT_EQ(m.triangles.size(), 4u);
+  EXPECT_EQ(m.triangles[0], (Tri{0, 2, 1}));
+  EXPECT_EQ(m.triangles[1], (Tri{0, 1, 3}));
+  expect_consistent_orientation(m, true);
+  // An error inside a continued statement names the line where it starts.
+  try {
+    io::read_mesh(write_file("bad.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 \\\n2 \\\n7\n"));
+    ADD_FAILURE() << "no error";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("line 4: face index 7 is out of range"), std::string::npos) << e.what();
+  }
+}
+
+// ---- intersection lines of a CSG export with a degenerate triangle --------------------------
+
+// Two boxes pushed into each other, each face a fine fan, plus degenerate triangles: one with
+// three distinct collinear corners inside the other box, one with a repeated corner.
+Mesh csg_like_with_degenerates() {
+  Mesh m;
+  vdbwrap::testing::add_box(m, {0, 0, 0}, {1, 1, 1}, 0);
+  vdbwrap::testing::add_box(m, {0.5, 0.3, 0.2}, {1.5, 1.3, 1.2}, 1);
+  const uint32_t b = uint32_t(m.points.size());
+  m.points.push_back({0.2, 0.5, 0.5});
+  m.points.push_back({0.7, 0.5, 0.5});
+  m.points.push_back({1.2, 0.5, 0.5});  // collinear, crossing the second box's faces
+  m.triangles.push_back({b, b + 1, b + 2});
+  m.triangle_part.push_back(0);
+  m.triangles.push_back({b, b, b + 1});
+  m.triangle_part.push_back(0);
+  return m;
+}
+
+TEST_F(FieldInputs, IntersectionLinesSkipDegenerateTrianglesAndAreExact) {
+  const Mesh m = csg_like_with_degenerates();
+  std::vector<check::TrianglePair> pairs;
+  for (uint32_t a = 0; a < m.triangles.size(); ++a)
+    for (uint32_t c = a; c < m.triangles.size(); ++c) pairs.push_back({a, c});  // every pair, self pairs too
+  const auto segments = check::intersection_segments(m.points, m.triangles, pairs);
+  ASSERT_FALSE(segments.empty());
+  const uint32_t degenerate = uint32_t(m.triangles.size() - 2);
+  for (const auto& s : segments) {
+    EXPECT_LT(s.tri_a, degenerate);
+    EXPECT_LT(s.tri_b, degenerate);
+    EXPECT_NE(s.tri_a, s.tri_b);
+    for (double v : {s.a[0], s.a[1], s.a[2], s.b[0], s.b[1], s.b[2]}) EXPECT_TRUE(std::isfinite(v));
+  }
+}
+
+// The wrap of such an input through the CLI: a valid surface, no signal.
+TEST_F(FieldInputs, CsgExportWithDegenerateTrianglesWraps) {
+  Mesh m = csg_like_with_degenerates();
+  // Nearly coplanar sliver pairs on a face of the first box, where constructions in doubles drift.
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> u(0.05, 0.95);
+  for (int i = 0; i < 200; ++i) {
+    const uint32_t b = uint32_t(m.points.size());
+    const double x = u(rng), y = u(rng), d = 1e-12 * u(rng);
+    m.points.push_back({x, y, 1.0 + d});
+    m.points.push_back({x + 0.3 * u(rng), y + 1e-9, 1.0 - d});
+    m.points.push_back({x + 1e-9, y + 0.2 * u(rng), 1.0});
+    m.triangles.push_back({b, b + 1, b + 2});
+    m.triangle_part.push_back(0);
+  }
+  const std::string in = (dir_ / "csg.obj").string(), out = (dir_ / "csg_wrap.ply").string();
+  io::write_mesh(m, in);
+  const int status = std::system((std::string(VDBWRAP_CLI) + " wrap " + in + " -o " + out + " -q > /dev/null 2>&1").c_str());
+  ASSERT_TRUE(WIFEXITED(status)) << "ended by a signal";
+  ASSERT_EQ(WEXITSTATUS(status), 0);
+  const Mesh w = io::read_mesh(out);
+  const auto verdict = check::cgal_verdict(w.points, w.triangles);
+  EXPECT_TRUE(verdict.valid_polygon_mesh && verdict.closed && !verdict.self_intersects && verdict.outward);
+}
+
+// ---- open scan with gap closure -----------------------------------------------------------
+
+// The flood fill turns a uniform block with a leaf node into a tile. OpenVDB deletes the leaf
+// without telling the accessor, so reads of that block through the same cursor went to freed
+// memory (the SIGSEGV in label_components): they must see the tile.
+TEST(AdaptiveGridCursor, ABlockTurnedIntoATileReadsTheNewValue) {
+  using grid::AdaptiveGrid;
+  AdaptiveGrid g({0, 0, 0}, 1.0, 1, openvdb::Coord(32, 32, 32));
+  AdaptiveGrid::Cursor cursor(g);
+  const openvdb::Coord lo(8, 8, 8);
+  for (int x = 0; x < AdaptiveGrid::kBlock; ++x)
+    for (int y = 0; y < AdaptiveGrid::kBlock; ++y)
+      for (int z = 0; z < AdaptiveGrid::kBlock; ++z) cursor.set(0, lo.offsetBy(x, y, z), grid::kNarrow);
+  int32_t v = 0;
+  ASSERT_TRUE(cursor.uniform_block(lo, v));
+  ASSERT_EQ(v, grid::kNarrow);
+  cursor.set_block(lo, 7);
+  EXPECT_EQ(cursor.get(0, lo), 7);
+  EXPECT_EQ(cursor.get(0, lo.offsetBy(3, 2, 1)), 7);
+  ASSERT_TRUE(cursor.uniform_block(lo, v));
+  EXPECT_EQ(v, 7);
+  EXPECT_EQ(g.get(0, lo.offsetBy(7, 7, 7)), 7);
+}
+
+// A bumpy hemisphere-like scan: a UV sphere with its bottom cap and some windows cut out, so
+// the outside reaches the inside through holes of several widths.
+Mesh open_scan() {
+  Mesh s = vdbwrap::testing::sphere_mesh(1.0, 48, 96);
+  for (Vec3& p : s.points) {
+    const double bump = 1.0 + 0.04 * std::sin(7 * p[0]) * std::cos(5 * p[1]) + 0.03 * std::sin(11 * p[2]);
+    for (double& c : p) c *= bump;
+  }
+  Mesh out;
+  out.points = s.points;
+  for (const Tri& t : s.triangles) {
+    const Vec3 c{(s.points[t[0]][0] + s.points[t[1]][0] + s.points[t[2]][0]) / 3,
+                 (s.points[t[0]][1] + s.points[t[1]][1] + s.points[t[2]][1]) / 3,
+                 (s.points[t[0]][2] + s.points[t[1]][2] + s.points[t[2]][2]) / 3};
+    if (c[2] < -0.6) continue;                                                  // the open base
+    if (std::hypot(c[0] - 0.9, c[1]) < 0.12 && c[2] > -0.3 && c[2] < 0.3) continue;  // a window
+    if (std::hypot(c[1] + 0.9, c[2] - 0.2) < 0.05) continue;                   // a small hole
+    out.triangles.push_back(t);
+  }
+  return out;
+}
+
+TEST_F(FieldInputs, OpenScanWrapsWithEveryGapClosure) {
+  const Mesh scan = open_scan();
+  for (const char* gap : {"1%", "3%", "4%", "4.5%", "5%", "6%", "8%", "15%"}) {
+    SCOPED_TRACE(std::string("gap closure ") + gap);
+    WrapParams p;
+    p.base_size = Length::parse("2%");
+    p.levels = 2;
+    p.gap_closure = Length::parse(gap);
+    try {
+      const WrapResult r = wrap(scan, p);
+      EXPECT_TRUE(r.report.output.valid_closed_surface()) << "invalid surface handed back";
+      const auto verdict = check::cgal_verdict(r.surface.points, r.surface.triangles);
+      EXPECT_TRUE(verdict.closed && !verdict.self_intersects && verdict.outward);
+    } catch (const Error& e) {
+      // A clear refusal is fine; a crash is not (it would end this process).
+      EXPECT_NE(std::string(e.what()), "") << "error without a message";
+    }
+  }
+}
+
+}  // namespace
