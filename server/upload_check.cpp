@@ -3,6 +3,7 @@
 #include <signal.h>
 #include <sys/wait.h>
 
+#include <fstream>
 #include <new>
 #include <optional>
 #include <thread>
@@ -53,6 +54,8 @@ pb::JobStatus check_upload(const std::string& worker_command, uint64_t memory_li
 }
 
 int run_upload_check(const std::string& file, const std::string& format_number, const std::string& name) {
+  // As a job's process: when the machine runs out of memory, the kernel should end this, not the server.
+  if (std::ofstream adj{"/proc/self/oom_score_adj"}) adj << 500 << std::flush;
   pb::JobStatus v;
   try {
     const auto format = pb::MeshFormat(std::stoi(format_number));
