@@ -4,6 +4,8 @@
 //   "crash-segv"  reports "read" and "extract", then raise(SIGSEGV)
 //   "hang"        reports "read", then sleeps forever and ignores SIGTERM (the server must
 //                 SIGKILL it)
+//   "exit-early"  reports "read", then exits with code 3 without a verdict
+//   "garbage"     reports "read", then writes bytes that are not a frame, then sleeps
 // and for an upload's check (--check-upload FILE FORMAT NAME):
 //   "crash-read"  raise(SIGSEGV), as a mesh reader crashing on a hostile file would
 // Anything else runs the real worker (VDBWRAP_SERVER with the same arguments).
@@ -57,6 +59,7 @@ int main(int argc, char** argv) {
   const std::string text = record.str();
   const size_t at = text.find("\"file_name\"");
   const std::string name = at == std::string::npos ? "" : text.substr(at, text.find('\n', at) - at);
+  in.close();  // the process keeps only what the server gave it (fds 0-3)
   if (name.find("crash-segv") != std::string::npos) {
     report_stage("read");
     report_stage("extract");
@@ -65,6 +68,16 @@ int main(int argc, char** argv) {
   if (name.find("hang") != std::string::npos) {
     report_stage("read");
     ::signal(SIGTERM, SIG_IGN);
+    for (;;) ::pause();
+  }
+  if (name.find("exit-early") != std::string::npos) {
+    report_stage("read");
+    return 3;
+  }
+  if (name.find("garbage") != std::string::npos) {
+    report_stage("read");
+    const char junk[] = "\xff\xff\xff\x7fnot a frame";
+    if (::write(vdbwrap::server::kWorkerEventsFd, junk, sizeof junk) < 0) return 1;
     for (;;) ::pause();
   }
   run_the_real_worker(argv);

@@ -1341,13 +1341,16 @@ TEST_F(Service, CrashingJobFailsAloneWhileTheServerServesOn) {
   SubmitOutcome crash = c.submit(data("fuze.obj"), "crash-segv.obj", coarse());
   ASSERT_TRUE(crash.status.ok()) << crash.status.error_message();
   good.push_back(c.submit_ok("unit_sphere.STL"));
+  SubmitOutcome early = c.submit(data("fuze.obj"), "exit-early.obj", coarse());
+  SubmitOutcome garbage = c.submit(data("fuze.obj"), "garbage.obj", coarse());
+  ASSERT_TRUE(early.status.ok() && garbage.status.ok());
   // An upload whose check crashes the mesh reader is refused, and no job is created.
   SubmitOutcome unreadable = c.submit(data("fuze.obj"), "crash-read.obj", coarse());
   EXPECT_EQ(unreadable.status.error_code(), grpc::StatusCode::INTERNAL);
   EXPECT_NE(unreadable.status.error_message().find("crash-read.obj: the mesh reader's process ended with signal 11 (SIGSEGV)"),
             std::string::npos)
       << unreadable.status.error_message();
-  EXPECT_EQ(s.jobs_on_disk(), 4u);
+  EXPECT_EQ(s.jobs_on_disk(), 6u);
 
   pb::JobStatus crashed = c.wait_done(crash.job_id, 60s);
   EXPECT_EQ(crashed.state(), pb::JOB_STATE_FAILED);
@@ -1362,6 +1365,15 @@ TEST_F(Service, CrashingJobFailsAloneWhileTheServerServesOn) {
     ASSERT_TRUE(c.download(id, bytes).ok());
     expect_valid_result(bytes, vdbwrap::io::format_from_extension(st.spec().file_name()), st.spec().file_name());
   }
+  // A process that exits without a verdict, or writes what is not a frame, fails its job alone.
+  pb::JobStatus ended = c.wait_done(early.job_id, 60s);
+  EXPECT_EQ(ended.state(), pb::JOB_STATE_FAILED);
+  EXPECT_NE(ended.error_message().find("the wrap process ended with exit code 3 in stage read without a result"),
+            std::string::npos)
+      << ended.error_message();
+  pb::JobStatus broken = c.wait_done(garbage.job_id, 60s);
+  EXPECT_EQ(broken.state(), pb::JOB_STATE_FAILED);
+  EXPECT_NE(broken.error_message().find("broke the worker protocol"), std::string::npos) << broken.error_message();
   // The watchers saw the crash as the job's last event, with the reason.
   grpc::Status st;
   std::vector<pb::ProgressEvent> events = c.watch(crash.job_id, st, 10s);
@@ -1428,7 +1440,8 @@ TEST_F(Service, CancelAndTimeoutKillAJobProcessThatIgnoresThem) {
 }
 
 TEST_F(Service, ServerKilledWhileAJobRunsGivesUpAfterMaxAttempts) {
-  ServerProcess& s = server({"--workers", "1", "--max-attempts", "2", "--worker-command", VDBWRAP_WORKER_HOOK});
+  ServerProcess& s = server(
+      {"--workers", "1", "--max-attempts", "2", "--job-memory", "3G", "--worker-command", VDBWRAP_WORKER_HOOK});
   std::string id;
   {
     Client c(s.address());
@@ -1441,6 +1454,21 @@ TEST_F(Service, ServerKilledWhileAJobRunsGivesUpAfterMaxAttempts) {
     c.poll(id, [](const pb::JobStatus& st) { return st.state() == pb::JOB_STATE_RUNNING && st.stage() == "read"; }, 30s);
     std::map<pid_t, char> workers = children_of(s.pid());
     ASSERT_EQ(workers.size(), 1u) << "run " << run;
+    if (run == 1) {
+      // How the server started it: fds 0-3 only, its own process group, the memory limit.
+      const fs::path proc = "/proc/" + std::to_string(workers.begin()->first);
+      std::set<std::string> fds;
+      for (const auto& e : fs::directory_iterator(proc / "fd")) fds.insert(e.path().filename().string());
+      EXPECT_EQ(fds, (std::set<std::string>{"0", "1", "2", "3"}));
+      const std::string stat = read_file(proc / "stat");
+      std::istringstream rest(stat.substr(stat.rfind(')') + 1));
+      char state = 0;
+      pid_t ppid = 0, pgrp = 0;
+      rest >> state >> ppid >> pgrp;
+      EXPECT_EQ(pgrp, workers.begin()->first);
+      EXPECT_TRUE(std::regex_search(read_file(proc / "limits"), std::regex("Max data size +3221225472 +3221225472 ")))
+          << read_file(proc / "limits");
+    }
     EXPECT_EQ(s.kill(SIGKILL), 128 + SIGKILL);
     // The job's process does not outlive the server.
     EXPECT_TRUE(process_gone(workers.begin()->first, 10s)) << "run " << run;
