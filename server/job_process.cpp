@@ -19,7 +19,8 @@ namespace {
 [[noreturn]] void child_fail() { ::_exit(127); }
 
 // The child between fork and exec: async-signal-safe calls only.
-[[noreturn]] void exec_child(char* const* argv, pid_t parent, int events_fd, int null_fd, const rlimit* limit) {
+[[noreturn]] void exec_child(char* const* argv, pid_t parent, int events_fd, int null_fd, const rlimit* limit,
+                            int max_fd) {
   if (::prctl(PR_SET_PDEATHSIG, SIGKILL) != 0 || ::getppid() != parent) child_fail();
   if (limit && ::setrlimit(RLIMIT_DATA, limit) != 0) child_fail();
   ::setpgid(0, 0);
@@ -37,7 +38,8 @@ namespace {
     child_fail();
   }
   // Whatever else is open (a file an upload writes to, without O_CLOEXEC) stays with the server.
-  ::close_range(kWorkerEventsFd + 1, ~0u, 0);
+  if (::close_range(kWorkerEventsFd + 1, ~0u, 0) != 0)  // kernels before 5.9
+    for (int fd = kWorkerEventsFd + 1; fd < max_fd; ++fd) ::close(fd);
   ::execv(argv[0], argv);
   child_fail();
 }
@@ -60,9 +62,13 @@ JobProcess::JobProcess(const std::vector<std::string>& args, uint64_t memory_lim
     ::close(fds[1]);
     throw std::runtime_error("cannot open /dev/null");
   }
+  rlimit files{};
+  const int max_fd = ::getrlimit(RLIMIT_NOFILE, &files) == 0 && files.rlim_cur != RLIM_INFINITY && files.rlim_cur < (1u << 20)
+                         ? int(files.rlim_cur)
+                         : 1 << 20;
   const pid_t parent = ::getpid();
   pid_t pid = ::fork();
-  if (pid == 0) exec_child(argv.data(), parent, fds[1], null_fd, memory_limit > 0 ? &limit : nullptr);
+  if (pid == 0) exec_child(argv.data(), parent, fds[1], null_fd, memory_limit > 0 ? &limit : nullptr, max_fd);
   const int fork_errno = errno;
   ::close(fds[1]);
   ::close(null_fd);
