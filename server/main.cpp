@@ -10,6 +10,7 @@
 
 #include <cctype>
 #include <cstdio>
+#include <cstdlib>
 #include <fstream>
 #include <sstream>
 
@@ -81,6 +82,10 @@ int main(int argc, char** argv) {
   // client; not in --help).
   if (argc == 3 && std::string(argv[1]) == "--worker") return run_worker(argv[2]);
   if (argc == 5 && std::string(argv[1]) == "--check-upload") return run_upload_check(argv[2], argv[3], argv[4]);
+
+  // Job processes are started with fork+exec: the child runs no gRPC, so gRPC's fork handlers
+  // (which pause its threads around every fork) have nothing to protect.
+  ::setenv("GRPC_ENABLE_FORK_SUPPORT", "false", 1);
 
   CLI::App app{"vdbwrap-server: the vdbwrap gRPC job service (vdbwrap.v1.Jobs, health, reflection)"};
   app.set_version_flag("--version", "vdbwrap-server 0.1.0");
