@@ -12,11 +12,11 @@
 
 #include "check/diagnostics.h"
 #include "check/intersections.h"
+#include "common/debug_switch.h"
 #include "common/in_background.h"
 #include "common/stage_timer.h"
 #include "common/vec.h"
 #include "io/mesh_io.h"
-#include <cstdlib>
 #include "extract/extract_surface.h"
 #include "fit/feature_insert.h"
 #include "fit/fit_surface.h"
@@ -392,8 +392,8 @@ WrapResult run_pipeline(const Mesh& input, const WrapParams& params, ProgressSin
       result.surface = label_parts();
     }
     if (!report.output.valid_closed_surface() || !verdict.valid_polygon_mesh || !verdict.outward) {
-      // For diagnosis only: VDBWRAP_DUMP_INVALID=FILE keeps the rejected surface.
-      if (const char* dump = std::getenv("VDBWRAP_DUMP_INVALID")) io::write_mesh(result.surface, dump);
+      // For diagnosis (debug-dump builds): VDBWRAP_DUMP_INVALID=FILE keeps the rejected surface.
+      if (const char* dump = debug::setting("VDBWRAP_DUMP_INVALID")) io::write_mesh(result.surface, dump);
       std::string why = "the wrap failed validation: closed=" + std::to_string(report.output.closed) +
                         " manifold=" + std::to_string(report.output.manifold) + " outward=" + std::to_string(verdict.outward) +
                         " self-intersecting=" + std::to_string(verdict.self_intersects);

@@ -21,6 +21,7 @@
 #include "prep/check_input.h"
 #include "check/distance_stats.h"
 #include "check/intersections.h"
+#include "common/debug_switch.h"
 #include "common/edge_key.h"
 #include "common/float_round.h"
 #include "common/stage_timer.h"
@@ -62,7 +63,7 @@ void validate(const RepairParams& p) {
 
 
 bool debug_enabled() {
-  static const bool on = std::getenv("VDBWRAP_REPAIR_DEBUG") != nullptr;
+  static const bool on = debug::setting("VDBWRAP_REPAIR_DEBUG") != nullptr;
   return on;
 }
 

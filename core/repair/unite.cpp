@@ -15,6 +15,7 @@
 #include <algorithm>
 #include <map>
 
+#include "common/debug_switch.h"
 #include "common/float_round.h"
 
 namespace vdbwrap::local_repair {
@@ -71,7 +72,7 @@ Union unite_bodies(const std::vector<Vec3>& points, const std::vector<std::vecto
       if (PMP::corefine_and_compute_union(a, b, result)) {
         acc = std::move(result);
       } else {
-        if (std::getenv("VDBWRAP_REPAIR_DEBUG")) std::fprintf(stderr, "[repair] unite: body %zu waits\n", i);
+        if (debug::setting("VDBWRAP_REPAIR_DEBUG")) std::fprintf(stderr, "[repair] unite: body %zu waits\n", i);
         still.push_back(i);
       }
     }
