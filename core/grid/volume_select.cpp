@@ -94,7 +94,9 @@ LeakReport widest_path(const AdaptiveGrid& g, FreeLeaves& leaves, const std::vec
   heap.push({best[from], from});
   int64_t end = -1;
   while (!heap.empty() && end < 0) {
-    auto [width, i] = heap.top();
+    // Plain variables, not a structured binding: the lambda below captures them (clang 14).
+    const float width = heap.top().first;
+    const uint32_t i = heap.top().second;
     heap.pop();
     if (done[i]) continue;
     done[i] = 1;
