@@ -4,12 +4,16 @@
 // 5 output not written, 1 internal error.
 #include <CLI/CLI.hpp>
 
+#include <algorithm>
+#include <cctype>
 #include <cstdio>
 #include <fstream>
 #include <iostream>
 
 #include "cli_progress.h"
+#include "output_paths.h"
 #include "repair_options.h"
+#include "suggest.h"
 #include "wrap_options.h"
 #ifdef VDBWRAP_WITH_REMOTE
 #include "remote.h"  // submit, wait, jobs, cancel (gRPC job service)
@@ -88,13 +92,72 @@ void print_repair_report(const std::string& output, const RepairReport& r) {
   std::printf("  %.2fs; %s\n", r.total_seconds, r.all_fixed() ? "no intersections left" : "INTERSECTIONS LEFT");
 }
 
+bool looks_like_number(const std::string& t) {
+  return t.size() > 1 && t[0] == '-' && (std::isdigit(static_cast<unsigned char>(t[1])) || t[1] == '.');
+}
+
+// The first unknown subcommand or option on the command line, as a message naming the
+// closest valid one: CLI11 only says "A subcommand is required" or "arguments were not
+// expected". Empty when every name is known (the error is about something else).
+std::string unknown_argument(CLI::App& app, int argc, char** argv) {
+  std::vector<std::string> commands;
+  for (const CLI::App* sub : app.get_subcommands([](CLI::App*) { return true; })) commands.push_back(sub->get_name());
+  int at = 1;
+  while (at < argc && argv[at][0] == '-') ++at;  // --help, --version before the command
+  if (at >= argc) return "";
+  const std::string word = argv[at];
+  CLI::App* cmd = nullptr;
+  try {
+    cmd = app.get_subcommand(word);
+  } catch (const CLI::OptionNotFound&) {
+  }
+  if (!cmd) {
+    std::string msg = "unknown command " + word;
+    if (auto near = cli::closest_match(word, commands)) return msg + "; did you mean " + *near + "?";
+    msg += "; the commands are";
+    for (size_t i = 0; i < commands.size(); ++i) msg += (i ? ", " : " ") + commands[i];
+    return msg;
+  }
+  std::vector<std::string> names;
+  std::vector<std::string> takes_value;  // short names that may carry their value (-oFILE)
+  for (const CLI::App* scope : {static_cast<const CLI::App*>(cmd), static_cast<const CLI::App*>(&app)})
+    for (const CLI::Option* o : scope->get_options()) {
+      for (const std::string& l : o->get_lnames()) names.push_back("--" + l);
+      for (const std::string& s : o->get_snames()) {
+        names.push_back("-" + s);
+        if (o->get_items_expected_max() > 0) takes_value.push_back("-" + s);
+      }
+    }
+  auto known = [](const std::vector<std::string>& list, const std::string& t) {
+    return std::find(list.begin(), list.end(), t) != list.end();
+  };
+  for (int i = at + 1; i < argc; ++i) {
+    std::string t = argv[i];
+    if (t == "--") break;  // the rest are values
+    if (t.size() < 2 || t[0] != '-' || looks_like_number(t)) continue;
+    if (t[1] == '-') t = t.substr(0, t.find('='));
+    else if (t.size() > 2 && known(takes_value, t.substr(0, 2))) continue;  // -oFILE
+    if (known(names, t)) continue;
+    std::string msg = "unknown option " + t;
+    if (auto near = cli::closest_match(t, names)) return msg + "; did you mean " + *near + "?";
+    return msg + " (vdbwrap " + word + " --help lists the options)";
+  }
+  return "";
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   CLI::App app{"vdbwrap: shrink-wraps dirty triangle surfaces into closed, 2-manifold, self-intersection-free ones.\n"
                "Reads and writes STL (binary/ASCII), OBJ, OFF and PLY (ASCII/binary)."};
   app.require_subcommand(1);
-  app.set_version_flag("--version", "vdbwrap 0.1.0");
+  app.set_version_flag("--version", "vdbwrap " VDBWRAP_VERSION);
+  app.footer(
+      "Examples:\n"
+      "  vdbwrap wrap part.stl -o part_wrap.stl --base-size 0.5% --report part_wrap.json\n"
+      "  vdbwrap check part_wrap.stl --against part.stl\n"
+      "  vdbwrap repair part.stl -o part_fixed.stl\n"
+      "Run vdbwrap COMMAND --help for the options of a command.");
 
   // wrap
   auto* wrap_cmd = app.add_subcommand("wrap", "Wrap INPUT into a closed, valid surface written to OUTPUT");
@@ -102,12 +165,24 @@ int main(int argc, char** argv) {
   cli::WrapOptions wrap_options;
   bool quiet = false;
   wrap_cmd->add_option("input", input, "Input mesh (.stl .obj .off .ply)")->required();
-  wrap_cmd->add_option("-o,--output", output, "Output mesh; the format follows the extension")->required();
   wrap_options.add_to(wrap_cmd, "Worker threads (0: all cores)");
-  wrap_cmd->add_option("--leak-path", leak_path,
-                       "When a seed point's volume leaks: write the narrowest passage and the path to it here (OBJ)");
-  wrap_cmd->add_option("--report", report_path, "Write a JSON report (diagnostics, parameters, validity, distances, timings)");
-  wrap_cmd->add_flag("-q,--quiet", quiet, "No progress on stderr");
+  // After the parameters: the help lists its groups in the order they first appear.
+  wrap_cmd->add_option("-o,--output", output, "Output mesh; the format follows the extension")->required()->group("Output");
+  wrap_cmd->add_option("--report", report_path, "Write a JSON report (diagnostics, parameters, validity, distances, timings)")
+      ->group("Output");
+  wrap_cmd
+      ->add_option("--leak-path", leak_path,
+                   "When a seed point's volume leaks: write the narrowest passage and the path to it here (OBJ)")
+      ->group("Output");
+  wrap_cmd->add_flag("-q,--quiet", quiet, "No progress on stderr")->group("Output");
+  wrap_cmd->footer(
+      "Examples:\n"
+      "  vdbwrap wrap part.stl -o part_wrap.stl --base-size 0.5% --report part_wrap.json\n"
+      "  vdbwrap wrap engine_bay.stl -o cabin.obj --volume 0.2,1.5,0.9 --gap-closure 0.15 --leak-path leak.obj\n"
+      "  vdbwrap wrap assembly.obj -o wrap.obj --params params.yaml --levels 2\n"
+      "Exit codes: 0 ok; 2 bad arguments (checked before the wrap starts, output folders included); 3 unreadable or\n"
+      "invalid input; 4 no valid surface (a leak, a failed validation; the report is still written); 5 output not\n"
+      "written; 1 internal error.");
 
   // check
   auto* check_cmd = app.add_subcommand("check", "Diagnose a mesh: watertight? manifold? self-intersecting?");
@@ -118,21 +193,32 @@ int main(int argc, char** argv) {
   bool require_valid = false;
   check_cmd->add_flag("--require-valid", require_valid,
                       "Exit with code 4 unless the mesh is a valid closed surface (for scripts)");
+  check_cmd->footer(
+      "Examples:\n"
+      "  vdbwrap check part.stl\n"
+      "  vdbwrap check part_wrap.stl --against part.stl --report distances.json\n"
+      "  vdbwrap check part_wrap.stl --require-valid && echo watertight");
 
   // repair
   auto* repair_cmd = app.add_subcommand(
       "repair", "Repair the self-intersections of INPUT locally (no re-wrap) and write OUTPUT");
   repair_cmd->footer(
+      "Examples:\n"
+      "  vdbwrap repair part.stl -o part_fixed.stl --report repair.json\n"
+      "  vdbwrap repair scan.ply -o scan_fixed.ply --max-deviation 0.2%\n"
       "Exit codes: 0 no intersections left; 4 intersections left (OUTPUT and the report are still written, the\n"
       "report lists the unfixed regions); 2 bad arguments; 3 unreadable or invalid input; 5 output not written.");
   std::string repair_input, repair_output, repair_report;
   cli::RepairOptions repair_options;
   bool repair_quiet = false;
   repair_cmd->add_option("input", repair_input, "Input mesh (.stl .obj .off .ply)")->required();
-  repair_cmd->add_option("-o,--output", repair_output, "Output mesh; the format follows the extension")->required();
-  repair_cmd->add_option("--report", repair_report, "Write a JSON report (regions, diagnostics before/after, deviation)");
   repair_options.add_to(repair_cmd, true);
-  repair_cmd->add_flag("-q,--quiet", repair_quiet, "No progress on stderr");
+  repair_cmd->add_option("-o,--output", repair_output, "Output mesh; the format follows the extension")
+      ->required()
+      ->group("Output");
+  repair_cmd->add_option("--report", repair_report, "Write a JSON report (regions, diagnostics before/after, deviation)")
+      ->group("Output");
+  repair_cmd->add_flag("-q,--quiet", repair_quiet, "No progress on stderr")->group("Output");
 
 #ifdef VDBWRAP_WITH_REMOTE
   vdbwrap::remote::RemoteCommands remote(app);
@@ -140,6 +226,13 @@ int main(int argc, char** argv) {
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
+    if (e.get_exit_code() != 0) {  // not --help or --version
+      const std::string unknown = unknown_argument(app, argc, argv);
+      if (!unknown.empty()) {
+        std::fprintf(stderr, "vdbwrap: error: %s\n", unknown.c_str());
+        return exit_code(ErrorKind::InvalidArgument);
+      }
+    }
     int code = app.exit(e);
     return code == 0 ? 0 : exit_code(ErrorKind::InvalidArgument);
   }
@@ -155,6 +248,9 @@ int main(int argc, char** argv) {
       params.float_coordinates = io::format_from_extension(output) == io::Format::Stl;
       if (io::format_from_extension(output) == io::Format::Unknown)
         throw Error(ErrorKind::InvalidArgument, output + ": unknown output format (use .stl, .obj, .off or .ply)");
+      cli::check_output_path("-o", output);
+      cli::check_output_path("--report", report_path);
+      cli::check_output_path("--leak-path", leak_path);
       cli::StderrProgress progress(quiet);
       progress.progress("read", 0.0, input);
       Mesh mesh = io::read_mesh(input);
@@ -194,6 +290,8 @@ int main(int argc, char** argv) {
       rparams.float_coordinates = io::format_from_extension(repair_output) == io::Format::Stl;
       if (io::format_from_extension(repair_output) == io::Format::Unknown)
         throw Error(ErrorKind::InvalidArgument, repair_output + ": unknown output format (use .stl, .obj, .off or .ply)");
+      cli::check_output_path("-o", repair_output);
+      cli::check_output_path("--report", repair_report);
       cli::StderrProgress progress(repair_quiet);
       progress.progress("read", 0.0, repair_input);
       Mesh mesh = io::read_mesh(repair_input);
@@ -205,6 +303,7 @@ int main(int argc, char** argv) {
       return result.report.all_fixed() ? 0 : exit_code(ErrorKind::WrapFailed);
     }
     if (*check_cmd) {
+      cli::check_output_path("--report", check_report);
       Mesh mesh = io::read_mesh(check_input);
       MeshDiagnostics d = diagnose(mesh, true);
       print_diagnostics(check_input, d);

@@ -1,4 +1,5 @@
 #include "remote.h"
+#include "output_paths.h"
 #include "repair_options.h"
 #include "wrap_options.h"
 
@@ -440,14 +441,21 @@ struct RemoteCommands::Impl {
   void add_connection(CLI::App* cmd) {
     cmd->add_option("--server", conn.server,
                     "Server address HOST:PORT, or a gRPC target (ipv4:H1:P1,H2:P2, dns:///name:port)")
-        ->required();
-    cmd->add_option("--token-file", conn.token_file, "File holding the server's bearer token")->check(CLI::ExistingFile);
+        ->required()
+        ->envname("VDBWRAP_SERVER")
+        ->group("Server");
+    cmd->add_option("--token-file", conn.token_file, "File holding the server's bearer token")
+        ->check(CLI::ExistingFile)
+        ->envname("VDBWRAP_TOKEN_FILE")
+        ->group("Server");
     cmd->add_option("--tls-ca", conn.tls_ca, "PEM file of the CA that signed the server's certificate: connect with TLS")
-        ->check(CLI::ExistingFile);
-    cmd->add_option("--tls-server-name", conn.tls_name, "Host name to expect in the server's certificate (TLS)");
+        ->check(CLI::ExistingFile)
+        ->group("Server");
+    cmd->add_option("--tls-server-name", conn.tls_name, "Host name to expect in the server's certificate (TLS)")->group("Server");
     cmd->add_option("--retry", conn.retry_seconds, "Seconds to keep retrying while the server is unreachable")
         ->capture_default_str()
-        ->check(CLI::NonNegativeNumber);
+        ->check(CLI::NonNegativeNumber)
+        ->group("Server");
   }
 
   explicit Impl(CLI::App& app) {
@@ -457,34 +465,52 @@ struct RemoteCommands::Impl {
     submit->add_option("input", inputs, "Input meshes (.stl .obj .off .ply); several run concurrently on the server")
         ->required()
         ->check(CLI::ExistingFile);
-    submit->add_option("-o,--output", output, "Output mesh (one input); the format follows the extension");
-    submit->add_option("--out-dir", out_dir, "Folder for the results NAME_wrap.EXT (repairs: NAME_repaired.EXT) and reports NAME_wrap.json");
-    submit->add_option("--format", format, "Output format with --out-dir (default: the input's)")
-        ->check(CLI::IsMember({"stl", "obj", "off", "ply"}));
-    submit->add_option("--report", report, "Write the JSON report (one input)");
-    submit->add_flag("--detach", detach, "Print the job ids (one per line) once accepted and exit; see `vdbwrap wait`");
-    submit->add_flag("--round-robin", conn.round_robin,
-                     "Spread the jobs over every address of --server (gRPC round_robin); each job is then followed on "
-                     "the server that accepted it");
-    submit->add_option("--queue-wait", queue_wait, "Seconds to keep retrying while the server's queue is full")
-        ->capture_default_str()
-        ->check(CLI::NonNegativeNumber);
-    submit->add_flag("-q,--quiet", quiet, "No progress on stderr");
     // The wrap options, as in `vdbwrap wrap`; with --repair, the repair options of `vdbwrap repair`.
     wrap_options.add_to(submit, "Worker threads on the server (0: all its cores)");
+    submit->add_option("-o,--output", output, "Output mesh (one input); the format follows the extension")->group("Output");
+    submit->add_option("--out-dir", out_dir,
+                       "Folder for the results NAME_wrap.EXT (repairs: NAME_repaired.EXT) and reports NAME_wrap.json; "
+                       "created when missing")
+        ->group("Output");
+    submit->add_option("--format", format, "Output format with --out-dir (default: the input's)")
+        ->check(CLI::IsMember({"stl", "obj", "off", "ply"}))
+        ->group("Output");
+    submit->add_option("--report", report, "Write the JSON report (one input)")->group("Output");
+    submit->add_option("--leak-path", leak_path,
+                       "When a seed point's volume leaks: write the narrowest passage and the path to it here (OBJ; one input)")
+        ->group("Output");
+    submit->add_flag("-q,--quiet", quiet, "No progress on stderr")->group("Output");
+    submit->add_flag("--detach", detach, "Print the job ids (one per line) once accepted and exit; see `vdbwrap wait`")
+        ->group("Job");
+    submit->add_flag("--round-robin", conn.round_robin,
+                     "Spread the jobs over every address of --server (gRPC round_robin); each job is then followed on "
+                     "the server that accepted it")
+        ->group("Job");
+    submit->add_option("--queue-wait", queue_wait, "Seconds to keep retrying while the server's queue is full")
+        ->capture_default_str()
+        ->check(CLI::NonNegativeNumber)
+        ->group("Job");
     submit->add_flag("--repair", repair_job,
                      "Repair the self-intersections of each input locally, as `vdbwrap repair`, instead of wrapping it "
-                     "(takes the repair options below, not the wrap options; exit code 4 when intersections are left)");
+                     "(takes the repair options below, not the wrap options; exit code 4 when intersections are left)")
+        ->group("Job");
     repair_options.add_to(submit, false);
-    submit->add_option("--leak-path", leak_path,
-                       "When a seed point's volume leaks: write the narrowest passage and the path to it here (OBJ; one input)");
+    submit->footer(
+        "Examples:\n"
+        "  vdbwrap submit --server host:50051 part.stl -o part_wrap.stl --base-size 0.5% --report part_wrap.json\n"
+        "  vdbwrap submit --server host:50051 a.stl b.obj --out-dir results --format stl\n"
+        "  vdbwrap submit --server host:50051 a.stl b.stl --detach > ids.txt; vdbwrap wait --server host:50051 $(cat ids.txt)\n"
+        "The server's address and token file can come from VDBWRAP_SERVER and VDBWRAP_TOKEN_FILE.");
 
     wait = app.add_subcommand("wait", "Wait for jobs on a vdbwrap-server and download their results");
     add_connection(wait);
     wait->add_option("id", ids, "Job ids")->required();
-    wait->add_option("--out-dir", out_dir, "Folder for the results NAME_wrap.EXT (repairs: NAME_repaired.EXT) and reports NAME_wrap.json")
-        ->capture_default_str();
-    wait->add_flag("-q,--quiet", quiet, "No progress on stderr");
+    wait->add_option("--out-dir", out_dir,
+                     "Folder for the results NAME_wrap.EXT (repairs: NAME_repaired.EXT) and reports NAME_wrap.json; "
+                     "created when missing")
+        ->capture_default_str()
+        ->group("Output");
+    wait->add_flag("-q,--quiet", quiet, "No progress on stderr")->group("Output");
 
     jobs = app.add_subcommand("jobs", "List the jobs of a vdbwrap-server with their state");
     add_connection(jobs);
@@ -555,7 +581,9 @@ int RemoteCommands::Impl::run_submit() {
     throw Error(ErrorKind::InvalidArgument, "--report names one file: with --out-dir the reports are NAME_wrap.json (NAME_repaired.json)");
   if (!output.empty() && io::format_from_extension(output) == io::Format::Unknown)
     throw Error(ErrorKind::InvalidArgument, output + ": unknown output format (use .stl, .obj, .off or .ply)");
-  if (!out_dir.empty() && !fs::is_directory(out_dir)) throw Error(ErrorKind::InvalidArgument, out_dir + ": not a folder");
+  cli::check_output_path("-o", output);
+  cli::check_output_path("--report", report);
+  cli::check_output_path("--leak-path", leak_path);
   // The job's parameters: a wrap's, or with --repair a repair's (and not the other's).
   pb::WrapParameters wire_params;
   pb::RepairParameters wire_repair;
@@ -573,6 +601,7 @@ int RemoteCommands::Impl::run_submit() {
     wire_params = api::to_proto(wrap_options.resolve());
   }
   conn.load();
+  if (!out_dir.empty() && !detach) cli::ensure_output_folder("--out-dir", out_dir);
 
   // Output format per input.
   std::vector<pb::MeshFormat> formats;
@@ -698,7 +727,7 @@ int RemoteCommands::Impl::run_submit() {
 int RemoteCommands::Impl::run_wait() {
   conn.load();
   if (out_dir.empty()) out_dir = ".";
-  if (!fs::is_directory(out_dir)) throw Error(ErrorKind::InvalidArgument, out_dir + ": not a folder");
+  cli::ensure_output_folder("--out-dir", out_dir);
   auto channel = conn.channel();
   auto stub = pb::Jobs::NewStub(channel);
   // Names and formats from the server.

@@ -5,7 +5,7 @@ namespace vdbwrap::cli {
 void RepairOptions::add_to(CLI::App* cmd, bool with_threads) {
   auto add = [&](CLI::Option* o) {
     options_.push_back(o);
-    return o;
+    return o->group(with_threads ? "Repair" : "Repair (with --repair)");
   };
   add(cmd->add_option("--max-deviation", max_deviation_,
                       "How far any vertex or refill may end from the input: model units (0.05) or percent of the "

@@ -15,30 +15,50 @@ CLI::Option* WrapOptions::bind(CLI::App* cmd, const std::string& name, T& value,
 }
 
 void WrapOptions::add_to(CLI::App* cmd, const std::string& threads_help) {
-  cmd->add_option("--params", params_file_,
-                  "Parameter file (.json, .yaml, .yml) in the form of the API's WrapParameters message "
-                  "(proto/vdbwrap/v1/jobs.proto); options on the command line override it")
-      ->check(CLI::ExistingFile);
+  // Added group by group: the help lists the groups in the order they first appear.
   bind(cmd, "--base-size", base_size_, "Level-0 cell edge: model units (0.5) or percent of the bounding-box diagonal (1%)",
        [this](WrapParams& p) { p.base_size = Length::parse(base_size_); })
-      ->capture_default_str();
+      ->capture_default_str()
+      ->group("Size");
   bind(cmd, "--levels", cli_.levels, "Most 2x2x2 refinement levels below the base size by the refinement criteria (0-6)",
        [this](WrapParams& p) { p.levels = cli_.levels; })
       ->capture_default_str()
-      ->check(CLI::Range(0, 6));
-  bind(cmd, "--feature-angle", cli_.feature_angle_deg,
-       "Angle in degrees between adjacent triangles' normals that makes their edge sharp",
-       [this](WrapParams& p) { p.feature_angle_deg = cli_.feature_angle_deg; })
+      ->check(CLI::Range(0, 6))
+      ->group("Size");
+  bind(cmd, "--refine-triangles", cli_.refine_max_triangles, "Refine a cell holding more input triangles than this",
+       [this](WrapParams& p) { p.refine_max_triangles = cli_.refine_max_triangles; })
       ->capture_default_str()
-      ->check(CLI::Range(0.0, 180.0));
+      ->check(CLI::PositiveNumber)
+      ->group("Size");
+  bind(cmd, "--refine-normal-spread", cli_.refine_normal_spread_deg,
+       "Refine a cell whose input normals spread more than this many degrees",
+       [this](WrapParams& p) { p.refine_normal_spread_deg = cli_.refine_normal_spread_deg; })
+      ->capture_default_str()
+      ->group("Size");
   bind(cmd, "--volume", volume_,
        "Volume to wrap: outside (around the input), inside (the largest volume it encloses), or the volume(s) "
        "holding seed points X,Y,Z (several separated by ';'); a seed point's volume reaching the outside is a leak",
        [this](WrapParams& p) { parse_volume_choice(volume_, p.volume, p.seed_points); })
-      ->capture_default_str();
+      ->capture_default_str()
+      ->group("Volume");
   bind(cmd, "--gap-closure", gap_closure_,
        "Openings narrower than this (model units or N%) do not let the volume through, whatever the cell size",
-       [this](WrapParams& p) { p.gap_closure = Length::parse(gap_closure_); });
+       [this](WrapParams& p) { p.gap_closure = Length::parse(gap_closure_); })
+      ->group("Volume");
+  bind(cmd, "--feature-angle", cli_.feature_angle_deg,
+       "Angle in degrees between adjacent triangles' normals that makes their edge sharp",
+       [this](WrapParams& p) { p.feature_angle_deg = cli_.feature_angle_deg; })
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 180.0))
+      ->group("Features");
+  bind(cmd, "--corner-angle", cli_.corner_angle_deg, "Degrees a feature curve must turn at a point to make a corner there",
+       [this](WrapParams& p) { p.corner_angle_deg = cli_.corner_angle_deg; })
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 180.0))
+      ->group("Features");
+  CLI::Option* nf = cmd->add_flag("--no-features", no_features_, "Do not snap the wrap onto sharp edges, boundaries and corners")
+                         ->group("Features");
+  bindings_.push_back({nf, [this](WrapParams& p) { p.snap_features = !no_features_; }});
   bind(cmd, "--control-volume", control_volumes_,
        "A region with its own cell size, repeatable: box:X0,Y0,Z0,X1,Y1,Z1:SIZE, sphere:X,Y,Z,R:SIZE, "
        "cylinder:X0,Y0,Z0,X1,Y1,Z1,R:SIZE, cone:X0,Y0,Z0,X1,Y1,Z1,R0,R1:SIZE",
@@ -46,13 +66,15 @@ void WrapOptions::add_to(CLI::App* cmd, const std::string& threads_help) {
          p.control_volumes.clear();
          for (const auto& s : control_volumes_) p.control_volumes.push_back(ControlVolume::parse(s));
        })
-      ->take_all();
+      ->take_all()
+      ->group("Controls");
   bind(cmd, "--part-size", part_sizes_, "Cell size where an input part (STL solid, OBJ group) passes, repeatable: NAME=SIZE",
        [this](WrapParams& p) {
          p.part_sizes.clear();
          for (const auto& s : part_sizes_) p.part_sizes.push_back(PartSize::parse(s));
        })
-      ->take_all();
+      ->take_all()
+      ->group("Controls");
   bind(cmd, "--contact-prevention", contact_rules_,
        "Keep parts apart, repeatable: hot,cold (every part of the list against every other) or a,b:c,d (group "
        "against group); cells between them are refined down to --contact-floor",
@@ -60,49 +82,48 @@ void WrapOptions::add_to(CLI::App* cmd, const std::string& threads_help) {
          p.contact_prevention.clear();
          for (const auto& s : contact_rules_) p.contact_prevention.push_back(ContactRule::parse(s));
        })
-      ->take_all();
+      ->take_all()
+      ->group("Controls");
   bind(cmd, "--contact-floor", contact_floor_, "Smallest cell contact prevention may use (default: the finest cell / 8)",
-       [this](WrapParams& p) { p.contact_floor = Length::parse(contact_floor_); });
-  bind(cmd, "--coarsen-tolerance", cli_.coarsen_tolerance,
-       "Merge nodes on flat parts while new triangles stay within this fraction of the base size of the input (0: off)",
-       [this](WrapParams& p) { p.coarsen_tolerance = cli_.coarsen_tolerance; })
-      ->capture_default_str()
-      ->check(CLI::Range(0.0, 0.5));
-  bind(cmd, "--threads", cli_.threads, threads_help, [this](WrapParams& p) { p.threads = cli_.threads; })
-      ->capture_default_str()
-      ->check(CLI::NonNegativeNumber);
-  bind(cmd, "--refine-triangles", cli_.refine_max_triangles, "Refine a cell holding more input triangles than this",
-       [this](WrapParams& p) { p.refine_max_triangles = cli_.refine_max_triangles; })
-      ->capture_default_str()
-      ->check(CLI::PositiveNumber);
-  bind(cmd, "--refine-normal-spread", cli_.refine_normal_spread_deg,
-       "Refine a cell whose input normals spread more than this many degrees",
-       [this](WrapParams& p) { p.refine_normal_spread_deg = cli_.refine_normal_spread_deg; })
-      ->capture_default_str();
+       [this](WrapParams& p) { p.contact_floor = Length::parse(contact_floor_); })
+      ->group("Controls");
+  cmd->add_option("--params", params_file_,
+                  "Parameter file (.json, .yaml, .yml) in the form of the API's WrapParameters message "
+                  "(proto/vdbwrap/v1/jobs.proto); options on the command line override it")
+      ->check(CLI::ExistingFile)
+      ->group("Controls");
   bind(cmd, "--presmooth", cli_.presmooth_iterations,
        "Smoothing iterations of the voxel surface before projection (untangles the staircase)",
        [this](WrapParams& p) { p.presmooth_iterations = cli_.presmooth_iterations; })
       ->capture_default_str()
-      ->check(CLI::Range(0, 100));
+      ->check(CLI::Range(0, 100))
+      ->group("Surface fit");
   bind(cmd, "--validity-rounds", cli_.validity_rounds,
        "Rounds of the projection's validity loop; intersections left after them go to the remeshing and the "
        "intersection repair (0: straight there)",
        [this](WrapParams& p) { p.validity_rounds = cli_.validity_rounds; })
       ->capture_default_str()
-      ->check(CLI::Range(0, 100000));
-  CLI::Option* nd = cmd->add_flag("--no-distances", no_distances_,
-                                  "Skip the sampled distances of the report (timing runs: they cost as much as a stage)");
-  bindings_.push_back({nd, [this](WrapParams& p) { p.compute_distances = !no_distances_; }});
-  CLI::Option* nf = cmd->add_flag("--no-features", no_features_, "Do not snap the wrap onto sharp edges, boundaries and corners");
-  bindings_.push_back({nf, [this](WrapParams& p) { p.snap_features = !no_features_; }});
+      ->check(CLI::Range(0, 100000))
+      ->group("Surface fit");
+  bind(cmd, "--coarsen-tolerance", cli_.coarsen_tolerance,
+       "Merge nodes on flat parts while new triangles stay within this fraction of the base size of the input (0: off)",
+       [this](WrapParams& p) { p.coarsen_tolerance = cli_.coarsen_tolerance; })
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 0.5))
+      ->group("Surface fit");
   CLI::Option* nr = cmd->add_flag("--no-remesh", no_remesh_,
                                   "Do not rebuild the bad regions of the wrap (slivers, tiny triangles, very poor normals); "
-                                  "the report's quality section still counts them");
+                                  "the report's quality section still counts them")
+                         ->group("Surface fit");
   bindings_.push_back({nr, [this](WrapParams& p) { p.remesh = !no_remesh_; }});
-  bind(cmd, "--corner-angle", cli_.corner_angle_deg, "Degrees a feature curve must turn at a point to make a corner there",
-       [this](WrapParams& p) { p.corner_angle_deg = cli_.corner_angle_deg; })
+  bind(cmd, "--threads", cli_.threads, threads_help, [this](WrapParams& p) { p.threads = cli_.threads; })
       ->capture_default_str()
-      ->check(CLI::Range(0.0, 180.0));
+      ->check(CLI::NonNegativeNumber)
+      ->group("Run");
+  CLI::Option* nd = cmd->add_flag("--no-distances", no_distances_,
+                                  "Skip the sampled distances of the report (timing runs: they cost as much as a stage)")
+                         ->group("Output");
+  bindings_.push_back({nd, [this](WrapParams& p) { p.compute_distances = !no_distances_; }});
 }
 
 std::vector<std::string> WrapOptions::given() const {

@@ -1,11 +1,13 @@
 // The CLI as a user runs it: exit codes and one-line messages for bad input and arguments.
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <sys/wait.h>
 
+#include "../client/suggest.h"
 #include "io/mesh_io.h"
 #include "test_meshes.h"
 
@@ -21,6 +23,8 @@ namespace {
 struct CliRun {
   int code;
   std::string err;
+  std::string out;
+  double seconds = 0;  // wall time of the run
 };
 
 class Cli : public ::testing::Test {
@@ -32,13 +36,18 @@ class Cli : public ::testing::Test {
   }
   void TearDown() override { fs::remove_all(dir); }
 
-  CliRun run(const std::string& args) {
-    std::string err = (dir / "stderr.txt").string();
-    std::string cmd = std::string(VDBWRAP_CLI) + " " + args + " > /dev/null 2> " + err;
+  // env: assignments put before the command (VAR=value ...).
+  CliRun run(const std::string& args, const std::string& env = "") {
+    std::string err = (dir / "stderr.txt").string(), out = (dir / "stdout.txt").string();
+    std::string cmd = env + " " + std::string(VDBWRAP_CLI) + " " + args + " > " + out + " 2> " + err;
+    const auto t0 = std::chrono::steady_clock::now();
     int status = std::system(cmd.c_str());
-    std::ifstream in(err);
-    std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-    return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, text};
+    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    auto slurp = [](const std::string& path) {
+      std::ifstream in(path);
+      return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    };
+    return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, slurp(err), slurp(out), seconds};
   }
   std::string file(const std::string& name, const std::string& bytes) {
     std::string p = (dir / name).string();
@@ -143,8 +152,117 @@ TEST_F(Cli, BadArgumentsAreExitCodeTwo) {
 }
 
 TEST_F(Cli, UnwritableOutputIsExitCodeFive) {
-  CliRun r = run("wrap " + vdbwrap::testing::data_path("fuze.obj") + " -o /nonexistent-dir/o.stl --base-size 5%");
-  EXPECT_EQ(r.code, 5);
+  // /proc is a folder no file can be created in: the path passes the early checks (as root) or
+  // fails the writability check (as a user); either way the output is not written.
+  CliRun r = run("wrap " + vdbwrap::testing::data_path("fuze.obj") + " -o /proc/vdbwrap_cli_test.stl --base-size 5%");
+  EXPECT_EQ(r.code, 5) << r.err;
+  EXPECT_NE(r.err.find("/proc/vdbwrap_cli_test.stl"), std::string::npos) << r.err;
+}
+
+TEST_F(Cli, MissingOutputFolderFailsBeforeTheWrap) {
+  const std::string in = vdbwrap::testing::data_path("fuze.obj");
+  const std::string ok_args = " --base-size 1.5% --threads 1";
+  const fs::path out = dir / "o.stl";
+  CliRun ok = run("wrap " + in + " -o " + out.string() + ok_args + " -q");
+  ASSERT_EQ(ok.code, 0) << ok.err;
+  fs::remove(out);
+  const std::string missing = (dir / "no_such_folder").string();
+  // Each output option names a file in a folder that does not exist: exit 2 at once, naming it.
+  for (const std::string& bad : {" -o " + missing + "/o.stl",
+                                 " -o " + out.string() + " --report " + missing + "/r.json",
+                                 " -o " + out.string() + " --leak-path " + missing + "/leak.obj"}) {
+    CliRun r = run("wrap " + in + bad + ok_args);
+    EXPECT_EQ(r.code, 2) << bad << ": " << r.err;
+    EXPECT_NE(r.err.find(missing), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("does not exist"), std::string::npos) << r.err;
+    EXPECT_LT(r.seconds, ok.seconds / 2) << "the check comes before the wrap (" << ok.seconds << " s)";
+    EXPECT_FALSE(fs::exists(out)) << bad;
+    EXPECT_FALSE(fs::exists(out.string() + ".tmp")) << bad;
+  }
+  // Before the input is even read: a missing input with a missing output folder is a bad argument.
+  EXPECT_EQ(run("wrap " + (dir / "nope.stl").string() + " -o " + missing + "/o.stl").code, 2);
+  // repair and check likewise.
+  CliRun rep = run("repair " + in + " -o " + missing + "/fixed.stl");
+  EXPECT_EQ(rep.code, 2);
+  EXPECT_NE(rep.err.find(missing), std::string::npos) << rep.err;
+  CliRun rep_report = run("repair " + in + " -o " + (dir / "fixed.stl").string() + " --report " + missing + "/r.json");
+  EXPECT_EQ(rep_report.code, 2);
+  EXPECT_FALSE(fs::exists(dir / "fixed.stl"));
+  CliRun chk = run("check " + in + " --report " + missing + "/c.json");
+  EXPECT_EQ(chk.code, 2);
+  EXPECT_NE(chk.err.find(missing), std::string::npos) << chk.err;
+  // An output that names a folder is refused up front too.
+  fs::create_directories(dir / "taken.stl");
+  CliRun folder = run("wrap " + in + " -o " + (dir / "taken.stl").string());
+  EXPECT_EQ(folder.code, 2);
+  EXPECT_NE(folder.err.find("is a folder"), std::string::npos) << folder.err;
+}
+
+TEST_F(Cli, UnknownOptionsAndCommandsSuggestTheClosest) {
+  const std::string in = vdbwrap::testing::data_path("fuze.obj"), out = (dir / "o.stl").string();
+  CliRun typo = run("wrap " + in + " -o " + out + " --base-szie 2%");
+  EXPECT_EQ(typo.code, 2);
+  EXPECT_NE(typo.err.find("unknown option --base-szie; did you mean --base-size?"), std::string::npos) << typo.err;
+  CliRun with_value = run("wrap " + in + " -o " + out + " --gap-closre=0.1");
+  EXPECT_EQ(with_value.code, 2);
+  EXPECT_NE(with_value.err.find("did you mean --gap-closure?"), std::string::npos) << with_value.err;
+  CliRun single_dash = run("wrap " + in + " -o " + out + " -quiet");
+  EXPECT_EQ(single_dash.code, 2);
+  EXPECT_NE(single_dash.err.find("did you mean --quiet?"), std::string::npos) << single_dash.err;
+  CliRun repair_typo = run("repair " + in + " -o " + out + " --max-deviaton 1%");
+  EXPECT_EQ(repair_typo.code, 2);
+  EXPECT_NE(repair_typo.err.find("did you mean --max-deviation?"), std::string::npos) << repair_typo.err;
+  CliRun command = run("wrp " + in + " -o " + out);
+  EXPECT_EQ(command.code, 2);
+  EXPECT_NE(command.err.find("unknown command wrp; did you mean wrap?"), std::string::npos) << command.err;
+  // Nothing close: no guess, the valid names instead.
+  CliRun far = run("frobnicate");
+  EXPECT_EQ(far.code, 2);
+  EXPECT_EQ(far.err.find("did you mean"), std::string::npos) << far.err;
+  EXPECT_NE(far.err.find("wrap, check, repair"), std::string::npos) << far.err;
+  CliRun far_option = run("wrap " + in + " -o " + out + " --zzzzzzzz");
+  EXPECT_EQ(far_option.code, 2);
+  EXPECT_NE(far_option.err.find("unknown option --zzzzzzzz"), std::string::npos) << far_option.err;
+  EXPECT_EQ(far_option.err.find("did you mean"), std::string::npos) << far_option.err;
+  EXPECT_FALSE(fs::exists(out));
+}
+
+TEST(Suggest, EditDistanceCountsASwapAsOneEdit) {
+  using vdbwrap::cli::closest_match;
+  using vdbwrap::cli::edit_distance;
+  EXPECT_EQ(edit_distance("size", "size"), 0u);
+  EXPECT_EQ(edit_distance("szie", "size"), 1u);  // neighbours swapped
+  EXPECT_EQ(edit_distance("levls", "levels"), 1u);
+  EXPECT_EQ(edit_distance("", "wrap"), 4u);
+  EXPECT_EQ(edit_distance("kitten", "sitting"), 3u);
+  const std::vector<std::string> options = {"--levels", "--volume", "--report"};
+  EXPECT_EQ(closest_match("--levles", options), std::optional<std::string>("--levels"));
+  EXPECT_EQ(closest_match("--colour", options), std::nullopt);
+}
+
+TEST_F(Cli, HelpGroupsTheOptionsAndShowsExamples) {
+  CliRun help = run("wrap --help");
+  ASSERT_EQ(help.code, 0) << help.err;
+  // Each group's heading, in this order, with an option of the group under it.
+  const std::vector<std::pair<std::string, std::string>> groups = {
+      {"Size:", "--base-size"}, {"Volume:", "--gap-closure"}, {"Features:", "--feature-angle"},
+      {"Controls:", "--control-volume"}, {"Output:", "--report"}};
+  size_t at = 0;
+  for (const auto& [heading, option] : groups) {
+    const size_t h = help.out.find("\n" + heading, at);
+    ASSERT_NE(h, std::string::npos) << heading << " missing or out of order:\n" << help.out;
+    const size_t next = help.out.find(":\n", h + heading.size() + 2);
+    EXPECT_LT(help.out.find(option, h), next) << option << " not under " << heading << ":\n" << help.out;
+    at = h + 1;
+  }
+  const size_t examples = help.out.find("Examples:");
+  ASSERT_NE(examples, std::string::npos) << help.out;
+  size_t lines = 0;
+  for (size_t p = help.out.find("  vdbwrap wrap ", examples); p != std::string::npos; p = help.out.find("  vdbwrap wrap ", p + 1))
+    ++lines;
+  EXPECT_GE(lines, 2u) << help.out;
+  EXPECT_NE(run("--help").out.find("Examples:"), std::string::npos);
+  EXPECT_NE(run("repair --help").out.find("Examples:"), std::string::npos);
 }
 
 TEST_F(Cli, InsideOfAnOpenSurfaceFailsClearly) {
