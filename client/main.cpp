@@ -3,10 +3,12 @@
 // or invalid input, 4 no valid surface produced (repair: intersections left, output written),
 // 5 output not written, 1 internal error.
 #include <CLI/CLI.hpp>
+#include <nlohmann/json.hpp>
 
 #include <algorithm>
 #include <cctype>
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
 #include <iostream>
 
@@ -90,6 +92,35 @@ void print_repair_report(const std::string& output, const RepairReport& r) {
   }
   if (r.unfixed.size() > 20) std::printf("  ... %zu more unfixed regions in the JSON report\n", r.unfixed.size() - 20);
   std::printf("  %.2fs; %s\n", r.total_seconds, r.all_fixed() ? "no intersections left" : "INTERSECTIONS LEFT");
+}
+
+// What the report says about the run's origin: the tool's version, the input's file name and
+// its parts with their triangle counts (the core library never sees a file name).
+WrapReport::Source source_of(const std::string& path, const Mesh& mesh) {
+  WrapReport::Source src;
+  src.tool_version = VDBWRAP_VERSION;
+  src.file_name = std::filesystem::path(path).filename().string();
+  std::vector<size_t> counts(std::max<size_t>(mesh.part_names.size(), 1), 0);
+  for (size_t t = 0; t < mesh.triangles.size(); ++t) {
+    const int32_t p = mesh.part_of(t);
+    if (p < 0) continue;
+    if (size_t(p) >= counts.size()) counts.resize(size_t(p) + 1, 0);
+    ++counts[size_t(p)];
+  }
+  for (size_t p = 0; p < counts.size(); ++p)
+    src.parts.emplace_back(p < mesh.part_names.size() ? mesh.part_names[p] : std::string(), counts[p]);
+  return src;
+}
+
+// The same keys as the wrap report's, added to the JSON of the reports built elsewhere
+// (repair's, check's).
+std::string with_source(const std::string& report_json, const WrapReport::Source& src) {
+  nlohmann::json j = nlohmann::json::parse(report_json);
+  j["vdbwrap_version"] = src.tool_version;
+  nlohmann::json parts = nlohmann::json::array();
+  for (const auto& [name, triangles] : src.parts) parts.push_back({{"name", name}, {"triangles", triangles}});
+  j["source"] = {{"file_name", src.file_name}, {"parts", parts}};
+  return j.dump(2);
 }
 
 bool looks_like_number(const std::string& t) {
@@ -255,12 +286,17 @@ int main(int argc, char** argv) {
       progress.progress("read", 0.0, input);
       Mesh mesh = io::read_mesh(input);
       progress.progress("read", 1.0, std::to_string(mesh.triangles.size()) + " triangles");
+      const WrapReport::Source source = source_of(input, mesh);
       WrapResult result;
       try {
         result = wrap(mesh, params, &progress);
       } catch (const WrapFailure& failure) {
         // The report is written even when the run stops (a leak, a failed validation).
-        if (!report_path.empty()) write_text(report_path, to_json(failure.report()));
+        if (!report_path.empty()) {
+          WrapReport report = failure.report();
+          report.source = source;
+          write_text(report_path, to_json(report));
+        }
         const LeakReport& leak = failure.report().leak;
         if (leak.detected) {
           if (!leak_path.empty()) write_text(leak_path, leak_to_obj(leak));
@@ -273,6 +309,7 @@ int main(int argc, char** argv) {
       }
       progress.progress("write", 0.0, output);
       io::write_mesh(result.surface, output);
+      result.report.source = source;
       if (!report_path.empty()) write_text(report_path, to_json(result.report));
       const auto& r = result.report;
       if (!quiet)
@@ -298,7 +335,8 @@ int main(int argc, char** argv) {
       RepairResult result = repair(mesh, rparams, &progress);
       progress.progress("write", 0.0, repair_output);
       io::write_mesh(result.mesh, repair_output);
-      if (!repair_report.empty()) write_text(repair_report, to_json(result.report));
+      if (!repair_report.empty())
+        write_text(repair_report, with_source(to_json(result.report), source_of(repair_input, mesh)));
       print_repair_report(repair_output, result.report);
       return result.report.all_fixed() ? 0 : exit_code(ErrorKind::WrapFailed);
     }
@@ -328,7 +366,7 @@ int main(int argc, char** argv) {
                 ", \"sharp_edges_from_reference\": " + to_json(edges);
       }
       json += "}";
-      if (!check_report.empty()) write_text(check_report, json);
+      if (!check_report.empty()) write_text(check_report, with_source(json, source_of(check_input, mesh)));
       if (require_valid && !d.valid_closed_surface()) return exit_code(ErrorKind::WrapFailed);
       return 0;
     }

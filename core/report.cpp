@@ -258,6 +258,13 @@ std::string to_json(const WrapReport& r, int indent) {
          {"distance_sharp_edges_to_output", dist_json(r.sharp_edges_to_output)},
          {"stages", stages},
          {"total_seconds", r.total_seconds}};
+  // New keys only, and only when the caller set them: older readers see the report unchanged.
+  if (!r.source.tool_version.empty()) j["vdbwrap_version"] = r.source.tool_version;
+  if (!r.source.file_name.empty() || !r.source.parts.empty()) {
+    json parts = json::array();
+    for (const auto& [name, triangles] : r.source.parts) parts.push_back({{"name", name}, {"triangles", triangles}});
+    j["source"] = {{"file_name", r.source.file_name}, {"parts", parts}};
+  }
   return j.dump(indent);
 }
 

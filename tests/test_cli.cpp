@@ -1,5 +1,6 @@
 // The CLI as a user runs it: exit codes and one-line messages for bad input and arguments.
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 
 #include <chrono>
 #include <cstdlib>
@@ -66,6 +67,11 @@ std::string binary_stl(uint32_t declared, size_t triangles, float fill = 0.0f) {
     s.append(2, '\0');
   }
   return s;
+}
+
+std::string read_text(const fs::path& p) {
+  std::ifstream in(p);
+  return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
 }
 
 }  // namespace
@@ -340,14 +346,62 @@ TEST_F(Cli, ParameterFilesInJsonAndYamlAndTheCommandLineOverrides) {
   EXPECT_NE(part.err.find("warm"), std::string::npos) << part.err;
 }
 
-// ---- repair ---------------------------------------------------------------------------
-
-namespace {
-std::string read_text(const fs::path& p) {
-  std::ifstream in(p);
-  return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+TEST_F(Cli, ReportsNameTheToolVersionTheInputFileAndItsParts) {
+  Mesh m;
+  vdbwrap::testing::add_box(m, {0, 0, 0}, {1, 1, 1}, 0);
+  vdbwrap::testing::add_box(m, {2, 0, 0}, {3, 1, 1}, 1);
+  vdbwrap::testing::add_box(m, {4, 0, 0}, {5, 1, 1}, 1);
+  m.part_names = {"inlet", "housing"};
+  const std::string in = (dir / "assembly.obj").string();
+  io::write_mesh(m, in);
+  // The version --version prints, without the program name.
+  CliRun version = run("--version");
+  ASSERT_EQ(version.code, 0);
+  std::string expected_version = version.out.substr(version.out.find(' ') + 1);
+  while (!expected_version.empty() && std::isspace(static_cast<unsigned char>(expected_version.back()))) expected_version.pop_back();
+  ASSERT_FALSE(expected_version.empty()) << version.out;
+  auto expect_source = [&](const nlohmann::json& j, const std::string& what) {
+    EXPECT_EQ(j.value("vdbwrap_version", ""), expected_version) << what;
+    ASSERT_TRUE(j.contains("source")) << what;
+    EXPECT_EQ(j["source"].value("file_name", ""), "assembly.obj") << what;
+    const nlohmann::json& parts = j["source"]["parts"];
+    ASSERT_EQ(parts.size(), 2u) << what;
+    EXPECT_EQ(parts[0].value("name", ""), "inlet");
+    EXPECT_EQ(parts[0].value("triangles", size_t(0)), 12u);
+    EXPECT_EQ(parts[1].value("name", ""), "housing");
+    EXPECT_EQ(parts[1].value("triangles", size_t(0)), 24u);
+  };
+  const fs::path report = dir / "r.json";
+  CliRun r = run("wrap " + in + " -o " + (dir / "o.obj").string() + " --base-size 3% --report " + report.string());
+  ASSERT_EQ(r.code, 0) << r.err;
+  nlohmann::json j = nlohmann::json::parse(read_text(report));
+  expect_source(j, "wrap");
+  // The keys older readers use are all still there.
+  for (const char* key : {"input", "features", "parameters", "grid", "volumes", "leak", "output", "stages", "total_seconds"})
+    EXPECT_TRUE(j.contains(key)) << key;
+  EXPECT_EQ(j["input"].value("parts", size_t(0)), 2u);
+  // A leaking seed point's report, written although the wrap stops.
+  const std::string holed = (dir / "holed.obj").string();
+  io::write_mesh(vdbwrap::testing::holed_cube(0.1), holed);
+  fs::remove(report);
+  CliRun leak = run("wrap " + holed + " -o " + (dir / "l.obj").string() + " --volume 0.5,0.5,0.5 --report " + report.string());
+  EXPECT_EQ(leak.code, 4) << leak.err;
+  nlohmann::json failed = nlohmann::json::parse(read_text(report));
+  EXPECT_EQ(failed.value("vdbwrap_version", ""), expected_version);
+  EXPECT_EQ(failed["source"].value("file_name", ""), "holed.obj");
+  EXPECT_TRUE(failed["leak"].value("detected", false));
+  // repair and check reports carry the same keys.
+  ASSERT_EQ(run("repair " + in + " -o " + (dir / "f.obj").string() + " --report " + report.string()).code, 0);
+  j = nlohmann::json::parse(read_text(report));
+  expect_source(j, "repair");
+  EXPECT_TRUE(j.contains("regions") && j.contains("all_fixed")) << j.dump();
+  ASSERT_EQ(run("check " + in + " --report " + report.string()).code, 0);
+  j = nlohmann::json::parse(read_text(report));
+  expect_source(j, "check");
+  EXPECT_TRUE(j.contains("diagnostics"));
 }
-}  // namespace
+
+// ---- repair ---------------------------------------------------------------------------
 
 TEST_F(Cli, RepairFixesADentAndReportsIt) {
   Mesh m = vdbwrap::testing::cylinder_mesh({0, 0, 0}, 1.0, 0.02, 128);

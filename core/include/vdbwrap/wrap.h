@@ -259,6 +259,13 @@ struct WrapReport {
   DistanceStats sharp_edges_to_output;  // samples along the input's sharp edges (over 40 degrees)
   std::vector<StageStats> stages;
   double total_seconds = 0;
+  // Filled by the caller, not by wrap(): the program and the input file the report is about
+  // (the CLI knows the file's name; the library never sees one). Left out of the JSON when empty.
+  struct Source {
+    std::string tool_version;                            // "0.1.0"
+    std::string file_name;                               // the input's file name, without its folder
+    std::vector<std::pair<std::string, size_t>> parts;  // each input part's name and triangle count
+  } source;
 };
 
 struct WrapResult {
