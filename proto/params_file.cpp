@@ -22,17 +22,38 @@ using nlohmann::json;
   throw Error(ErrorKind::InvalidArgument, name + ": " + what);
 }
 
+// A WrapParameters message is a few levels deep. Deeper text is refused while it is read:
+// printing a deeply nested JSON array overflowed the stack (issue 33).
+constexpr int kMaxDepth = 32;
+
+[[noreturn]] void too_deep(const std::string& name) {
+  bad(name, "nested more than " + std::to_string(kMaxDepth) + " levels deep (not a WrapParameters message)");
+}
+
+// YAML aliases repeat a node wherever they appear: a few lines of nested aliases expand to
+// billions of values (exhausting memory, issue 33). Far more values than any parameter file has
+// are refused.
+constexpr size_t kMaxYamlValues = 100000;
+
+struct YamlBudget {
+  const std::string& name;
+  size_t values = 0;
+};
+
 // YAML scalars carry no type: numbers and booleans are recognised, the rest are strings.
-json yaml_to_json(const YAML::Node& node) {
+json yaml_to_json(const YAML::Node& node, YamlBudget& budget, int depth = 0) {
+  if (depth > kMaxDepth) too_deep(budget.name);
+  if (++budget.values > kMaxYamlValues)
+    bad(budget.name, "more than " + std::to_string(kMaxYamlValues) + " values once its aliases are expanded");
   switch (node.Type()) {
     case YAML::NodeType::Map: {
       json j = json::object();
-      for (const auto& kv : node) j[kv.first.as<std::string>()] = yaml_to_json(kv.second);
+      for (const auto& kv : node) j[kv.first.as<std::string>()] = yaml_to_json(kv.second, budget, depth + 1);
       return j;
     }
     case YAML::NodeType::Sequence: {
       json j = json::array();
-      for (const auto& v : node) j.push_back(yaml_to_json(v));
+      for (const auto& v : node) j.push_back(yaml_to_json(v, budget, depth + 1));
       return j;
     }
     case YAML::NodeType::Scalar: {
@@ -75,7 +96,16 @@ void normalise_enums(json& j) {
 v1::WrapParameters parse_params_text(const std::string& text, bool yaml, const std::string& name) {
   json j;
   try {
-    j = yaml ? yaml_to_json(YAML::Load(text)) : json::parse(text);
+    if (yaml) {
+      YamlBudget budget{name};
+      j = yaml_to_json(YAML::Load(text), budget);
+    } else {
+      // The parser itself does not recurse; its callback sees the depth of every value.
+      j = json::parse(text, [&](int depth, json::parse_event_t, json&) {
+        if (depth > kMaxDepth) too_deep(name);
+        return true;
+      });
+    }
   } catch (const YAML::Exception& e) {
     bad(name, std::string("not valid YAML: ") + e.what());
   } catch (const json::exception& e) {
