@@ -16,7 +16,11 @@ struct GridKey {
 };
 
 struct GridKeyHash {
-  size_t operator()(const GridKey& k) const { return size_t(k.x * 73856093LL ^ k.y * 19349663LL ^ k.z * 83492791LL); }
+  // Unsigned arithmetic: the same values, without the signed overflow (undefined behaviour,
+  // found by UBSan) that cells far from the origin caused.
+  size_t operator()(const GridKey& k) const {
+    return size_t(uint64_t(k.x) * 73856093ULL ^ uint64_t(k.y) * 19349663ULL ^ uint64_t(k.z) * 83492791ULL);
+  }
 };
 
 // The cell of p on a grid of cells 1/inv_cell wide.
