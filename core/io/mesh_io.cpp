@@ -1,5 +1,5 @@
 // Public entry points of the mesh I/O layer: format detection, whole-file reading, final
-// checks, and atomic writing. The formats themselves live in stl/obj/off/ply.cpp.
+// checks, and atomic writing. The formats themselves live in stl/obj/off/ply/vtp/nastran.cpp.
 #include "io/mesh_io.h"
 
 #include <algorithm>
@@ -43,10 +43,12 @@ std::string file_stem(const std::string& path) {
   return base;
 }
 
+// Control bytes become spaces too: an ASCII STL solid name with one is refused as text on
+// reading (looks_like_ascii_stl), so a written file did not read back (found by fuzzing).
 std::string one_line(const std::string& name) {
   std::string out = name;
   for (char& c : out)
-    if (c == '\n' || c == '\r') c = ' ';
+    if (static_cast<unsigned char>(c) < 32) c = ' ';
   return out;
 }
 
@@ -63,6 +65,8 @@ using detail::fail;
 
 // Format from the content, for names without a known extension.
 Format sniff_format(std::string_view bytes) {
+  // Before the NUL test: appended raw VTP data is binary.
+  if (detail::looks_like_vtp(bytes)) return Format::Vtp;
   std::string_view head = detail::trim(bytes.substr(0, 4096));
   if (head.substr(0, 3) == "ply" && head.size() > 3 && (head[3] == '\n' || head[3] == '\r'))
     return Format::Ply;
@@ -100,9 +104,11 @@ Mesh parse(std::string_view bytes, Format format, const std::string& name) {
     case Format::Obj: reject_binary_text(bytes, name, "OBJ"); return detail::read_obj(bytes, name);
     case Format::Off: reject_binary_text(bytes, name, "OFF"); return detail::read_off(bytes, name);
     case Format::Ply: return detail::read_ply(bytes, name);
+    case Format::Vtp: return detail::read_vtp(bytes, name);
+    case Format::Nastran: fail(name, "reading Nastran bulk data is not supported (write only)");
     case Format::Unknown: break;
   }
-  fail(name, "unknown format (expected STL, OBJ, OFF or PLY)");
+  fail(name, "unknown format (expected STL, OBJ, OFF, PLY or VTP)");
 }
 
 // A file's bytes in a buffer that is never zero-filled first: the read writes every byte
@@ -143,11 +149,16 @@ FileBytes read_whole_file(const std::string& path) {
 
 // Writers index points and parts blindly; an inconsistent mesh must not make them read
 // out of bounds.
-void check_writable(const Mesh& mesh, const std::string& path) {
+void check_writable(const Mesh& mesh, Format format, const std::string& path) {
   auto bad = [&](const std::string& what) {
     throw Error(ErrorKind::OutputFailed, path + ": cannot write: " + what);
   };
   if (mesh.triangles.size() > UINT32_MAX) bad("more than 2^32-1 triangles");
+  if (format == Format::Nastran &&
+      std::max(mesh.points.size(), mesh.triangles.size()) > detail::kNastranMaxId)
+    bad("Nastran IDs have 8 digits: at most " + std::to_string(detail::kNastranMaxId) +
+        " grid points and triangles (the mesh has " + std::to_string(mesh.points.size()) + " and " +
+        std::to_string(mesh.triangles.size()) + ")");
   for (size_t t = 0; t < mesh.triangles.size(); ++t)
     for (uint32_t v : mesh.triangles[t])
       if (v >= mesh.points.size())
@@ -163,12 +174,23 @@ void check_writable(const Mesh& mesh, const std::string& path) {
           " but the mesh has " + std::to_string(mesh.part_names.size()) + " part names");
 }
 
-void write_to(const Mesh& mesh, Format format, detail::Sink& out) {
+bool stl_is_ascii(const Mesh& mesh, StlEncoding encoding) {
+  switch (encoding) {
+    case StlEncoding::Ascii: return true;
+    case StlEncoding::Binary: return false;
+    case StlEncoding::Auto: break;
+  }
+  return mesh.part_names.size() > 1;
+}
+
+void write_to(const Mesh& mesh, Format format, const WriteOptions& options, detail::Sink& out) {
   switch (format) {
-    case Format::Stl: return detail::write_stl(mesh, out);
+    case Format::Stl: return detail::write_stl(mesh, out, stl_is_ascii(mesh, options.stl));
     case Format::Obj: return detail::write_obj(mesh, out);
     case Format::Off: return detail::write_off(mesh, out);
     case Format::Ply: return detail::write_ply(mesh, out);
+    case Format::Vtp: return detail::write_vtp(mesh, out);
+    case Format::Nastran: return detail::write_nastran(mesh, out);
     case Format::Unknown: break;
   }
 }
@@ -185,6 +207,8 @@ Format format_from_extension(std::string_view path) {
   if (detail::iequals(ext, "obj")) return Format::Obj;
   if (detail::iequals(ext, "off")) return Format::Off;
   if (detail::iequals(ext, "ply")) return Format::Ply;
+  if (detail::iequals(ext, "vtp")) return Format::Vtp;
+  if (detail::iequals(ext, "nas") || detail::iequals(ext, "bdf")) return Format::Nastran;
   return Format::Unknown;
 }
 
@@ -213,21 +237,22 @@ Mesh read_mesh_from_bytes(std::string_view bytes, Format format, const std::stri
   return mesh;
 }
 
-std::string write_mesh_to_bytes(const Mesh& mesh, Format format) {
+std::string write_mesh_to_bytes(const Mesh& mesh, Format format, const WriteOptions& options) {
   if (format == Format::Unknown) throw Error(ErrorKind::OutputFailed, "unknown output format");
-  check_writable(mesh, "output");
+  check_writable(mesh, format, "output");
   detail::Sink sink;
-  write_to(mesh, format, sink);
+  write_to(mesh, format, options, sink);
   return sink.take();
 }
 
-void write_mesh(const Mesh& mesh, const std::string& path) {
+void write_mesh(const Mesh& mesh, const std::string& path, const WriteOptions& options) {
   auto failed = [&](const std::string& what) {
     throw Error(ErrorKind::OutputFailed, path + ": " + what);
   };
   Format format = format_from_extension(path);
-  if (format == Format::Unknown) failed("unknown output format (use .stl, .obj, .off or .ply)");
-  check_writable(mesh, path);
+  if (format == Format::Unknown)
+    failed("unknown output format (use .stl, .obj, .off, .ply, .vtp, .nas or .bdf)");
+  check_writable(mesh, format, path);
 
   // Write beside the target, then rename: readers never see a half-written file.
   const std::string tmp = path + ".tmp";
@@ -236,7 +261,7 @@ void write_mesh(const Mesh& mesh, const std::string& path) {
   bool ok = false;
   try {
     detail::Sink sink(f);
-    write_to(mesh, format, sink);
+    write_to(mesh, format, options, sink);
     sink.flush();
     ok = !sink.failed();
   } catch (...) {

@@ -1,4 +1,5 @@
-// Reading and writing STL (binary and ASCII), OBJ, OFF and PLY (ASCII and binary).
+// Reading and writing STL (binary and ASCII), OBJ, OFF, PLY (ASCII and binary) and VTK XML
+// PolyData (.vtp); writing Nastran bulk data (.nas, .bdf).
 #pragma once
 #include <string>
 #include <string_view>
@@ -7,7 +8,18 @@
 
 namespace vdbwrap::io {
 
-enum class Format { Unknown, Stl, Obj, Off, Ply };
+// New formats go at the end: the values are logged and picked by byte in the fuzzer.
+enum class Format { Unknown, Stl, Obj, Off, Ply, Vtp, Nastran };
+
+// How STL is written. Auto: binary (float coordinates), ASCII when the mesh has several parts
+// (binary STL has no solids). Ascii always keeps the solid names and the doubles; Binary
+// always writes floats and drops the part names.
+enum class StlEncoding { Auto, Ascii, Binary };
+
+// Per-format choices of the writers; formats without a choice ignore it.
+struct WriteOptions {
+  StlEncoding stl = StlEncoding::Auto;
+};
 
 // Format from a file name's extension (case-insensitive); Unknown when none matches.
 Format format_from_extension(std::string_view path);
@@ -21,7 +33,8 @@ Format format_from_extension(std::string_view path);
 // STL points are not welded (3 per facet); OBJ/OFF/PLY keep their indexing and polygons are
 // triangulated (ear clipping). Parts: one per ASCII STL solid, one named after the file for
 // binary STL, one per OBJ o/g group ("default" before any), one per distinct PLY face "part"
-// value; OFF and PLY without "part" have none. Parts are in order of first appearance and only
+// value or VTP cell "part_id" value (named by the VTP's "part_names" field data); OFF, and PLY
+// or VTP without those, have none. Nastran files cannot be read. Parts are in order of first appearance and only
 // parts with triangles exist. With at most one part, triangle_part is left empty.
 Mesh read_mesh(const std::string& path);
 
@@ -29,14 +42,16 @@ Mesh read_mesh(const std::string& path);
 // display_name is used in error messages.
 Mesh read_mesh_from_bytes(std::string_view bytes, Format format, const std::string& display_name);
 
-// Writes by the path's extension (.stl binary, .obj, .off, .ply binary little-endian).
-// Part names are kept as STL solids (ASCII STL when there are several parts), OBJ groups,
-// and a per-face "part" property in PLY. Throws vdbwrap::Error(OutputFailed).
-// The file is written to PATH.tmp, then renamed to PATH.
-void write_mesh(const Mesh& mesh, const std::string& path);
+// Writes by the path's extension (.stl binary, .obj, .off, .ply binary little-endian, .vtp
+// appended raw binary, .nas/.bdf Nastran bulk data with GRID* and CTRIA3).
+// Part names are kept as STL solids (ASCII STL), OBJ groups (faces sorted by part, each group
+// once), a per-face "part" property in PLY, cell data "part_id" plus field data "part_names"
+// in VTP, and PIDs (part index + 1) with "$ PID n: name" comments in Nastran.
+// Throws vdbwrap::Error(OutputFailed). The file is written to PATH.tmp, then renamed to PATH.
+void write_mesh(const Mesh& mesh, const std::string& path, const WriteOptions& options = {});
 
 // The same into memory (the server sends results this way). Throws Error(OutputFailed) for
 // Format::Unknown or an inconsistent mesh.
-std::string write_mesh_to_bytes(const Mesh& mesh, Format format);
+std::string write_mesh_to_bytes(const Mesh& mesh, Format format, const WriteOptions& options = {});
 
 }  // namespace vdbwrap::io

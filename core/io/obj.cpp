@@ -126,7 +126,9 @@ Mesh read_obj(std::string_view bytes, const std::string& name) {
   return ObjReader(bytes, name).read();
 }
 
-// Vertices, then faces; a "g" line wherever the part changes, so triangle order is kept.
+// Vertices, then faces grouped by part: each part's "g" line appears once (readers that make
+// one group per "g" line would otherwise split a part), in part order; within a part the
+// faces keep their order.
 void write_obj(const Mesh& mesh, Sink& out) {
   out.put("# written by vdbwrap\n");
   for (const Vec3& p : mesh.points) {
@@ -137,19 +139,30 @@ void write_obj(const Mesh& mesh, Sink& out) {
     }
     out.put('\n');
   }
-  int32_t current = -1;
-  for (size_t t = 0; t < mesh.triangles.size(); ++t) {
-    if (!mesh.part_names.empty() && mesh.part_of(t) != current) {
-      current = mesh.part_of(t);
-      std::string group = one_line(mesh.part_names[size_t(current)]);
-      out.put("g " + (group.empty() ? std::string("default") : group) + "\n");
-    }
+  auto put_face = [&](const Tri& tri) {
     out.put('f');
-    for (uint32_t v : mesh.triangles[t]) {
+    for (uint32_t v : tri) {
       out.put(' ');
       out.put_uint(uint64_t(v) + 1);
     }
     out.put('\n');
+  };
+  if (mesh.part_names.empty()) {
+    for (const Tri& tri : mesh.triangles) put_face(tri);
+    return;
+  }
+  // Counting sort by part: stable, linear.
+  std::vector<size_t> start(mesh.part_names.size() + 1, 0);
+  for (size_t t = 0; t < mesh.triangles.size(); ++t) ++start[size_t(mesh.part_of(t)) + 1];
+  for (size_t p = 1; p < start.size(); ++p) start[p] += start[p - 1];
+  std::vector<uint32_t> order(mesh.triangles.size());
+  std::vector<size_t> next(start.begin(), start.end() - 1);
+  for (size_t t = 0; t < mesh.triangles.size(); ++t) order[next[size_t(mesh.part_of(t))]++] = uint32_t(t);
+  for (size_t p = 0; p < mesh.part_names.size(); ++p) {
+    if (start[p] == start[p + 1]) continue;  // a part without faces makes no group
+    std::string group = one_line(mesh.part_names[p]);
+    out.put("g " + (group.empty() ? std::string("default") : group) + "\n");
+    for (size_t i = start[p]; i < start[p + 1]; ++i) put_face(mesh.triangles[order[i]]);
   }
 }
 

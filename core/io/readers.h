@@ -154,6 +154,8 @@ Mesh read_stl(std::string_view bytes, const std::string& name);
 Mesh read_obj(std::string_view bytes, const std::string& name);
 Mesh read_off(std::string_view bytes, const std::string& name);
 Mesh read_ply(std::string_view bytes, const std::string& name);
+bool looks_like_vtp(std::string_view bytes);  // an XML VTKFile of type PolyData
+Mesh read_vtp(std::string_view bytes, const std::string& name);
 
 // ---- writers ------------------------------------------------------------------------------
 
@@ -197,10 +199,15 @@ class Sink {
 std::string one_line(const std::string& name);
 
 // Each writer expects a mesh already checked by the caller (indices and parts in range).
-void write_stl(const Mesh& mesh, Sink& out);  // binary; ASCII with one solid per part if >1 part
+// Binary (one part at most) or ASCII with one solid per part, as `ascii` says.
+void write_stl(const Mesh& mesh, Sink& out, bool ascii);
 void write_obj(const Mesh& mesh, Sink& out);
 void write_off(const Mesh& mesh, Sink& out);
 void write_ply(const Mesh& mesh, Sink& out);
+void write_vtp(const Mesh& mesh, Sink& out);
+// Grid and element IDs are 8-character fields: the caller checks the counts against this.
+constexpr uint64_t kNastranMaxId = 99999999;
+void write_nastran(const Mesh& mesh, Sink& out);
 
 // Little-endian byte order helpers for the binary formats.
 constexpr bool kHostLittleEndian = __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__;

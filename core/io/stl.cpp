@@ -216,16 +216,17 @@ void write_ascii_facet(const Mesh& mesh, const Tri& t, Sink& out) {
 }
 
 // One solid per part, in part order (a triangle order that interleaves parts is not kept).
+// A single part keeps its name; a mesh without parts is one unnamed solid.
 void write_ascii_stl(const Mesh& mesh, Sink& out) {
-  std::vector<std::vector<uint32_t>> by_part(mesh.part_names.size());
+  std::vector<std::vector<uint32_t>> by_part(std::max<size_t>(mesh.part_names.size(), 1));
   for (size_t t = 0; t < mesh.triangles.size(); ++t)
     by_part[mesh.part_of(t)].push_back(uint32_t(t));
   for (size_t p = 0; p < by_part.size(); ++p) {
     if (by_part[p].empty()) continue;
-    std::string solid = one_line(mesh.part_names[p]);
-    out.put("solid " + solid + "\n");
+    std::string solid = p < mesh.part_names.size() ? one_line(mesh.part_names[p]) : "";
+    out.put(solid.empty() ? std::string("solid\n") : "solid " + solid + "\n");
     for (uint32_t t : by_part[p]) write_ascii_facet(mesh, mesh.triangles[t], out);
-    out.put("endsolid " + solid + "\n");
+    out.put(solid.empty() ? std::string("endsolid\n") : "endsolid " + solid + "\n");
   }
 }
 
@@ -255,8 +256,8 @@ Mesh read_stl(std::string_view bytes, const std::string& name) {
   fail_binary_size(bytes, name);
 }
 
-void write_stl(const Mesh& mesh, Sink& out) {
-  if (mesh.part_names.size() > 1)
+void write_stl(const Mesh& mesh, Sink& out, bool ascii) {
+  if (ascii)
     write_ascii_stl(mesh, out);
   else
     write_binary_stl(mesh, out);
