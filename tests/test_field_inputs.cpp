@@ -200,6 +200,23 @@ TEST_F(FieldInputs, IntersectionLinesSkipDegenerateTrianglesAndAreExact) {
   }
 }
 
+// A pair whose planes meet along an edge of one triangle (two of its corners lie on the other's
+// plane): CGAL's construction in doubles raised SIGFPE on it (found by fuzz_wrap).
+TEST_F(FieldInputs, IntersectionLineAlongAnEdgeOfOneTriangle) {
+  Mesh m;
+  m.points = {{-3.9375, -3.671875, 3.5}, {3.0625, 3.078125, 3.5}, {-3.6875, 3.578125, 1.75},
+              {-3.0625, -2.828125, 3.5}, {3.9375, 3.421875, 1.75}, {3.9375, 3.921875, 3.5}};
+  m.triangles = {{0, 1, 2}, {3, 4, 5}};
+  const auto pairs = check::find_intersecting_pairs(m.points, m.triangles);
+  ASSERT_EQ(pairs.size(), 1u);
+  const auto segments = check::intersection_segments(m.points, m.triangles, pairs);
+  for (const auto& s : segments) {
+    for (double v : {s.a[0], s.a[1], s.a[2], s.b[0], s.b[1], s.b[2]}) EXPECT_TRUE(std::isfinite(v));
+    EXPECT_DOUBLE_EQ(s.a[2], 3.5);  // on the line z = 3.5 of the first triangle's edge
+    EXPECT_DOUBLE_EQ(s.b[2], 3.5);
+  }
+}
+
 // The wrap of such an input through the CLI: a valid surface, no signal.
 TEST_F(FieldInputs, CsgExportWithDegenerateTrianglesWraps) {
   Mesh m = csg_like_with_degenerates();
@@ -223,6 +240,34 @@ TEST_F(FieldInputs, CsgExportWithDegenerateTrianglesWraps) {
   const Mesh w = io::read_mesh(out);
   const auto verdict = check::cgal_verdict(w.points, w.triangles);
   EXPECT_TRUE(verdict.valid_polygon_mesh && verdict.closed && !verdict.self_intersects && verdict.outward);
+}
+
+// The same kind of input at the ends of the supported range: CGAL's constructions in doubles
+// overflow on models in the billions (SIGFPE found by the stress generator) and underflow on
+// tiny ones; the intersection lines are then constructed exactly.
+TEST_F(FieldInputs, CsgExportAtExtremeScalesWraps) {
+  const Mesh base = csg_like_with_degenerates();
+  for (double scale : {1e-9, 1e9})
+    for (double offset : {0.0, 1e3}) {
+      SCOPED_TRACE("scale " + std::to_string(scale) + ", offset " + std::to_string(offset));
+      Mesh m = base;
+      for (Vec3& p : m.points)
+        for (double& c : p) c = c * scale + offset * scale;
+      const auto pairs = check::find_intersecting_pairs(m.points, m.triangles);
+      ASSERT_FALSE(pairs.empty());
+      const auto segments = check::intersection_segments(m.points, m.triangles, pairs);
+      EXPECT_FALSE(segments.empty());
+      for (const auto& seg : segments)
+        for (double v : {seg.a[0], seg.a[1], seg.a[2], seg.b[0], seg.b[1], seg.b[2]}) ASSERT_TRUE(std::isfinite(v));
+      WrapParams p;
+      p.base_size = Length::parse("3%");
+      try {
+        const WrapResult r = wrap(m, p);
+        EXPECT_TRUE(r.report.output.valid_closed_surface());
+      } catch (const Error& e) {
+        ADD_FAILURE() << "refused: " << e.what();
+      }
+    }
 }
 
 // ---- open scan with gap closure -----------------------------------------------------------

@@ -1118,53 +1118,18 @@ std::vector<TrianglePair> find_intersecting_pairs_with(const std::vector<Vec3>& 
   return out;
 }
 
-namespace {
-// Is the pair far from the configurations where constructions in doubles break down? Both
-// triangles well away from degenerate (twice the area against the longest edge squared) and
-// their planes well away from parallel (the sine of the angle between the normals). Near
-// those, a constructed point can come out non-finite, and the filtered predicate that CGAL
-// runs on it next converts it to a rational and raises SIGFPE.
-bool well_conditioned(const Vec3 (&x)[3], const Vec3 (&y)[3]) {
-  constexpr double kRelative = 1e-6;
-  auto normal = [](const Vec3 (&t)[3], double& longest2) {
-    longest2 = std::max({norm2(t[1] - t[0]), norm2(t[2] - t[1]), norm2(t[0] - t[2])});
-    return cross(t[1] - t[0], t[2] - t[0]);
-  };
-  double lx = 0, ly = 0;
-  const Vec3 nx = normal(x, lx), ny = normal(y, ly);
-  const double ax = norm(nx), ay = norm(ny);
-  if (!(ax > kRelative * lx) || !(ay > kRelative * ly)) return false;
-  return norm(cross(nx, ny)) > kRelative * ax * ay;
-}
-}  // namespace
-
-// Well-conditioned pairs are constructed in doubles, the others in the exact kernel (see
-// well_conditioned). A pair that holds a degenerate triangle (listed as a pair with itself),
-// and a coplanar pair, has no intersection line.
+// The segments are constructed in the exact kernel. CGAL's construction in doubles is not safe
+// on real inputs: where the line of the two planes runs along an edge of one triangle (a
+// vertex on the other's plane, frequent on CAD grids and in CSG exports), or the planes are
+// nearly parallel, or the coordinates are large (it raises them to high powers), a constructed
+// point comes out non-finite and the filtered predicate that CGAL runs on it next converts it
+// to a rational, which raises SIGFPE. A pair that holds a degenerate triangle (listed as a
+// pair with itself), and a coplanar pair (duplicates, overlaps: they meet in an area or along
+// their own edges), has no intersection line; both are settled by exact predicates first.
 std::vector<Segment> intersection_segments(const std::vector<Vec3>& points, const std::vector<Tri>& triangles,
                                            const std::vector<TrianglePair>& pairs) {
   using EK = CGAL::Exact_predicates_exact_constructions_kernel;
   auto exact = [&](uint32_t v) { return EK::Point_3(points[v][0], points[v][1], points[v][2]); };
-  auto exact_segment = [&](const Tri& x, const Tri& y, Vec3& a, Vec3& b) {
-    const EK::Triangle_3 tx(exact(x[0]), exact(x[1]), exact(x[2]));
-    const EK::Triangle_3 ty(exact(y[0]), exact(y[1]), exact(y[2]));
-    const auto result = CGAL::intersection(tx, ty);
-    const EK::Segment_3* s = result ? boost::get<EK::Segment_3>(&*result) : nullptr;
-    if (!s) return false;  // a point, or a coplanar overlap (no single line)
-    a = {CGAL::to_double(s->source().x()), CGAL::to_double(s->source().y()), CGAL::to_double(s->source().z())};
-    b = {CGAL::to_double(s->target().x()), CGAL::to_double(s->target().y()), CGAL::to_double(s->target().z())};
-    return true;
-  };
-  auto inexact_segment = [&](const Tri& x, const Tri& y, Vec3& a, Vec3& b) {
-    const T3 tx(to_point(points[x[0]]), to_point(points[x[1]]), to_point(points[x[2]]));
-    const T3 ty(to_point(points[y[0]]), to_point(points[y[1]]), to_point(points[y[2]]));
-    const auto result = CGAL::intersection(tx, ty);
-    const S3* s = result ? boost::get<S3>(&*result) : nullptr;
-    if (!s) return false;
-    a = {s->source().x(), s->source().y(), s->source().z()};
-    b = {s->target().x(), s->target().y(), s->target().z()};
-    return true;
-  };
   std::vector<Segment> out;
   std::mutex lock;
   tbb::parallel_for(tbb::blocked_range<size_t>(0, pairs.size(), 64), [&](const tbb::blocked_range<size_t>& r) {
@@ -1173,25 +1138,19 @@ std::vector<Segment> intersection_segments(const std::vector<Vec3>& points, cons
       if (pairs[i].a == pairs[i].b) continue;
       const Tri& x = triangles[pairs[i].a];
       const Tri& y = triangles[pairs[i].b];
-      const Vec3 cx[3] = {points[x[0]], points[x[1]], points[x[2]]};
-      const Vec3 cy[3] = {points[y[0]], points[y[1]], points[y[2]]};
-      Vec3 a, b;
-      if (well_conditioned(cx, cy)) {
-        if (!inexact_segment(x, y, a, b)) continue;
-        if (!std::isfinite(norm2(a) + norm2(b))) {
-          if (!exact_segment(x, y, a, b)) continue;
-        }
-      } else {
-        const P3 px[3] = {to_point(cx[0]), to_point(cx[1]), to_point(cx[2])};
-        const P3 py[3] = {to_point(cy[0]), to_point(cy[1]), to_point(cy[2])};
-        if (CGAL::collinear(px[0], px[1], px[2]) || CGAL::collinear(py[0], py[1], py[2])) continue;
-        // Coplanar pairs (duplicates, overlaps) meet in an area or along their own edges:
-        // no intersection line, and the exact construction of their overlap is costly.
-        if (CGAL::coplanar(px[0], px[1], px[2], py[0]) && CGAL::coplanar(px[0], px[1], px[2], py[1]) &&
-            CGAL::coplanar(px[0], px[1], px[2], py[2]))
-          continue;
-        if (!exact_segment(x, y, a, b)) continue;
-      }
+      const P3 px[3] = {to_point(points[x[0]]), to_point(points[x[1]]), to_point(points[x[2]])};
+      const P3 py[3] = {to_point(points[y[0]]), to_point(points[y[1]]), to_point(points[y[2]])};
+      if (CGAL::collinear(px[0], px[1], px[2]) || CGAL::collinear(py[0], py[1], py[2])) continue;
+      if (CGAL::coplanar(px[0], px[1], px[2], py[0]) && CGAL::coplanar(px[0], px[1], px[2], py[1]) &&
+          CGAL::coplanar(px[0], px[1], px[2], py[2]))
+        continue;
+      const EK::Triangle_3 tx(exact(x[0]), exact(x[1]), exact(x[2]));
+      const EK::Triangle_3 ty(exact(y[0]), exact(y[1]), exact(y[2]));
+      const auto result = CGAL::intersection(tx, ty);
+      const EK::Segment_3* s = result ? boost::get<EK::Segment_3>(&*result) : nullptr;
+      if (!s) continue;  // a point
+      const Vec3 a{CGAL::to_double(s->source().x()), CGAL::to_double(s->source().y()), CGAL::to_double(s->source().z())};
+      const Vec3 b{CGAL::to_double(s->target().x()), CGAL::to_double(s->target().y()), CGAL::to_double(s->target().z())};
       if (a == b) continue;  // shorter than the doubles can tell apart
       local.push_back({a, b, pairs[i].a, pairs[i].b});
     }
