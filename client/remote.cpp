@@ -10,6 +10,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <cctype>
 #include <chrono>
 #include <condition_variable>
 #include <cstdio>
@@ -21,6 +22,8 @@
 #include <random>
 #include <sstream>
 #include <thread>
+
+#include <nlohmann/json.hpp>
 
 #include "params_mapping.h"
 #include "vdbwrap/v1/jobs.grpc.pb.h"
@@ -424,6 +427,7 @@ struct RemoteCommands::Impl {
   CLI::App* wait = nullptr;
   CLI::App* jobs = nullptr;
   CLI::App* cancel = nullptr;
+  CLI::App* remove = nullptr;
   CLI::App* health = nullptr;
   Connection conn;
   std::string health_service = "vdbwrap.v1.Jobs";
@@ -435,17 +439,27 @@ struct RemoteCommands::Impl {
   cli::RepairOptions repair_options;
   bool detach = false, quiet = false, repair_job = false;
   double queue_wait = 600;
-  // wait / cancel
+  // --server and --token-file, per command (see add_connection).
+  struct EnvBacked {
+    std::string server, token_file;
+  };
+  std::map<const CLI::App*, EnvBacked> env_backed;  // nodes stay put: the options point into them
+  // wait / cancel / delete
   std::vector<std::string> ids;
+  bool json_list = false;  // jobs --json
 
   void add_connection(CLI::App* cmd) {
-    cmd->add_option("--server", conn.server,
+    // Each command's own strings for the options backed by the environment: CLI11 fills them
+    // from it in every command, given or not, and one shared string would take the last.
+    EnvBacked& own = env_backed[cmd];
+    cmd->add_option("--server", own.server,
                     "Server address HOST:PORT, or a gRPC target (ipv4:H1:P1,H2:P2, dns:///name:port)")
         ->required()
         ->envname("VDBWRAP_SERVER")
         ->group("Server");
-    cmd->add_option("--token-file", conn.token_file, "File holding the server's bearer token")
-        ->check(CLI::ExistingFile)
+    // No ExistingFile check: CLI11 would apply it to the environment's value in every command,
+    // `vdbwrap wrap` included; Connection::load() says when the file cannot be read.
+    cmd->add_option("--token-file", own.token_file, "File holding the server's bearer token")
         ->envname("VDBWRAP_TOKEN_FILE")
         ->group("Server");
     cmd->add_option("--tls-ca", conn.tls_ca, "PEM file of the CA that signed the server's certificate: connect with TLS")
@@ -514,10 +528,15 @@ struct RemoteCommands::Impl {
 
     jobs = app.add_subcommand("jobs", "List the jobs of a vdbwrap-server with their state");
     add_connection(jobs);
+    jobs->add_flag("--json", json_list, "Print the jobs as a JSON array, one object per job (for scripts)");
 
     cancel = app.add_subcommand("cancel", "Cancel jobs on a vdbwrap-server");
     add_connection(cancel);
     cancel->add_option("id", ids, "Job ids")->required();
+
+    remove = app.add_subcommand("delete", "Delete ended jobs and their files from a vdbwrap-server (cancel a running job first)");
+    add_connection(remove);
+    remove->add_option("id", ids, "Job ids")->required();
 
     health = app.add_subcommand("health", "Exit 0 when the server's gRPC health service answers SERVING (no token needed)");
     add_connection(health);
@@ -528,6 +547,7 @@ struct RemoteCommands::Impl {
   int run_wait();
   int run_jobs();
   int run_cancel();
+  int run_delete();
   int run_health();
 };
 
@@ -774,6 +794,35 @@ int RemoteCommands::Impl::run_jobs() {
     std::fprintf(stderr, "vdbwrap: error: %s\n", describe(st).c_str());
     return exit_code_of(st, ctx);
   }
+  if (json_list) {
+    nlohmann::json list = nlohmann::json::array();
+    for (const auto& j : reply.jobs()) {
+      // "ERROR_KIND_WRAP_FAILED" -> "wrap_failed"; empty when the job has no error.
+      std::string kind;
+      if (j.error_kind() != pb::ERROR_KIND_UNSPECIFIED) {
+        kind = pb::ErrorKind_Name(j.error_kind()).substr(std::string("ERROR_KIND_").size());
+        for (char& c : kind) c = char(std::tolower(static_cast<unsigned char>(c)));
+      }
+      list.push_back({{"id", j.job_id()},
+                      {"state", api::state_name(j.state())},
+                      {"kind", api::is_repair(j.spec()) ? "repair" : "wrap"},
+                      {"file_name", j.spec().file_name()},
+                      {"submitted_unix_ms", j.submitted_unix_ms()},
+                      {"started_unix_ms", j.started_unix_ms()},
+                      {"finished_unix_ms", j.finished_unix_ms()},
+                      {"stage", j.stage()},
+                      {"fraction", j.fraction()},
+                      {"message", j.message()},
+                      {"error_kind", kind},
+                      {"error_message", j.error_message()},
+                      {"input_bytes", j.input_bytes()},
+                      {"result_bytes", j.result_bytes()},
+                      {"output_triangles", j.output_triangles()},
+                      {"server", j.server()}});
+    }
+    std::printf("%s\n", list.dump(2).c_str());
+    return 0;
+  }
   std::printf("%-32s  %-9s  %-19s  %-24s  %s\n", "ID", "STATE", "SUBMITTED", "PROGRESS", "FILE");
   for (const auto& j : reply.jobs()) {
     std::time_t t = std::time_t(j.submitted_unix_ms() / 1000);
@@ -813,6 +862,31 @@ int RemoteCommands::Impl::run_cancel() {
   return code;
 }
 
+int RemoteCommands::Impl::run_delete() {
+  conn.load();
+  auto stub = pb::Jobs::NewStub(conn.channel());
+  int code = 0;
+  for (const auto& id : ids) {
+    grpc::ClientContext ctx;
+    conn.prepare(ctx);
+    ctx.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(30));
+    pb::JobId req;
+    req.set_job_id(id);
+    pb::DeleteReply reply;
+    grpc::Status st = stub->Delete(&ctx, req, &reply);
+    if (!st.ok()) {
+      std::fprintf(stderr, "vdbwrap: error: job %s: %s\n", id.c_str(), describe(st).c_str());
+      // A queued or running job is not the user's to delete yet: a usage error, like an unknown id.
+      const int c = st.error_code() == grpc::StatusCode::FAILED_PRECONDITION ? exit_code(ErrorKind::InvalidArgument)
+                                                                             : exit_code_of(st, ctx);
+      if (code == 0) code = c;
+      continue;
+    }
+    std::printf("%s deleted\n", id.c_str());
+  }
+  return code;
+}
+
 RemoteCommands::RemoteCommands(CLI::App& app) : impl_(std::make_unique<Impl>(app)) {}
 RemoteCommands::~RemoteCommands() = default;
 
@@ -828,10 +902,16 @@ std::optional<int> RemoteCommands::run() {
       return exit_code(ErrorKind::Internal);
     }
   };
+  for (const auto& [cmd, own] : impl_->env_backed)
+    if (cmd->parsed()) {
+      impl_->conn.server = own.server;
+      impl_->conn.token_file = own.token_file;
+    }
   if (*impl_->submit) return guarded([&] { return impl_->run_submit(); });
   if (*impl_->wait) return guarded([&] { return impl_->run_wait(); });
   if (*impl_->jobs) return guarded([&] { return impl_->run_jobs(); });
   if (*impl_->cancel) return guarded([&] { return impl_->run_cancel(); });
+  if (*impl_->remove) return guarded([&] { return impl_->run_delete(); });
   if (*impl_->health) return guarded([&] { return impl_->run_health(); });
   return std::nullopt;
 }

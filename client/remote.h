@@ -1,4 +1,4 @@
-// The CLI's remote mode: `vdbwrap submit`, `wait`, `jobs`, `cancel`, `health` talk to a vdbwrap-server
+// The CLI's remote mode: `vdbwrap submit`, `wait`, `jobs`, `cancel`, `delete`, `health` talk to a vdbwrap-server
 // (gRPC, vdbwrap.v1.Jobs). Thin: options -> API messages (through the one mapping of
 // proto/params_mapping.h), progress display, downloads, exit codes like `vdbwrap wrap`.
 #pragma once

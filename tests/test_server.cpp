@@ -26,6 +26,8 @@
 #include <sstream>
 #include <thread>
 
+#include <nlohmann/json.hpp>
+
 #include "io/mesh_io.h"
 #include "params_mapping.h"
 #include "test_meshes.h"
@@ -376,9 +378,10 @@ class Service : public ::testing::Test {
     return *servers_.back();
   }
 
-  CliRun cli(const std::string& args) {
+  // env: assignments put before the command (VAR=value ...).
+  CliRun cli(const std::string& args, const std::string& env = "") {
     const std::string out = (dir_ / "cli_out.txt").string(), err = (dir_ / "cli_err.txt").string();
-    std::string cmd = std::string(VDBWRAP_CLI) + " " + args + " > " + out + " 2> " + err;
+    std::string cmd = env + " " + std::string(VDBWRAP_CLI) + " " + args + " > " + out + " 2> " + err;
     int status = std::system(cmd.c_str());
     return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, read_file(out), read_file(err)};
   }
@@ -1154,6 +1157,111 @@ TEST_F(Service, CliDetachWaitJobsCancel) {
   // wait on a cancelled job exits like a cancelled wrap (6).
   CliRun w2 = cli("wait --server " + s.address() + " " + slow_id + " --out-dir " + (dir_ / "w").string());
   EXPECT_EQ(w2.code, 6) << w2.err;
+}
+
+TEST_F(Service, CliOutputFoldersAndEnvironmentDefaults) {
+  const fs::path token = dir_ / "token";
+  write_file(token, "tok");
+  ServerProcess& s = server({"--token-file", token.string()});
+  // The server and the token from the environment, no --server or --token-file.
+  const std::string env = "VDBWRAP_SERVER=" + s.address() + " VDBWRAP_TOKEN_FILE=" + token.string();
+  const std::string sphere = vdbwrap::testing::data_path("unit_sphere.STL");
+  // -o in a missing folder: refused before anything is uploaded.
+  const fs::path missing = dir_ / "no_such_folder";
+  CliRun early = cli("submit " + sphere + " -o " + (missing / "o.stl").string() + " --base-size 3%", env);
+  EXPECT_EQ(early.code, 2) << early.err;
+  EXPECT_NE(early.err.find(missing.string()), std::string::npos) << early.err;
+  CliRun early_report = cli("submit " + sphere + " -o " + (dir_ / "o.stl").string() + " --report " +
+                            (missing / "r.json").string(), env);
+  EXPECT_EQ(early_report.code, 2) << early_report.err;
+  EXPECT_EQ(s.jobs_on_disk(), 0u) << "nothing uploaded";
+  // --out-dir is created, parents included.
+  const fs::path outs = dir_ / "results" / "today";
+  CliRun r = cli("submit " + sphere + " --out-dir " + outs.string() + " --base-size 3% -q", env);
+  ASSERT_EQ(r.code, 0) << r.err;
+  expect_valid_result(read_file(outs / "unit_sphere_wrap.stl"), vdbwrap::io::Format::Stl, "sphere into a new folder");
+  EXPECT_TRUE(fs::exists(outs / "unit_sphere_wrap.json"));
+  // wait's --out-dir too.
+  CliRun detached = cli("submit --detach " + sphere + " --base-size 3%", env);
+  ASSERT_EQ(detached.code, 0) << detached.err;
+  const std::string id = detached.out.substr(0, 32);
+  CliRun waited = cli("wait " + id + " --out-dir " + (dir_ / "waited").string() + " -q", env);
+  ASSERT_EQ(waited.code, 0) << waited.err;
+  EXPECT_TRUE(fs::exists(dir_ / "waited" / "unit_sphere_wrap.stl"));
+  // A file where the folder should be: a bad argument.
+  write_file(dir_ / "a_file", "x");
+  CliRun blocked = cli("wait " + id + " --out-dir " + (dir_ / "a_file").string() + " -q", env);
+  EXPECT_EQ(blocked.code, 2) << blocked.err;
+  // The environment is what made these calls work: without the token the server refuses.
+  CliRun no_token = cli("jobs --server " + s.address());
+  EXPECT_EQ(no_token.code, 2);
+  EXPECT_NE(no_token.err.find("UNAUTHENTICATED"), std::string::npos) << no_token.err;
+  // Options given on the command line win over the environment.
+  CliRun explicit_server = cli("jobs --server " + s.address(), "VDBWRAP_SERVER=127.0.0.1:1 VDBWRAP_TOKEN_FILE=" + token.string());
+  EXPECT_EQ(explicit_server.code, 0) << explicit_server.err;
+  EXPECT_NE(explicit_server.out.find(id), std::string::npos);
+  // A token file in the environment that does not exist: named when a remote command needs
+  // it, no concern of the local commands.
+  CliRun missing_token = cli("jobs --server " + s.address(), "VDBWRAP_TOKEN_FILE=" + (dir_ / "nope").string());
+  EXPECT_EQ(missing_token.code, 2);
+  EXPECT_NE(missing_token.err.find((dir_ / "nope").string()), std::string::npos) << missing_token.err;
+  CliRun local = cli("check " + sphere, "VDBWRAP_TOKEN_FILE=" + (dir_ / "nope").string() + " VDBWRAP_SERVER=127.0.0.1:1");
+  EXPECT_EQ(local.code, 0) << local.err;
+  // Neither: --server is required.
+  CliRun none = cli("jobs");
+  EXPECT_EQ(none.code, 2);
+  EXPECT_NE(none.err.find("--server"), std::string::npos) << none.err;
+}
+
+TEST_F(Service, CliDeletesEndedJobsAndListsJobsAsJson) {
+  ServerProcess& s = server({"--workers", "1"});
+  Client c(s.address());
+  const std::string done = c.submit_ok("unit_sphere.STL");
+  const pb::JobStatus done_status = c.wait_done(done);
+  ASSERT_EQ(done_status.state(), pb::JOB_STATE_SUCCEEDED);
+  const std::string running = c.submit_ok("fuze.obj", slow());
+  c.poll(running, [](const pb::JobStatus& st) { return st.state() == pb::JOB_STATE_RUNNING; }, 30s);
+  const std::string at = " --server " + s.address();
+
+  CliRun listed = cli("jobs --json" + at);
+  ASSERT_EQ(listed.code, 0) << listed.err;
+  const nlohmann::json jobs = nlohmann::json::parse(listed.out);
+  ASSERT_TRUE(jobs.is_array());
+  ASSERT_EQ(jobs.size(), 2u) << listed.out;
+  std::map<std::string, nlohmann::json> by_id;
+  for (const auto& j : jobs) by_id[j.value("id", "")] = j;
+  ASSERT_TRUE(by_id.count(done) && by_id.count(running)) << listed.out;
+  EXPECT_EQ(by_id[done].value("state", ""), "succeeded");
+  EXPECT_EQ(by_id[done].value("kind", ""), "wrap");
+  EXPECT_EQ(by_id[done].value("file_name", ""), "unit_sphere.STL");
+  EXPECT_EQ(by_id[done].value("output_triangles", uint64_t(0)), done_status.output_triangles());
+  EXPECT_EQ(by_id[done].value("error_kind", "x"), "");
+  EXPECT_EQ(by_id[running].value("state", ""), "running");
+  EXPECT_EQ(by_id[running].value("file_name", ""), "fuze.obj");
+
+  // A running job is not deleted: the server's FAILED_PRECONDITION, exit 2, the job stays.
+  CliRun refused = cli("delete" + at + " " + running);
+  EXPECT_EQ(refused.code, 2) << refused.err;
+  EXPECT_NE(refused.err.find("FAILED_PRECONDITION"), std::string::npos) << refused.err;
+  EXPECT_NE(refused.err.find("cancel it first"), std::string::npos) << refused.err;
+  EXPECT_EQ(s.jobs_on_disk(), 2u);
+  // An ended job goes, with its files.
+  CliRun deleted = cli("delete" + at + " " + done);
+  EXPECT_EQ(deleted.code, 0) << deleted.err;
+  EXPECT_EQ(s.jobs_on_disk(), 1u);
+  pb::JobStatus gone;
+  EXPECT_EQ(c.status(done, gone).error_code(), grpc::StatusCode::NOT_FOUND);
+  CliRun again = cli("delete" + at + " " + done);
+  EXPECT_EQ(again.code, 2) << "an unknown job is a bad argument";
+  // Cancelled, then deleted: the spool is empty and the list too.
+  ASSERT_EQ(cli("cancel" + at + " " + running).code, 0);
+  EXPECT_EQ(c.wait_done(running, 30s).state(), pb::JOB_STATE_CANCELLED);
+  CliRun cancelled_gone = cli("delete" + at + " " + running);
+  EXPECT_EQ(cancelled_gone.code, 0) << cancelled_gone.err;
+  EXPECT_EQ(s.jobs_on_disk(), 0u);
+  CliRun empty = cli("jobs --json" + at);
+  ASSERT_EQ(empty.code, 0);
+  EXPECT_EQ(nlohmann::json::parse(empty.out), nlohmann::json::array());
 }
 
 TEST_F(Service, CliRoundRobinSpreadsAndFollowsEachJob) {
