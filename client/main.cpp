@@ -282,7 +282,7 @@ int main(int argc, char** argv) {
       cli::check_output_path("-o", output);
       cli::check_output_path("--report", report_path);
       cli::check_output_path("--leak-path", leak_path);
-      cli::StderrProgress progress(quiet);
+      cli::StderrProgress progress(quiet, cli::wrap_stage_weights());
       progress.progress("read", 0.0, input);
       Mesh mesh = io::read_mesh(input);
       progress.progress("read", 1.0, std::to_string(mesh.triangles.size()) + " triangles");
@@ -298,6 +298,7 @@ int main(int argc, char** argv) {
           write_text(report_path, to_json(report));
         }
         const LeakReport& leak = failure.report().leak;
+        progress.finish();  // the messages below start on a line of their own
         if (leak.detected) {
           if (!leak_path.empty()) write_text(leak_path, leak_to_obj(leak));
           std::fprintf(stderr, "vdbwrap: %s\n", leak.description.c_str());
@@ -311,6 +312,7 @@ int main(int argc, char** argv) {
       io::write_mesh(result.surface, output);
       result.report.source = source;
       if (!report_path.empty()) write_text(report_path, to_json(result.report));
+      progress.complete(output);
       const auto& r = result.report;
       if (!quiet)
         std::fprintf(stderr,
@@ -329,7 +331,7 @@ int main(int argc, char** argv) {
         throw Error(ErrorKind::InvalidArgument, repair_output + ": unknown output format (use .stl, .obj, .off or .ply)");
       cli::check_output_path("-o", repair_output);
       cli::check_output_path("--report", repair_report);
-      cli::StderrProgress progress(repair_quiet);
+      cli::StderrProgress progress(repair_quiet, cli::repair_stage_weights());
       progress.progress("read", 0.0, repair_input);
       Mesh mesh = io::read_mesh(repair_input);
       RepairResult result = repair(mesh, rparams, &progress);
@@ -337,6 +339,7 @@ int main(int argc, char** argv) {
       io::write_mesh(result.mesh, repair_output);
       if (!repair_report.empty())
         write_text(repair_report, with_source(to_json(result.report), source_of(repair_input, mesh)));
+      progress.complete(repair_output);
       print_repair_report(repair_output, result.report);
       return result.report.all_fixed() ? 0 : exit_code(ErrorKind::WrapFailed);
     }

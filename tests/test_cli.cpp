@@ -2,11 +2,18 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <chrono>
 #include <cstdlib>
+#include <set>
 #include <filesystem>
 #include <fstream>
+#include <pty.h>
 #include <sys/wait.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <regex>
 
 #include "../client/suggest.h"
 #include "io/mesh_io.h"
@@ -49,6 +56,30 @@ class Cli : public ::testing::Test {
       return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
     };
     return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, slurp(err), slurp(out), seconds};
+  }
+  // Runs the CLI on a pseudo-terminal, as from an interactive shell (stderr is a TTY): what it
+  // wrote to the terminal, and its exit code.
+  CliRun run_on_terminal(const std::string& args) {
+    const std::string cmd = std::string(VDBWRAP_CLI) + " " + args;
+    int master = -1;
+    const pid_t pid = ::forkpty(&master, nullptr, nullptr, nullptr);
+    if (pid == 0) {
+      ::execl("/bin/sh", "sh", "-c", cmd.c_str(), static_cast<char*>(nullptr));
+      ::_exit(127);
+    }
+    std::string text;
+    if (pid < 0) return {-1, "forkpty failed", "", 0};
+    char buf[4096];
+    for (;;) {
+      const ssize_t n = ::read(master, buf, sizeof buf);
+      if (n > 0) text.append(buf, size_t(n));
+      else if (n < 0 && errno == EINTR) continue;
+      else break;  // EIO once the child has closed the terminal
+    }
+    int status = 0;
+    ::waitpid(pid, &status, 0);
+    ::close(master);
+    return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, text, "", 0};
   }
   std::string file(const std::string& name, const std::string& bytes) {
     std::string p = (dir / name).string();
@@ -399,6 +430,39 @@ TEST_F(Cli, ReportsNameTheToolVersionTheInputFileAndItsParts) {
   j = nlohmann::json::parse(read_text(report));
   expect_source(j, "check");
   EXPECT_TRUE(j.contains("diagnostics"));
+}
+
+TEST_F(Cli, OneOverallProgressFigureOnATerminal) {
+  const std::string args = "wrap " + vdbwrap::testing::data_path("fuze.obj") + " -o " + (dir / "o.stl").string() +
+                           " --base-size 3%";
+  CliRun tty = run_on_terminal(args);
+  ASSERT_EQ(tty.code, 0) << tty.err;
+  // One line redrawn in place: "[ 42%] project: ..." figures that only grow, ending at 100 %.
+  const std::regex figure("\\r\x1b\\[K\\[ *([0-9]+)%\\] ([a-z ]+)");
+  std::vector<int> figures;
+  std::set<std::string> stages;
+  for (auto it = std::sregex_iterator(tty.err.begin(), tty.err.end(), figure); it != std::sregex_iterator(); ++it) {
+    figures.push_back(std::stoi((*it)[1]));
+    stages.insert((*it)[2]);
+  }
+  ASSERT_GE(figures.size(), 5u) << tty.err;
+  EXPECT_TRUE(std::is_sorted(figures.begin(), figures.end())) << tty.err;
+  EXPECT_LT(figures.front(), 10) << tty.err;
+  EXPECT_EQ(figures.back(), 100) << tty.err;
+  EXPECT_GT(std::set<int>(figures.begin(), figures.end()).size(), 4u) << "the figure moves through the run";
+  EXPECT_TRUE(stages.count("project")) << tty.err;
+  EXPECT_FALSE(std::regex_search(tty.err, std::regex("\\[ *[0-9]+\\.[0-9]+s\\]"))) << "no per-stage log lines on a terminal";
+  EXPECT_NE(tty.err.find("wrote "), std::string::npos) << "the summary follows on its own line";
+  // -q: nothing at all.
+  CliRun quiet = run_on_terminal(args + " -q");
+  ASSERT_EQ(quiet.code, 0);
+  EXPECT_EQ(quiet.err.find('%'), std::string::npos) << quiet.err;
+  EXPECT_EQ(quiet.err.find("wrote"), std::string::npos) << quiet.err;
+  // Not a terminal (a log file): one line per stage message with the elapsed time, as before.
+  CliRun log = run(args);
+  ASSERT_EQ(log.code, 0) << log.err;
+  EXPECT_TRUE(std::regex_search(log.err, std::regex("\\[ *[0-9]+\\.[0-9]+s\\] project"))) << log.err;
+  EXPECT_EQ(log.err.find('\r'), std::string::npos);
 }
 
 // ---- repair ---------------------------------------------------------------------------
