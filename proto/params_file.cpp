@@ -119,7 +119,14 @@ v1::WrapParameters parse_params_text(const std::string& text, bool yaml, const s
   v1::WrapParameters msg;
   google::protobuf::util::JsonParseOptions options;
   options.ignore_unknown_fields = false;
-  auto status = google::protobuf::util::JsonStringToMessage(j.dump(), &msg, options);
+  std::string text_json;
+  try {
+    text_json = j.dump();
+  } catch (const json::exception& e) {
+    // YAML takes any bytes; JSON (and so the message) only UTF-8: a Latin-1 byte threw here.
+    bad(name, std::string("is not UTF-8 text: ") + e.what());
+  }
+  auto status = google::protobuf::util::JsonStringToMessage(text_json, &msg, options);
   if (!status.ok()) bad(name, "not a WrapParameters message: " + std::string(status.message()));
   return msg;
 }
