@@ -788,9 +788,98 @@ TEST_F(FormatsTest, NastranLargeFieldKeepsDoublePrecision) {
   EXPECT_TRUE(deck.pid_names.empty());
 }
 
-TEST_F(FormatsTest, NastranIsWriteOnly) {
-  write_mesh(interleaved_mesh(), path("m.nas"));
-  expect_read_error(path("m.nas"), "reading Nastran bulk data is not supported");
+TEST_F(FormatsTest, NastranRoundTripKeepsPointsTrianglesAndNamedParts) {
+  const Mesh m = interleaved_mesh();
+  write_mesh(m, path("m.nas"));
+  const Mesh r = read_mesh(path("m.nas"));
+  ASSERT_EQ(r.points.size(), m.points.size());
+  for (size_t i = 0; i < m.points.size(); ++i)
+    for (int k = 0; k < 3; ++k)
+      EXPECT_LE(std::fabs(r.points[i][k] - m.points[i][k]), std::max(1e-12 * std::fabs(m.points[i][k]), 5e-15));
+  EXPECT_EQ(r.triangles, m.triangles);
+  EXPECT_EQ(r.part_names, m.part_names);
+  EXPECT_EQ(r.triangle_part, m.triangle_part);
+}
+
+// Small, large and free field cards, executive control before BEGIN BULK, a quad, a blank
+// PID (the element ID), names from ANSA and HyperMesh comments, cards that are skipped.
+TEST_F(FormatsTest, NastranFromOtherToolsInEveryFieldFormat) {
+  const std::string text =
+      "SOL 101\nCEND\nTITLE = from another tool\nBEGIN BULK\n"
+      "$ANSA_NAME_COMMENT;7;PSHELL;floor pan;;NO;NO;NO;\n"
+      "$HMNAME PROP                 9\"roof\"\n"
+      "PSHELL         7       1     1.0\n"
+      "MAT1           1  2.1+11              .3\n"
+      "GRID           1              0.      0.      0.\n"
+      "GRID,2,,1.,0.,0.\n"
+      "GRID*                  3               0             1.0             1.0\n"
+      "*                   -0.0\n"
+      "GRID           4       0      0.     1.0     0.0       0\n"
+      "GRID           5              .5      .5   1.5+0 $ an end-of-line comment\n"
+      "CQUAD4        10       7       1       2       3       4\n"
+      "CTRIA3        11       9       1       2       5\n"
+      "CTRIA3,12,,2,3,5\n"
+      "ENDDATA\n"
+      "GRID          99              9.      9.      9.\n";  // after ENDDATA: ignored
+  const Mesh m = read_mesh(write_file("tool.bdf", text));
+  ASSERT_EQ(m.points.size(), 5u);
+  EXPECT_EQ(m.points[1], (Vec3{1, 0, 0}));
+  EXPECT_EQ(m.points[2], (Vec3{1, 1, 0}));
+  EXPECT_EQ(m.points[4], (Vec3{0.5, 0.5, 1.5}));
+  ASSERT_EQ(m.triangles.size(), 4u);  // the quad makes two
+  EXPECT_EQ(m.triangles[2], (Tri{0, 1, 4}));
+  EXPECT_EQ(m.part_names, (std::vector<std::string>{"floor pan", "roof", "pid12"}));
+  EXPECT_EQ(m.triangle_part, (std::vector<int32_t>{0, 0, 1, 2}));
+  // Detected by content too.
+  EXPECT_EQ(read_mesh_from_bytes(text.substr(text.find("BEGIN BULK")), Format::Unknown, "upload").triangles.size(), 4u);
+}
+
+TEST_F(FormatsTest, MalformedNastranNamesTheFileAndTheLine) {
+  const std::string grids = "GRID           1              0.      0.      0.\n"
+                            "GRID           2              1.      0.      0.\n";
+  const struct {
+    const char* file;
+    std::string text;
+    const char* message;
+  } cases[] = {
+      {"missing.nas", grids + "CTRIA3         1       1       1       2       3\n",
+       "line 3: element 1 refers to GRID 3, which the file does not define"},
+      {"twice.nas", grids + "GRID           2              1.      1.      0.\n", "line 3: GRID 2 is defined twice"},
+      {"real.nas", "GRID           1              0.      x.      0.\n", "line 1: malformed coordinate 'x.'"},
+      {"nan.nas", "GRID           1              0.     nan      0.\n", "non-finite coordinate"},
+      {"cp.nas", "GRID           1       5      0.      0.      0.\n", "coordinate system 5"},
+      {"id.nas", "GRID          -1              0.      0.      0.\n", "positive ID"},
+      {"corners.nas", grids + "CTRIA3         1       1       1       2\n", "lacks grid 3"},
+      {"none.nas", grids, "contains no triangles"},
+  };
+  for (const auto& c : cases) {
+    SCOPED_TRACE(c.file);
+    expect_read_error(write_file(c.file, c.text), c.message);
+  }
+}
+
+// Every prefix and many corrupted copies of a written deck: an InvalidInput error naming the
+// file, or a consistent mesh.
+TEST_F(FormatsTest, CorruptedNastranNeverCrashes) {
+  const std::string good = write_mesh_to_bytes(interleaved_mesh(), Format::Nastran);
+  auto check = [&](const std::string& bytes) {
+    try {
+      Mesh m = read_mesh_from_bytes(bytes, Format::Nastran, "corrupt.nas");
+      for (const Tri& t : m.triangles)
+        for (uint32_t v : t) ASSERT_LT(v, m.points.size());
+    } catch (const Error& e) {
+      ASSERT_EQ(int(e.kind()), int(ErrorKind::InvalidInput)) << e.what();
+      ASSERT_EQ(std::string(e.what()).rfind("corrupt.nas: ", 0), 0u) << e.what();
+    }
+  };
+  for (size_t n = 0; n < good.size(); n += 7) check(good.substr(0, n));
+  std::mt19937 rng(43);
+  const char kNoise[] = "$*+,-.0123456789E \n\"";
+  for (int i = 0; i < 3000; ++i) {
+    std::string bytes = good;
+    for (int k = 0; k < 3; ++k) bytes[rng() % bytes.size()] = kNoise[rng() % (sizeof kNoise - 1)];
+    check(bytes);
+  }
 }
 
 // ---- STL solid names and encoding -----------------------------------------------------------

@@ -77,8 +77,11 @@ Format sniff_format(std::string_view bytes) {
   while (lines.next(line)) {
     detail::Tokens tokens(line);
     std::string_view first;
-    if (!tokens.next(first) || first[0] == '#') continue;
+    if (!tokens.next(first) || first[0] == '#' || first[0] == '$') continue;
     if (first.size() >= 3 && first.substr(first.size() - 3) == "OFF") return Format::Off;
+    static const char* const kNastranCards[] = {"BEGIN", "GRID", "CTRIA", "CQUAD", "PSHELL"};
+    for (const char* k : kNastranCards)
+      if (detail::iequals(first.substr(0, std::strlen(k)), k)) return Format::Nastran;
     static const char* const kObjKeywords[] = {"v", "vt",     "vn",     "f", "o",
                                                "g", "mtllib", "usemtl", "s"};
     for (const char* k : kObjKeywords)
@@ -105,7 +108,9 @@ Mesh parse(std::string_view bytes, Format format, const std::string& name) {
     case Format::Off: reject_binary_text(bytes, name, "OFF"); return detail::read_off(bytes, name);
     case Format::Ply: return detail::read_ply(bytes, name);
     case Format::Vtp: return detail::read_vtp(bytes, name);
-    case Format::Nastran: fail(name, "reading Nastran bulk data is not supported (write only)");
+    case Format::Nastran:
+      reject_binary_text(bytes, name, "Nastran");
+      return detail::read_nastran(bytes, name);
     case Format::Unknown: break;
   }
   fail(name, "unknown format (expected STL, OBJ, OFF, PLY or VTP)");

@@ -33,8 +33,9 @@ Format format_from_extension(std::string_view path);
 // STL points are not welded (3 per facet); OBJ/OFF/PLY keep their indexing and polygons are
 // triangulated (ear clipping). Parts: one per ASCII STL solid, one named after the file for
 // binary STL, one per OBJ o/g group ("default" before any), one per distinct PLY face "part"
-// value or VTP cell "part_id" value (named by the VTP's "part_names" field data); OFF, and PLY
-// or VTP without those, have none. Nastran files cannot be read. Parts are in order of first appearance and only
+// value or VTP cell "part_id" value (named by the VTP's "part_names" field data), one per
+// Nastran PID (named by "$ PID n: name", ANSA or HyperMesh comments); OFF, and PLY or VTP
+// without those, have none. Nastran: GRID, CTRIA3/6, CQUAD4/8 in the basic coordinate system. Parts are in order of first appearance and only
 // parts with triangles exist. With at most one part, triangle_part is left empty.
 Mesh read_mesh(const std::string& path);
 

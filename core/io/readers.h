@@ -156,6 +156,7 @@ Mesh read_off(std::string_view bytes, const std::string& name);
 Mesh read_ply(std::string_view bytes, const std::string& name);
 bool looks_like_vtp(std::string_view bytes);  // an XML VTKFile of type PolyData
 Mesh read_vtp(std::string_view bytes, const std::string& name);
+Mesh read_nastran(std::string_view bytes, const std::string& name);
 
 // ---- writers ------------------------------------------------------------------------------
 
