@@ -133,8 +133,16 @@ bool looks_like_number(const std::string& t) {
 std::string unknown_argument(CLI::App& app, int argc, char** argv) {
   std::vector<std::string> commands;
   for (const CLI::App* sub : app.get_subcommands([](CLI::App*) { return true; })) commands.push_back(sub->get_name());
+  std::vector<std::string> top;  // --help, --version: the options before the command
+  for (const CLI::Option* o : static_cast<const CLI::App&>(app).get_options())
+    for (const std::string& l : o->get_lnames()) top.push_back("--" + l);
   int at = 1;
-  while (at < argc && argv[at][0] == '-') ++at;  // --help, --version before the command
+  for (; at < argc && argv[at][0] == '-'; ++at) {
+    const std::string t = argv[at];
+    if (t.size() < 3 || std::find(top.begin(), top.end(), t) != top.end()) continue;
+    if (auto near = cli::closest_match(t, top)) return "unknown option " + t + "; did you mean " + *near + "?";
+    return "unknown option " + t + " (vdbwrap --help lists the commands)";
+  }
   if (at >= argc) return "";
   const std::string word = argv[at];
   CLI::App* cmd = nullptr;

@@ -252,6 +252,9 @@ TEST_F(Cli, UnknownOptionsAndCommandsSuggestTheClosest) {
   CliRun command = run("wrp " + in + " -o " + out);
   EXPECT_EQ(command.code, 2);
   EXPECT_NE(command.err.find("unknown command wrp; did you mean wrap?"), std::string::npos) << command.err;
+  CliRun top = run("--verison");
+  EXPECT_EQ(top.code, 2);
+  EXPECT_NE(top.err.find("unknown option --verison; did you mean --version?"), std::string::npos) << top.err;
   // Nothing close: no guess, the valid names instead.
   CliRun far = run("frobnicate");
   EXPECT_EQ(far.code, 2);
