@@ -1,5 +1,5 @@
-// Reading and writing STL (binary and ASCII), OBJ, OFF, PLY (ASCII and binary) and VTK XML
-// PolyData (.vtp); writing Nastran bulk data (.nas, .bdf).
+// Reading and writing STL (binary and ASCII), OBJ, OFF, PLY (ASCII and binary), VTK XML
+// PolyData (.vtp) and Nastran bulk data (.nas, .bdf).
 #pragma once
 #include <string>
 #include <string_view>
