@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <memory>
 #include <set>
 
@@ -395,9 +396,23 @@ WrapResult run_pipeline(const Mesh& input, const WrapParams& params, ProgressSin
       // For diagnosis (debug-dump builds): VDBWRAP_DUMP_INVALID=FILE keeps the rejected surface.
       if (const char* dump = debug::setting("VDBWRAP_DUMP_INVALID")) io::write_mesh(result.surface, dump);
       std::string why = "the wrap failed validation: closed=" + std::to_string(report.output.closed) +
-                        " manifold=" + std::to_string(report.output.manifold) + " outward=" + std::to_string(verdict.outward) +
-                        " self-intersecting=" + std::to_string(verdict.self_intersects);
-      if (verdict.self_intersects && report.quality.repair_runs > 0)
+                        " manifold=" + std::to_string(report.output.manifold) + " outward=" + std::to_string(verdict.outward);
+      // CGAL's self-intersection test runs on a closed manifold only: otherwise there is no verdict.
+      if (verdict.valid_polygon_mesh) why += " self-intersecting=" + std::to_string(verdict.self_intersects);
+      if (params.float_coordinates) {
+        // Far from the origin, single precision cannot hold cells this small: points merge.
+        double far = 0, cell = INFINITY;
+        for (const Vec3& p : result.surface.points) far = std::max({far, std::fabs(p[0]), std::fabs(p[1]), std::fabs(p[2])});
+        for (double c : surface.cell_size) cell = std::min(cell, c);
+        const double float_step = far * 6e-8;  // a float's spacing at that magnitude, about
+        if (float_step > 1e-3 * cell) {
+          char text[160];
+          std::snprintf(text, sizeof text, "; the output is rounded to single precision for STL, whose steps (about %.3g at "
+                        "these coordinates) are too coarse for cells of %.3g", float_step, cell);
+          why += std::string(text) + ": write .ply, .obj or .vtp, which keep doubles, or move the model nearer the origin";
+        }
+      }
+      if (verdict.valid_polygon_mesh && verdict.self_intersects && report.quality.repair_runs > 0)
         why += " (" + std::to_string(report.output.intersecting_triangles) +
                " intersecting triangles left after the intersection repair: " + report.quality.repair_summary + ")";
       throw WrapFailure(why, report);

@@ -270,6 +270,43 @@ TEST_F(FieldInputs, CsgExportAtExtremeScalesWraps) {
     }
 }
 
+// ---- stray points and far coordinates ------------------------------------------------------
+
+// Scans keep points that no triangle uses; they must not widen sizes given in % of the diagonal.
+TEST_F(FieldInputs, StrayPointsDoNotWidenTheDiagonal) {
+  Mesh m = vdbwrap::testing::box_mesh({0, 0, 0}, {1, 1, 1});
+  for (int i = 0; i < 20; ++i) m.points.push_back({(i % 2 ? 1e4 : -1e4), double(i), -1e4});
+  WrapParams p;
+  p.base_size = Length::parse("2%");
+  const WrapResult r = wrap(m, p);
+  EXPECT_TRUE(r.report.output.valid_closed_surface());
+  EXPECT_NEAR(r.report.diagonal, std::sqrt(3.0), 1e-9);
+  for (const Vec3& q : r.surface.points)
+    for (double c : q) EXPECT_TRUE(c > -0.1 && c < 1.1) << "a wrap point at " << c;
+}
+
+// Far from the origin, binary STL's floats cannot hold the wrap: the error says so and names
+// the way out, instead of listing contradictory validation flags.
+TEST_F(FieldInputs, FloatOutputFarFromTheOriginFailsWithAClearReason) {
+  Mesh m = vdbwrap::testing::box_mesh({1e7, 1e7, 1e7}, {1e7 + 1, 1e7 + 1, 1e7 + 1});
+  const std::string in = (dir_ / "far.obj").string(), out = (dir_ / "far.stl").string(), err = (dir_ / "err.txt").string();
+  io::write_mesh(m, in);
+  const int status = std::system((std::string(VDBWRAP_CLI) + " wrap " + in + " -o " + out + " -q 2> " + err).c_str());
+  ASSERT_TRUE(WIFEXITED(status));
+  std::ifstream f(err);
+  const std::string text((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
+  if (WEXITSTATUS(status) == 0) return;  // a wrap that survived the rounding is fine too
+  EXPECT_EQ(WEXITSTATUS(status), 4);
+  EXPECT_NE(text.find("single precision"), std::string::npos) << text;
+  EXPECT_EQ(text.find("self-intersecting=1"), std::string::npos) << text;
+  EXPECT_FALSE(fs::exists(out));
+  // The same wrap written with doubles is valid.
+  const std::string ply = (dir_ / "far.ply").string();
+  const int again = std::system((std::string(VDBWRAP_CLI) + " wrap " + in + " -o " + ply + " -q 2> /dev/null").c_str());
+  ASSERT_TRUE(WIFEXITED(again));
+  EXPECT_EQ(WEXITSTATUS(again), 0);
+}
+
 // ---- open scan with gap closure -----------------------------------------------------------
 
 // The flood fill turns a uniform block with a leaf node into a tile. OpenVDB deletes the leaf

@@ -231,7 +231,8 @@ RefineResult build_refined_grid(const prep::PreparedInput& in, const WrapParams&
   const auto& pts = in.mesh.points;
   const auto& tris = in.mesh.triangles;
   Box3 box;
-  for (const auto& p : pts) box.add(p);
+  for (const Tri& t : tris)  // the surface's extent: stray points no triangle uses do not count
+    for (uint32_t v : t) box.add(pts[v]);
   const int levels = sc.max_level;
   Vec3 origin = box.lo - Vec3{padding * base, padding * base, padding * base};
   Coord dims0;

@@ -202,12 +202,14 @@ InputIntersections input_intersections(const std::vector<check::TrianglePair>& m
 PreparedInput prepare(const Mesh& input, const WrapParams& params, ProgressSink* progress, const ExactWeld* input_weld) {
   PreparedInput out;
   if (input.triangles.empty()) throw Error(ErrorKind::InvalidInput, "input contains no triangles");
-  Box3 box;
-  for (const Vec3& p : input.points) {
+  for (const Vec3& p : input.points)
     if (!std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2]))
       throw Error(ErrorKind::InvalidInput, "input has a vertex with a non-finite coordinate");
-    box.add(p);
-  }
+  // The extent of the surface, not of the file: stray points that no triangle uses (scans keep
+  // them) would otherwise widen every size given in % of the diagonal.
+  Box3 box;
+  for (const Tri& t : input.triangles)
+    for (uint32_t v : t) box.add(input.points[v]);
   out.origin = box.center();
   out.diagonal = box.diagonal();
   if (!(out.diagonal > 0)) throw Error(ErrorKind::InvalidInput, "input has zero extent (all vertices coincide)");
