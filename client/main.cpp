@@ -203,7 +203,7 @@ int main(int argc, char** argv) {
   std::string input, output, report_path, leak_path;
   cli::WrapOptions wrap_options;
   bool quiet = false;
-  wrap_cmd->add_option("input", input, "Input mesh (.stl .obj .off .ply)")->required();
+  wrap_cmd->add_option("input", input, "Input mesh (.stl .obj .off .ply .vtp .nas .bdf)")->required();
   wrap_options.add_to(wrap_cmd, "Worker threads (0: all cores)");
   // After the parameters: the help lists its groups in the order they first appear.
   wrap_cmd->add_option("-o,--output", output, "Output mesh; the format follows the extension")->required()->group("Output");
@@ -250,7 +250,7 @@ int main(int argc, char** argv) {
   std::string repair_input, repair_output, repair_report;
   cli::RepairOptions repair_options;
   bool repair_quiet = false;
-  repair_cmd->add_option("input", repair_input, "Input mesh (.stl .obj .off .ply)")->required();
+  repair_cmd->add_option("input", repair_input, "Input mesh (.stl .obj .off .ply .vtp .nas .bdf)")->required();
   repair_options.add_to(repair_cmd, true);
   repair_cmd->add_option("-o,--output", repair_output, "Output mesh; the format follows the extension")
       ->required()
@@ -286,7 +286,7 @@ int main(int argc, char** argv) {
       // Binary STL stores floats: validate what will be written.
       params.float_coordinates = io::format_from_extension(output) == io::Format::Stl;
       if (io::format_from_extension(output) == io::Format::Unknown)
-        throw Error(ErrorKind::InvalidArgument, output + ": unknown output format (use .stl, .obj, .off or .ply)");
+        throw Error(ErrorKind::InvalidArgument, output + ": unknown output format (use .stl, .obj, .off, .ply, .vtp, .nas or .bdf)");
       cli::check_output_path("-o", output);
       cli::check_output_path("--report", report_path);
       cli::check_output_path("--leak-path", leak_path);
@@ -336,7 +336,7 @@ int main(int argc, char** argv) {
       // Binary STL stores floats: repair what will be written.
       rparams.float_coordinates = io::format_from_extension(repair_output) == io::Format::Stl;
       if (io::format_from_extension(repair_output) == io::Format::Unknown)
-        throw Error(ErrorKind::InvalidArgument, repair_output + ": unknown output format (use .stl, .obj, .off or .ply)");
+        throw Error(ErrorKind::InvalidArgument, repair_output + ": unknown output format (use .stl, .obj, .off, .ply, .vtp, .nas or .bdf)");
       cli::check_output_path("-o", repair_output);
       cli::check_output_path("--report", repair_report);
       cli::StderrProgress progress(repair_quiet, cli::repair_stage_weights());

@@ -476,7 +476,7 @@ struct RemoteCommands::Impl {
     submit = app.add_subcommand(
         "submit", "Wrap (or with --repair, repair) INPUT... on a vdbwrap-server: upload, show progress, download the results");
     add_connection(submit);
-    submit->add_option("input", inputs, "Input meshes (.stl .obj .off .ply); several run concurrently on the server")
+    submit->add_option("input", inputs, "Input meshes (.stl .obj .off .ply .vtp .nas .bdf); several run concurrently on the server")
         ->required()
         ->check(CLI::ExistingFile);
     // The wrap options, as in `vdbwrap wrap`; with --repair, the repair options of `vdbwrap repair`.
@@ -600,7 +600,7 @@ int RemoteCommands::Impl::run_submit() {
   if (!report.empty() && inputs.size() > 1)
     throw Error(ErrorKind::InvalidArgument, "--report names one file: with --out-dir the reports are NAME_wrap.json (NAME_repaired.json)");
   if (!output.empty() && io::format_from_extension(output) == io::Format::Unknown)
-    throw Error(ErrorKind::InvalidArgument, output + ": unknown output format (use .stl, .obj, .off or .ply)");
+    throw Error(ErrorKind::InvalidArgument, output + ": unknown output format (use .stl, .obj, .off, .ply, .vtp, .nas or .bdf)");
   cli::check_output_path("-o", output);
   cli::check_output_path("--report", report);
   cli::check_output_path("--leak-path", leak_path);

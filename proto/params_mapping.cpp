@@ -318,6 +318,8 @@ io::Format to_io_format(pb::MeshFormat format) {
     case pb::MESH_FORMAT_OBJ: return io::Format::Obj;
     case pb::MESH_FORMAT_OFF: return io::Format::Off;
     case pb::MESH_FORMAT_PLY: return io::Format::Ply;
+    case pb::MESH_FORMAT_VTP: return io::Format::Vtp;
+    case pb::MESH_FORMAT_NASTRAN: return io::Format::Nastran;
     default: return io::Format::Unknown;
   }
 }
@@ -328,6 +330,8 @@ pb::MeshFormat to_proto_format(io::Format format) {
     case io::Format::Obj: return pb::MESH_FORMAT_OBJ;
     case io::Format::Off: return pb::MESH_FORMAT_OFF;
     case io::Format::Ply: return pb::MESH_FORMAT_PLY;
+    case io::Format::Vtp: return pb::MESH_FORMAT_VTP;
+    case io::Format::Nastran: return pb::MESH_FORMAT_NASTRAN;
     case io::Format::Unknown: break;
   }
   return pb::MESH_FORMAT_UNSPECIFIED;
@@ -339,6 +343,8 @@ std::string extension_of(pb::MeshFormat format) {
     case pb::MESH_FORMAT_OBJ: return "obj";
     case pb::MESH_FORMAT_OFF: return "off";
     case pb::MESH_FORMAT_PLY: return "ply";
+    case pb::MESH_FORMAT_VTP: return "vtp";
+    case pb::MESH_FORMAT_NASTRAN: return "nas";
     default: return "";
   }
 }
