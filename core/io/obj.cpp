@@ -161,6 +161,9 @@ void write_obj(const Mesh& mesh, Sink& out) {
   for (size_t p = 0; p < mesh.part_names.size(); ++p) {
     if (start[p] == start[p + 1]) continue;  // a part without faces makes no group
     std::string group = one_line(mesh.part_names[p]);
+    // A name ending in a backslash would continue the group line onto the next statement.
+    while (!group.empty() && (group.back() == ' ' || group.back() == '\t')) group.pop_back();
+    if (!group.empty() && group.back() == '\\') group.back() = '/';
     out.put("g " + (group.empty() ? std::string("default") : group) + "\n");
     for (size_t i = start[p]; i < start[p + 1]; ++i) put_face(mesh.triangles[order[i]]);
   }
