@@ -548,6 +548,8 @@ struct RemoteCommands::Impl {
   int run_jobs();
   int run_cancel();
   int run_delete();
+  template <typename Reply, typename Rpc, typename Done, typename CodeOf>
+  int for_each_job(Rpc rpc, Done done, CodeOf code_of);
   int run_health();
 };
 
@@ -839,7 +841,10 @@ int RemoteCommands::Impl::run_jobs() {
   return 0;
 }
 
-int RemoteCommands::Impl::run_cancel() {
+// Calls `rpc(stub, ctx, request)` for each job id; on an error, prints it and keeps the first
+// exit code (`code_of` maps the failed status), else prints `done(reply)` after the id.
+template <typename Reply, typename Rpc, typename Done, typename CodeOf>
+int RemoteCommands::Impl::for_each_job(Rpc rpc, Done done, CodeOf code_of) {
   conn.load();
   auto stub = pb::Jobs::NewStub(conn.channel());
   int code = 0;
@@ -849,42 +854,40 @@ int RemoteCommands::Impl::run_cancel() {
     ctx.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(30));
     pb::JobId req;
     req.set_job_id(id);
-    pb::JobStatus status;
-    grpc::Status st = stub->Cancel(&ctx, req, &status);
+    Reply reply;
+    const grpc::Status st = rpc(*stub, &ctx, req, &reply);
     if (!st.ok()) {
       std::fprintf(stderr, "vdbwrap: error: job %s: %s\n", id.c_str(), describe(st).c_str());
-      if (code == 0) code = exit_code_of(st, ctx);
+      if (code == 0) code = code_of(st, ctx);
       continue;
     }
-    std::printf("%s %s\n", id.c_str(),
-                status.state() == pb::JOB_STATE_CANCELLED ? "cancelled" : "cancel requested (the job stops within moments)");
+    std::printf("%s %s\n", id.c_str(), done(reply));
   }
   return code;
 }
 
+int RemoteCommands::Impl::run_cancel() {
+  return for_each_job<pb::JobStatus>(
+      [](pb::Jobs::Stub& stub, grpc::ClientContext* ctx, const pb::JobId& req, pb::JobStatus* status) {
+        return stub.Cancel(ctx, req, status);
+      },
+      [](const pb::JobStatus& status) {
+        return status.state() == pb::JOB_STATE_CANCELLED ? "cancelled" : "cancel requested (the job stops within moments)";
+      },
+      [](const grpc::Status& st, grpc::ClientContext& ctx) { return exit_code_of(st, ctx); });
+}
+
 int RemoteCommands::Impl::run_delete() {
-  conn.load();
-  auto stub = pb::Jobs::NewStub(conn.channel());
-  int code = 0;
-  for (const auto& id : ids) {
-    grpc::ClientContext ctx;
-    conn.prepare(ctx);
-    ctx.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(30));
-    pb::JobId req;
-    req.set_job_id(id);
-    pb::DeleteReply reply;
-    grpc::Status st = stub->Delete(&ctx, req, &reply);
-    if (!st.ok()) {
-      std::fprintf(stderr, "vdbwrap: error: job %s: %s\n", id.c_str(), describe(st).c_str());
+  return for_each_job<pb::DeleteReply>(
+      [](pb::Jobs::Stub& stub, grpc::ClientContext* ctx, const pb::JobId& req, pb::DeleteReply* reply) {
+        return stub.Delete(ctx, req, reply);
+      },
+      [](const pb::DeleteReply&) { return "deleted"; },
       // A queued or running job is not the user's to delete yet: a usage error, like an unknown id.
-      const int c = st.error_code() == grpc::StatusCode::FAILED_PRECONDITION ? exit_code(ErrorKind::InvalidArgument)
-                                                                             : exit_code_of(st, ctx);
-      if (code == 0) code = c;
-      continue;
-    }
-    std::printf("%s deleted\n", id.c_str());
-  }
-  return code;
+      [](const grpc::Status& st, grpc::ClientContext& ctx) {
+        return st.error_code() == grpc::StatusCode::FAILED_PRECONDITION ? exit_code(ErrorKind::InvalidArgument)
+                                                                        : exit_code_of(st, ctx);
+      });
 }
 
 RemoteCommands::RemoteCommands(CLI::App& app) : impl_(std::make_unique<Impl>(app)) {}

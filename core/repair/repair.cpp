@@ -93,15 +93,13 @@ struct Work {
   }
 };
 
-// Exact weld (bit-identical points merge), parts per triangle, finite coordinates.
+// Exact weld (bit-identical points merge), parts per triangle.
 Work make_work(const Mesh& input, bool float_coordinates) {
   Work w;
   std::map<Vec3, uint32_t> index;
   std::vector<uint32_t> remap(input.points.size());
   for (size_t i = 0; i < input.points.size(); ++i) {
-    Vec3 p = input.points[i];
-    if (!std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2]))
-      throw Error(ErrorKind::InvalidInput, "repair: point " + std::to_string(i) + " is not finite");
+    Vec3 p = input.points[i];  // finite: repair() checked the input (prep::check_input_mesh)
     if (float_coordinates) p = round_to_float(p);
     auto [it, added] = index.emplace(p, uint32_t(w.points.size()));
     if (added) w.points.push_back(p);

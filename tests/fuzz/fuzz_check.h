@@ -3,6 +3,8 @@
 #include <cstdio>
 #include <cstdlib>
 
+#include "vdbwrap/errors.h"
+
 // abort(): libFuzzer and the sanitizers report it with the input that caused it; the replay
 // test (without libFuzzer) fails the same way.
 #define FUZZ_CHECK(cond, ...)                                                      \
@@ -14,3 +16,16 @@
       std::abort();                                                                \
     }                                                                              \
   } while (0)
+
+// Runs f: true when it returns, false when it refuses with Error(InvalidArgument), the one
+// refusal the parameter harnesses accept; any other error kind is a finding.
+template <class F>
+bool accepted(F&& f) {
+  try {
+    f();
+    return true;
+  } catch (const vdbwrap::Error& e) {
+    FUZZ_CHECK(e.kind() == vdbwrap::ErrorKind::InvalidArgument, "kind %d: %s", int(e.kind()), e.what());
+    return false;
+  }
+}

@@ -15,17 +15,6 @@ using google::protobuf::util::MessageDifferencer;
 
 namespace {
 
-template <class F>
-bool accepted(F&& f) {
-  try {
-    f();
-    return true;
-  } catch (const Error& e) {
-    FUZZ_CHECK(e.kind() == ErrorKind::InvalidArgument, "kind %d: %s", int(e.kind()), e.what());
-    return false;
-  }
-}
-
 bool finite(const Vec3& v) { return std::isfinite(v[0]) && std::isfinite(v[1]) && std::isfinite(v[2]); }
 
 // The ranges wrap() itself checks: what the mapping accepts must not be refused later.

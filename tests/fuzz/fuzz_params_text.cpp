@@ -57,17 +57,6 @@ void params_file(const std::string& text, bool yaml) {
   FUZZ_CHECK(google::protobuf::util::MessageDifferencer::Equals(api::to_proto(q), out), "mapping round trip");
 }
 
-template <class F>
-bool accepted(F&& f) {
-  try {
-    f();
-    return true;
-  } catch (const Error& e) {
-    FUZZ_CHECK(e.kind() == ErrorKind::InvalidArgument, "kind %d: %s", int(e.kind()), e.what());
-    return false;
-  }
-}
-
 }  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
