@@ -12,7 +12,7 @@ PKGS=(
   libgrpc++-dev libprotobuf-dev protobuf-compiler protobuf-compiler-grpc
   libgtest-dev libgmock-dev
   libcli11-dev nlohmann-json3-dev libyaml-cpp-dev
-  python3 python3-grpcio python3-protobuf python3-yaml openssl
+  python3 python3-grpcio python3-protobuf python3-yaml python3-venv python3-setuptools python3-wheel openssl
   clang libclang-rt-14-dev
 )
 missing=()
