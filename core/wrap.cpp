@@ -37,42 +37,6 @@
 namespace vdbwrap {
 namespace {
 
-void check_params(const WrapParams& p) {
-  auto bad = [](const std::string& m) { throw Error(ErrorKind::InvalidArgument, m); };
-  if (!(p.base_size.value > 0) || !std::isfinite(p.base_size.value)) bad("base size must be positive");
-  if (p.levels < 0 || p.levels > 6) bad("levels must be between 0 and 6");
-  if (!(p.feature_angle_deg > 0 && p.feature_angle_deg < 180)) bad("feature angle must be between 0 and 180 degrees");
-  if (p.threads < 0) bad("threads must be 0 (all cores) or more");
-  if (p.refine_max_triangles < 1) bad("refine_max_triangles must be at least 1");
-  if (!(p.surface_offset >= 0 && p.surface_offset < 0.5)) bad("surface offset must be in [0, 0.5) of the finest cell");
-  if (!(p.weld_tolerance >= 0 && p.weld_tolerance < 0.01)) bad("weld tolerance must be in [0, 0.01) of the diagonal");
-  if (!(p.corner_angle_deg > 0 && p.corner_angle_deg < 180)) bad("corner angle must be between 0 and 180 degrees");
-  if (!(p.coarsen_tolerance >= 0 && p.coarsen_tolerance <= 0.5)) bad("coarsen tolerance must be in [0, 0.5] of the base size");
-  if (p.validity_rounds < 0 || p.validity_rounds > 100000) bad("validity rounds must be between 0 and 100000");
-  if (p.volume == VolumeChoice::SeedPoints && p.seed_points.empty()) bad("volume by seed points needs at least one seed point");
-  if (p.volume != VolumeChoice::SeedPoints && !p.seed_points.empty()) bad("seed points are given but the volume is not chosen by seed points");
-  for (const Vec3& s : p.seed_points)
-    if (!std::isfinite(s[0]) || !std::isfinite(s[1]) || !std::isfinite(s[2])) bad("a seed point has a non-finite coordinate");
-  auto positive = [&](const Length& l, const std::string& what) {
-    if (!(l.value > 0) || !std::isfinite(l.value)) bad(what + " must be a positive length");
-  };
-  if (p.gap_closure) positive(*p.gap_closure, "gap closure");
-  if (p.contact_floor) positive(*p.contact_floor, "contact floor");
-  for (const auto& cv : p.control_volumes) {
-    positive(cv.size, "control volume " + cv.to_string() + ": its size");
-    for (int k = 0; k < 3; ++k)
-      if (!std::isfinite(cv.a[k]) || !std::isfinite(cv.b[k])) bad("control volume " + cv.to_string() + ": non-finite coordinate");
-    if (!(cv.radius >= 0) || !(cv.radius_b >= 0)) bad("control volume " + cv.to_string() + ": radii must not be negative");
-  }
-  for (const auto& ps : p.part_sizes) positive(ps.size, "part size " + ps.part);
-  for (const auto& rule : p.contact_prevention) {
-    size_t names = 0;
-    for (const auto& g : rule.groups) names += g.size();
-    if (rule.groups.empty() || rule.groups.size() > 2 || names < 2)
-      bad("contact prevention " + rule.to_string() + ": name two groups (a:b) or at least two parts (a,b)");
-  }
-}
-
 void check_cancel(ProgressSink* progress) {
   if (progress && progress->cancelled()) throw Error(ErrorKind::Cancelled, "cancelled");
 }
@@ -84,7 +48,7 @@ WrapResult run_pipeline(const Mesh& input, const WrapParams& params, ProgressSin
 }
 
 WrapResult wrap(const Mesh& input, const WrapParams& params, ProgressSink* progress) {
-  check_params(params);
+  validate(params);
   prep::check_input_mesh(input);
   // A task arena per job: its thread limit holds for this job only, so a server running
   // several jobs at once does not let one job's limit throttle the others.

@@ -50,24 +50,15 @@ WrapParams to_wrap_params(const pb::WrapParameters& in) {
   switch (in.base_size_case()) {
     case pb::WrapParameters::kBaseSizePercent:
       p.base_size = Length{finite("base_size_percent", in.base_size_percent()), true};
-      if (!(p.base_size.value > 0)) bad("base_size_percent", "must be positive");
       break;
     case pb::WrapParameters::kBaseSizeModelUnits:
       p.base_size = Length{finite("base_size_model_units", in.base_size_model_units()), false};
-      if (!(p.base_size.value > 0)) bad("base_size_model_units", "must be positive");
       break;
     case pb::WrapParameters::BASE_SIZE_NOT_SET:
       break;
   }
-  if (in.has_levels()) {
-    if (in.levels() < 0 || in.levels() > 6) bad("levels", "must be between 0 and 6");
-    p.levels = in.levels();
-  }
-  if (in.has_feature_angle_deg()) {
-    double a = finite("feature_angle_deg", in.feature_angle_deg());
-    if (!(a > 0 && a < 180)) bad("feature_angle_deg", "must be strictly between 0 and 180 degrees");
-    p.feature_angle_deg = a;
-  }
+  if (in.has_levels()) p.levels = in.levels();
+  if (in.has_feature_angle_deg()) p.feature_angle_deg = in.feature_angle_deg();
   switch (in.volume()) {
     case pb::VOLUME_UNSPECIFIED:
     case pb::VOLUME_OUTSIDE: p.volume = VolumeChoice::Outside; break;
@@ -77,8 +68,6 @@ WrapParams to_wrap_params(const pb::WrapParameters& in) {
   }
   for (const auto& s : in.seed_points())
     p.seed_points.push_back({finite("seed_points", s.x()), finite("seed_points", s.y()), finite("seed_points", s.z())});
-  if (p.volume == VolumeChoice::SeedPoints && p.seed_points.empty()) bad("seed_points", "VOLUME_SEED_POINTS needs at least one");
-  if (p.volume != VolumeChoice::SeedPoints && !p.seed_points.empty()) bad("seed_points", "given, but volume is not VOLUME_SEED_POINTS");
   if (in.has_gap_closure()) p.gap_closure = to_length("gap_closure", in.gap_closure());
   if (in.has_contact_floor()) p.contact_floor = to_length("contact_floor", in.contact_floor());
   for (const auto& c : in.control_volumes()) {
@@ -98,7 +87,6 @@ WrapParams to_wrap_params(const pb::WrapParameters& in) {
         if (cv.a[k] > cv.b[k]) std::swap(cv.a[k], cv.b[k]);
     cv.radius = finite("control_volumes.radius", c.radius());
     cv.radius_b = cv.shape == ControlVolume::Shape::Cone ? finite("control_volumes.radius_b", c.radius_b()) : cv.radius;
-    if (cv.radius < 0 || cv.radius_b < 0) bad("control_volumes", "radii must not be negative");
     if ((cv.shape == ControlVolume::Shape::Cylinder || cv.shape == ControlVolume::Shape::Cone) && cv.a == cv.b)
       bad("control_volumes", "the axis a -> b has zero length");
     if (!c.has_size()) bad("control_volumes", "size is required");
@@ -107,67 +95,31 @@ WrapParams to_wrap_params(const pb::WrapParameters& in) {
     p.control_volumes.push_back(cv);
   }
   for (const auto& ps : in.part_sizes()) {
-    if (ps.part().empty()) bad("part_sizes", "part name is empty");
     if (!ps.has_size()) bad("part_sizes", "size is required");
     p.part_sizes.push_back({ps.part(), to_length("part_sizes.size", ps.size())});
   }
   for (const auto& rule : in.contact_prevention()) {
     ContactRule r;
-    size_t names = 0;
     for (const auto& g : rule.groups()) {
       r.groups.emplace_back(g.parts().begin(), g.parts().end());
-      names += size_t(g.parts_size());
       if (g.parts().empty()) bad("contact_prevention", "a group has no parts");
     }
-    if (r.groups.empty() || r.groups.size() > 2 || names < 2)
-      bad("contact_prevention", "name two groups or at least two parts in one group");
     p.contact_prevention.push_back(std::move(r));
   }
-  if (in.has_threads()) {
-    if (in.threads() < 0) bad("threads", "must be 0 (all cores) or more");
-    p.threads = in.threads();
-  }
-  if (in.has_refine_max_triangles()) {
-    if (in.refine_max_triangles() < 1) bad("refine_max_triangles", "must be at least 1");
-    p.refine_max_triangles = in.refine_max_triangles();
-  }
-  if (in.has_refine_normal_spread_deg()) {
-    double a = finite("refine_normal_spread_deg", in.refine_normal_spread_deg());
-    if (!(a >= 0 && a <= 180)) bad("refine_normal_spread_deg", "must be between 0 and 180 degrees");
-    p.refine_normal_spread_deg = a;
-  }
-  if (in.has_presmooth_iterations()) {
-    if (in.presmooth_iterations() < 0 || in.presmooth_iterations() > 100) bad("presmooth_iterations", "must be between 0 and 100");
-    p.presmooth_iterations = in.presmooth_iterations();
-  }
-  if (in.has_validity_rounds()) {
-    if (in.validity_rounds() < 0 || in.validity_rounds() > 100000) bad("validity_rounds", "must be between 0 and 100000");
-    p.validity_rounds = in.validity_rounds();
-  }
+  if (in.has_threads()) p.threads = in.threads();
+  if (in.has_refine_max_triangles()) p.refine_max_triangles = in.refine_max_triangles();
+  if (in.has_refine_normal_spread_deg()) p.refine_normal_spread_deg = in.refine_normal_spread_deg();
+  if (in.has_presmooth_iterations()) p.presmooth_iterations = in.presmooth_iterations();
+  if (in.has_validity_rounds()) p.validity_rounds = in.validity_rounds();
   if (in.has_snap_features()) p.snap_features = in.snap_features();
   if (in.has_remesh()) p.remesh = in.remesh();
-  if (in.has_corner_angle_deg()) {
-    double a = finite("corner_angle_deg", in.corner_angle_deg());
-    if (!(a > 0 && a < 180)) bad("corner_angle_deg", "must be strictly between 0 and 180 degrees");
-    p.corner_angle_deg = a;
-  }
+  if (in.has_corner_angle_deg()) p.corner_angle_deg = in.corner_angle_deg();
   if (in.has_refine_at_features()) p.refine_at_features = in.refine_at_features();
-  if (in.has_weld_tolerance()) {
-    double w = finite("weld_tolerance", in.weld_tolerance());
-    if (!(w >= 0 && w < 0.01)) bad("weld_tolerance", "must be in [0, 0.01) of the diagonal");
-    p.weld_tolerance = w;
-  }
-  if (in.has_surface_offset()) {
-    double s = finite("surface_offset", in.surface_offset());
-    if (!(s >= 0 && s < 0.5)) bad("surface_offset", "must be in [0, 0.5) of the finest cell");
-    p.surface_offset = s;
-  }
+  if (in.has_weld_tolerance()) p.weld_tolerance = in.weld_tolerance();
+  if (in.has_surface_offset()) p.surface_offset = in.surface_offset();
   if (in.has_compute_distances()) p.compute_distances = in.compute_distances();
-  if (in.has_coarsen_tolerance()) {
-    double c = finite("coarsen_tolerance", in.coarsen_tolerance());
-    if (!(c >= 0 && c <= 0.5)) bad("coarsen_tolerance", "must be in [0, 0.5] of the base size");
-    p.coarsen_tolerance = c;
-  }
+  if (in.has_coarsen_tolerance()) p.coarsen_tolerance = in.coarsen_tolerance();
+  validate(p);  // the ranges: one check for every way in
   return p;
 }
 

@@ -10,7 +10,9 @@
 
 #include "vdbwrap/errors.h"
 #include "vdbwrap/mesh.h"
-#include "vdbwrap/wrap.h"  // Length, ProgressSink, MeshDiagnostics, DistanceStats
+#include "vdbwrap/params.h"    // Length
+#include "vdbwrap/progress.h"
+#include "vdbwrap/report.h"    // MeshDiagnostics, DistanceStats
 
 namespace vdbwrap {
 

@@ -1,0 +1,21 @@
+// Measures of any mesh: its defects, and sampled distances to another mesh.
+#pragma once
+#include "vdbwrap/mesh.h"
+#include "vdbwrap/report.h"
+
+namespace vdbwrap {
+
+// Diagnostics of any mesh, welded exactly (exactly equal coordinates) first.
+MeshDiagnostics diagnose(const Mesh& mesh, bool find_intersections = true);
+
+// Metro-style one-sided distance: samples on `from` spread by area at a spacing of
+// diagonal / samples_per_diagonal (widened so that there are at most about two million),
+// plus every vertex; distances to `to`.
+DistanceStats sampled_distance(const Mesh& from, const Mesh& to, double samples_per_diagonal = 1000);
+
+// Distance from points sampled every spacing_fraction x diagonal along the input's sharp
+// edges (normals more than angle_deg apart) to `surface`: how well it keeps the edges.
+DistanceStats sharp_edge_distance(const Mesh& input, const Mesh& surface, double angle_deg = 40,
+                                  double spacing_fraction = 0.001);
+
+}  // namespace vdbwrap
