@@ -737,7 +737,7 @@ TEST_F(IoTest, WriteErrors) {
 
 struct CorpusCase {
   const char* file;
-  size_t triangles;  // raw triangles: CORPUS.md's count (quads of quadknot.obj and suzanne.ply
+  size_t triangles;  // raw triangles: tests/data/CORPUS.md's count (quads of quadknot.obj and suzanne.ply
                      // split in 2)
   std::vector<std::string> parts;
 };

@@ -129,7 +129,7 @@ TEST_P(CorpusWrap, ValidSurfaceAtOnePercent) {
   // The wrap hugs the input: every corpus mesh stays well within one base cell.
   const double diag = r.report.diagonal;
   EXPECT_LT(r.report.output_to_input.mean, 0.005 * diag);
-  // Closed inputs (border 0 in CORPUS.md): the fidelity target, mean at most 0.05 %
+  // Closed inputs (border 0 in tests/data/CORPUS.md): the fidelity target, mean at most 0.05 %
   // and 95th percentile at most 0.2 % of the diagonal (alpha wrap at diag/100: 0.03-0.05 %).
   MeshDiagnostics in = r.report.input;
   if (in.border_edges == 0 && in.nonmanifold_edges == 0) {
