@@ -13,6 +13,7 @@
 #include <iostream>
 
 #include "cli_progress.h"
+#include "html_output.h"
 #include "output_paths.h"
 #include "repair_options.h"
 #include "suggest.h"
@@ -213,6 +214,8 @@ int main(int argc, char** argv) {
       ->add_option("--leak-path", leak_path,
                    "When a seed point's volume leaks: write the narrowest passage and the path to it here (OBJ)")
       ->group("Output");
+  cli::HtmlOutput html_output;
+  html_output.add_to(wrap_cmd);
   wrap_cmd->add_flag("-q,--quiet", quiet, "No progress on stderr")->group("Output");
   wrap_cmd->footer(
       "Examples:\n"
@@ -293,6 +296,7 @@ int main(int argc, char** argv) {
       cli::StderrProgress progress(quiet, cli::wrap_stage_weights());
       progress.progress("read", 0.0, input);
       Mesh mesh = io::read_mesh(input);
+      html_output.check();  // three.js too: exit 2 before the work
       progress.progress("read", 1.0, std::to_string(mesh.triangles.size()) + " triangles");
       const WrapReport::Source source = source_of(input, mesh);
       WrapResult result;
@@ -314,6 +318,12 @@ int main(int argc, char** argv) {
                        leak.location[1], leak.location[2], leak.width, leak_path.empty() ? "" : "; path in ",
                        leak_path.c_str());
         }
+        if (html_output.wanted()) {  // the page shows the input and the leak
+          WrapReport report = failure.report();
+          report.source = source;
+          const std::string page = html_output.write(mesh, nullptr, to_json(report), nullptr, source.file_name);
+          if (!quiet) std::fprintf(stderr, "vdbwrap: wrote %s\n", page.c_str());
+        }
         throw;
       }
       progress.progress("write", 0.0, output);
@@ -321,6 +331,10 @@ int main(int argc, char** argv) {
       result.report.source = source;
       if (!report_path.empty()) write_text(report_path, to_json(result.report));
       progress.complete(output);
+      if (html_output.wanted()) {
+        const std::string page = html_output.write(mesh, &result.surface, to_json(result.report), nullptr, source.file_name);
+        if (!quiet) std::fprintf(stderr, "wrote %s\n", page.c_str());
+      }
       const auto& r = result.report;
       if (!quiet)
         std::fprintf(stderr,

@@ -14,6 +14,7 @@ PKGS=(
   libcli11-dev nlohmann-json3-dev libyaml-cpp-dev
   python3 python3-grpcio python3-protobuf python3-yaml python3-venv python3-setuptools python3-wheel openssl
   clang libclang-rt-14-dev
+  libjs-three chromium  # --html embeds three.js; its test renders the page in headless Chromium
 )
 missing=()
 for p in "${PKGS[@]}"; do
