@@ -4,7 +4,7 @@
 #include <cmath>
 #include <sstream>
 
-#include "vdbwrap/wrap.h"
+#include "vdbwrap/params.h"
 
 namespace vdbwrap {
 namespace {

@@ -7,7 +7,7 @@
 #include <cmath>
 #include <sstream>
 
-#include "vdbwrap/wrap.h"
+#include "vdbwrap/report.h"
 
 namespace vdbwrap {
 namespace {

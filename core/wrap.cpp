@@ -18,6 +18,7 @@
 #include "common/stage_timer.h"
 #include "common/vec.h"
 #include "io/mesh_io.h"
+#include "pipeline/stage_params.h"
 #include "extract/extract_surface.h"
 #include "fit/feature_insert.h"
 #include "fit/fit_surface.h"
@@ -78,7 +79,7 @@ WrapResult run_pipeline(const Mesh& input, const WrapParams& params, ProgressSin
   prep::PreparedInput prepared;
   {
     StageTimer timer("prepare", report.stages);
-    prepared = prep::prepare(input, params, progress, &input_weld);
+    prepared = prep::prepare(input, pipeline::prepare_params(params), progress, &input_weld);
     input_weld = ExactWeld();  // its memory back
   }
   {
@@ -101,7 +102,7 @@ WrapResult run_pipeline(const Mesh& input, const WrapParams& params, ProgressSin
     throw Error(ErrorKind::InvalidArgument, "base size " + params.base_size.to_string() +
                                                 " is too small for this model (over 20000 cells across its diagonal)");
   const grid::SizeControls controls =
-      grid::make_size_controls(params, prepared.mesh, prepared.origin, prepared.diagonal, base);
+      grid::make_size_controls(pipeline::size_requests(params), prepared.mesh, prepared.origin, prepared.diagonal, base);
   report.finest_size = base / double(1 << controls.max_level);
   report.control_sizes = controls.described;
   check_cancel(progress);
@@ -121,7 +122,7 @@ WrapResult run_pipeline(const Mesh& input, const WrapParams& params, ProgressSin
   grid::RefineResult refined;
   {
     StageTimer timer("refine", report.stages);
-    refined = grid::build_refined_grid(prepared, params, base, controls, progress);
+    refined = grid::build_refined_grid(prepared, pipeline::refine_criteria(params), base, controls, progress);
   }
   report.cells_per_level = refined.touched_per_level;
   if (controls.contact()) {

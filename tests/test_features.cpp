@@ -73,7 +73,7 @@ EdgeFit wrap_edges(const Mesh& m, bool features, const std::string& base = "1%")
 }  // namespace
 
 TEST(FeatureCurves, CubeHasTwelveCurvesBetweenEightCorners) {
-  auto prepared = prep::prepare(cube(), WrapParams{}, nullptr);
+  auto prepared = prep::prepare(cube(), prep::PrepareParams{}, nullptr);
   auto curves = fit::build_feature_curves(prepared, 30);
   ASSERT_EQ(curves.size(), 12u);
   for (const auto& c : curves) {
@@ -86,7 +86,7 @@ TEST(FeatureCurves, CubeHasTwelveCurvesBetweenEightCorners) {
 TEST(FeatureCurves, IntersectionLinesOfAnAssemblyBecomeCurves) {
   Mesh m = box_mesh({0, 0, 0}, {2, 2, 2});
   add_box(m, {1, 0.5, 1}, {3, 1.5, 3}, 1);
-  auto prepared = prep::prepare(m, WrapParams{}, nullptr);
+  auto prepared = prep::prepare(m, prep::PrepareParams{}, nullptr);
   ASSERT_FALSE(prepared.intersections.empty());
   auto curves = fit::build_feature_curves(prepared, 30);
   // 24 box edges plus the junction line (split at its corners).

@@ -16,6 +16,7 @@
 #include "grid/refine.h"
 #include "prep/prepare.h"
 #include "test_meshes.h"
+#include "pipeline/stage_params.h"
 
 using namespace vdbwrap;
 using namespace vdbwrap::testing;
@@ -30,10 +31,10 @@ struct Fitted {
 
 Fitted fit_mesh(const Mesh& m, double base_percent, WrapParams params = {}) {
   Fitted f;
-  f.input = prep::prepare(m, params, nullptr);
+  f.input = prep::prepare(m, pipeline::prepare_params(params), nullptr);
   const double base = base_percent * 0.01 * f.input.diagonal;
-  auto controls = grid::make_size_controls(params, f.input.mesh, f.input.origin, f.input.diagonal, base);
-  auto refined = grid::build_refined_grid(f.input, params, base, controls, nullptr);
+  auto controls = grid::make_size_controls(pipeline::size_requests(params), f.input.mesh, f.input.origin, f.input.diagonal, base);
+  auto refined = grid::build_refined_grid(f.input, pipeline::refine_criteria(params), base, controls, nullptr);
   f.grid = std::move(refined.grid);
   grid::Components comps;
   int32_t label = grid::choose_volume(*f.grid, params.volume, comps, nullptr);

@@ -11,6 +11,7 @@
 #include "grid/refine.h"
 #include "prep/prepare.h"
 #include "test_meshes.h"
+#include "pipeline/stage_params.h"
 
 using namespace vdbwrap;
 using namespace vdbwrap::testing;
@@ -40,10 +41,10 @@ void expect_closed_manifold(const extract::LatticeSurface& s, VolumeChoice choic
 
 grid::RefineResult refine(const Mesh& m, double base_percent, int levels, WrapParams params = {}) {
   params.levels = levels;
-  auto prepared = prep::prepare(m, params, nullptr);
+  auto prepared = prep::prepare(m, pipeline::prepare_params(params), nullptr);
   const double base = base_percent * 0.01 * prepared.diagonal;
-  auto controls = grid::make_size_controls(params, prepared.mesh, prepared.origin, prepared.diagonal, base);
-  return grid::build_refined_grid(prepared, params, base, controls, nullptr);
+  auto controls = grid::make_size_controls(pipeline::size_requests(params), prepared.mesh, prepared.origin, prepared.diagonal, base);
+  return grid::build_refined_grid(prepared, pipeline::refine_criteria(params), base, controls, nullptr);
 }
 
 }  // namespace
@@ -180,10 +181,10 @@ TEST(Refine, LevelZeroCellsAreThoseEachCellTestFinds) {
   soup.triangle_part.assign(soup.triangles.size(), 0);
   WrapParams params;
   params.levels = 0;
-  const auto prepared = prep::prepare(soup, params, nullptr);
+  const auto prepared = prep::prepare(soup, pipeline::prepare_params(params), nullptr);
   const double base = 0.01 * prepared.diagonal;  // about 58 cells a side: 4 blocks
-  const auto controls = grid::make_size_controls(params, prepared.mesh, prepared.origin, prepared.diagonal, base);
-  const auto r = grid::build_refined_grid(prepared, params, base, controls, nullptr);
+  const auto controls = grid::make_size_controls(pipeline::size_requests(params), prepared.mesh, prepared.origin, prepared.diagonal, base);
+  const auto r = grid::build_refined_grid(prepared, pipeline::refine_criteria(params), base, controls, nullptr);
   const auto& g = *r.grid;
   const auto& pts = prepared.mesh.points;
   const double half = base * (0.5 + 1e-3);  // refinement's margin

@@ -13,6 +13,7 @@
 #include "common/vec.h"
 #include "prep/prepare.h"
 #include "test_meshes.h"
+#include "pipeline/stage_params.h"
 
 using namespace vdbwrap;
 using namespace vdbwrap::testing;
@@ -145,7 +146,7 @@ TEST(Orient, AnInsideOutBoxIsTurnedOver) {
 TEST(Features, BoxHasTwelveSharpEdgesAndAnOpenSquareFourBoundaryEdges) {
   Mesh box = box_mesh({0, 0, 0}, {1, 1, 1});
   std::vector<Vec3> normals;
-  auto prepared = prep::prepare(box, WrapParams{}, nullptr);
+  auto prepared = prep::prepare(box, prep::PrepareParams{}, nullptr);
   size_t sharp = 0;
   for (const auto& f : prepared.feature_edges) sharp += f.kind == prep::FeatureKind::Sharp;
   EXPECT_EQ(sharp, 12u);
@@ -154,7 +155,7 @@ TEST(Features, BoxHasTwelveSharpEdgesAndAnOpenSquareFourBoundaryEdges) {
   Mesh square;
   square.points = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}};
   square.triangles = {{0, 1, 2}, {0, 2, 3}};
-  auto open = prep::prepare(square, WrapParams{}, nullptr);
+  auto open = prep::prepare(square, prep::PrepareParams{}, nullptr);
   size_t boundary = 0;
   for (const auto& f : open.feature_edges) boundary += f.kind == prep::FeatureKind::Boundary;
   EXPECT_EQ(boundary, 4u);
@@ -167,7 +168,7 @@ TEST(Prepare, DropsDegenerateAndDuplicateTrianglesAndWeldsCracks) {
   m.points.push_back({0.5, 0, 0});         // collinear with 0 and 1
   m.triangles.push_back({0, 8, 1});
   m.triangle_part.resize(m.triangles.size(), 0);
-  auto p = prep::prepare(m, WrapParams{}, nullptr);
+  auto p = prep::prepare(m, prep::PrepareParams{}, nullptr);
   EXPECT_EQ(p.mesh.triangles.size(), 12u);
   EXPECT_EQ(p.dropped_degenerate, 2u);
   EXPECT_EQ(p.dropped_duplicate, 1u);
@@ -176,7 +177,7 @@ TEST(Prepare, DropsDegenerateAndDuplicateTrianglesAndWeldsCracks) {
 TEST(Prepare, FindsTheJunctionLineOfTwoInterpenetratingBoxes) {
   Mesh m = box_mesh({0, 0, 0}, {2, 2, 2});
   add_box(m, {1, 1, 1}, {3, 3, 3}, 1);
-  auto p = prep::prepare(m, WrapParams{}, nullptr);
+  auto p = prep::prepare(m, prep::PrepareParams{}, nullptr);
   ASSERT_FALSE(p.intersections.empty());
   double length = 0;
   for (const auto& s : p.intersections) length += std::sqrt((s.a[0] - s.b[0]) * (s.a[0] - s.b[0]) + (s.a[1] - s.b[1]) * (s.a[1] - s.b[1]) + (s.a[2] - s.b[2]) * (s.a[2] - s.b[2]));
@@ -203,9 +204,9 @@ TEST(Prepare, WeldingFromTheInputsExactWeldGivesTheSameMesh) {
   for (const double tolerance : {0.0, 1e-7}) {
     WrapParams params;
     params.weld_tolerance = tolerance;
-    const prep::PreparedInput all = prep::prepare(soup, params, nullptr);
+    const prep::PreparedInput all = prep::prepare(soup, pipeline::prepare_params(params), nullptr);
     const ExactWeld weld = exact_weld(soup.points);
-    const prep::PreparedInput shared = prep::prepare(soup, params, nullptr, &weld);
+    const prep::PreparedInput shared = prep::prepare(soup, pipeline::prepare_params(params), nullptr, &weld);
     EXPECT_EQ(all.mesh.points, shared.mesh.points) << "tolerance " << tolerance;
     EXPECT_EQ(all.mesh.triangles, shared.mesh.triangles) << "tolerance " << tolerance;
     EXPECT_EQ(all.input_to_mesh, shared.input_to_mesh) << "tolerance " << tolerance;
@@ -218,7 +219,7 @@ TEST(Prepare, WeldingFromTheInputsExactWeldGivesTheSameMesh) {
 TEST(Prepare, RejectsInputWithNothingUsable) {
   Mesh empty;
   try {
-    prep::prepare(empty, WrapParams{}, nullptr);
+    prep::prepare(empty, prep::PrepareParams{}, nullptr);
     FAIL();
   } catch (const Error& e) {
     EXPECT_EQ(e.kind(), ErrorKind::InvalidInput);
@@ -226,7 +227,7 @@ TEST(Prepare, RejectsInputWithNothingUsable) {
   Mesh flat;
   flat.points = {{0, 0, 0}, {1, 0, 0}, {2, 0, 0}};
   flat.triangles = {{0, 1, 2}};
-  EXPECT_THROW(prep::prepare(flat, WrapParams{}, nullptr), Error);
+  EXPECT_THROW(prep::prepare(flat, prep::PrepareParams{}, nullptr), Error);
 }
 
 TEST(Intersections, FansMeetOnlyAtTheirCentreUnlessTheyOverlapOrFold) {
@@ -581,7 +582,7 @@ TEST(Prepare, OneSearchGivesTheSegmentsAndTheInputCountsOfASearchOnTheRawInput) 
   m.triangles.push_back({0, 0, 1});
   m.triangle_part.resize(m.triangles.size(), 0);
 
-  auto p = prep::prepare(m, WrapParams{}, nullptr);
+  auto p = prep::prepare(m, prep::PrepareParams{}, nullptr);
   ASSERT_EQ(p.dropped_duplicate, 2u);
   ASSERT_EQ(p.input_to_mesh.size(), m.triangles.size());
   // The kept pairs are exactly a fresh search of the prepared mesh, and give its segments.

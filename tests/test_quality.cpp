@@ -127,7 +127,7 @@ struct Setup {
 };
 std::unique_ptr<Setup> setup_for(const Mesh& input, double finest) {
   auto s = std::make_unique<Setup>();
-  s->prepared = prep::prepare(input, WrapParams{}, nullptr);
+  s->prepared = prep::prepare(input, prep::PrepareParams{}, nullptr);
   s->index = std::make_unique<fit::SurfaceIndex>(s->prepared.mesh.points, s->prepared.mesh.triangles);
   s->ref.input = s->index.get();
   s->ref.origin = s->prepared.origin;

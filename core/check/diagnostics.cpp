@@ -18,7 +18,7 @@
 #include "common/radix_sort.h"
 #include "common/vec.h"
 #include "prep/prepare.h"
-#include "vdbwrap/wrap.h"
+#include "vdbwrap/check.h"
 
 namespace vdbwrap {
 namespace {

@@ -2,7 +2,7 @@
 // and both start from the same exact weld of the input's points.
 #pragma once
 #include "common/exact_weld.h"
-#include "vdbwrap/wrap.h"
+#include "vdbwrap/check.h"
 
 namespace vdbwrap::check {
 

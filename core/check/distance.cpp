@@ -8,7 +8,7 @@
 #include "check/distance_stats.h"
 #include "common/vec.h"
 #include "fit/surface_index.h"
-#include "vdbwrap/wrap.h"
+#include "vdbwrap/check.h"
 
 namespace vdbwrap {
 

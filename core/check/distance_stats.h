@@ -4,7 +4,7 @@
 #include <functional>
 #include <vector>
 
-#include "vdbwrap/wrap.h"
+#include "vdbwrap/check.h"
 
 namespace vdbwrap::check {
 

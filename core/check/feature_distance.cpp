@@ -5,7 +5,7 @@
 #include "common/edge_triangles.h"
 #include "common/vec.h"
 #include "prep/prepare.h"
-#include "vdbwrap/wrap.h"
+#include "vdbwrap/check.h"
 
 namespace vdbwrap {
 

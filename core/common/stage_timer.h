@@ -3,7 +3,7 @@
 #include <chrono>
 #include <string>
 
-#include "vdbwrap/wrap.h"
+#include "vdbwrap/report.h"
 
 namespace vdbwrap {
 

@@ -5,7 +5,8 @@
 #include <vector>
 
 #include "grid/adaptive_grid.h"
-#include "vdbwrap/wrap.h"
+#include "vdbwrap/params.h"
+#include "vdbwrap/progress.h"
 
 namespace vdbwrap::extract {
 

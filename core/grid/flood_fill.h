@@ -4,7 +4,9 @@
 #include <vector>
 
 #include "grid/adaptive_grid.h"
-#include "vdbwrap/wrap.h"
+#include "vdbwrap/errors.h"
+#include "vdbwrap/params.h"
+#include "vdbwrap/progress.h"
 
 namespace vdbwrap::grid {
 

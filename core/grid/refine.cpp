@@ -226,7 +226,7 @@ std::vector<CellTris> level0_cells(const prep::PreparedInput& in, const Vec3& or
   return level_cells;
 }
 
-RefineResult build_refined_grid(const prep::PreparedInput& in, const WrapParams& params, double base,
+RefineResult build_refined_grid(const prep::PreparedInput& in, const RefineCriteria& params, double base,
                                 const SizeControls& sc, ProgressSink* progress, int padding) {
   const auto& pts = in.mesh.points;
   const auto& tris = in.mesh.triangles;
@@ -254,7 +254,7 @@ RefineResult build_refined_grid(const prep::PreparedInput& in, const WrapParams&
   if (sc.contact()) contact = std::make_unique<ContactBuckets>(level_cells, in, sc);
 
   const FeatureSegments features = collect_features(in);
-  const double cos_spread = std::cos(params.refine_normal_spread_deg * M_PI / 180.0);
+  const double cos_spread = std::cos(params.normal_spread_deg * M_PI / 180.0);
 
   for (int level = 0; level <= levels; ++level) {
     if (progress) {
@@ -296,7 +296,7 @@ RefineResult build_refined_grid(const prep::PreparedInput& in, const WrapParams&
         bool split = level < region_level(sc, lo, h);
         for (size_t k = 0; !split && k < ct.tris.size(); ++k) split = level < sc.part_level[size_t(in.mesh.part_of(ct.tris[k]))];
         const bool criteria = level < sc.criteria_levels;
-        if (!split && criteria) split = int(ct.tris.size()) > params.refine_max_triangles;
+        if (!split && criteria) split = int(ct.tris.size()) > params.max_triangles;
         if (!split && criteria) {
           const Vec3& n0 = in.normals[ct.tris[0]];
           for (uint32_t t : ct.tris)
@@ -305,7 +305,7 @@ RefineResult build_refined_grid(const prep::PreparedInput& in, const WrapParams&
               break;
             }
         }
-        if (!split && criteria && params.refine_at_features) {
+        if (!split && criteria && params.at_features) {
           Vec3 glo = lo - Vec3{h * margin_fraction, h * margin_fraction, h * margin_fraction};
           Vec3 ghi = lo + Vec3{h * (1 + margin_fraction), h * (1 + margin_fraction), h * (1 + margin_fraction)};
           for (uint32_t t : ct.tris) {

@@ -7,7 +7,7 @@
 #include "grid/adaptive_grid.h"
 #include "grid/size_controls.h"
 #include "prep/prepare.h"
-#include "vdbwrap/wrap.h"
+#include "vdbwrap/progress.h"
 
 namespace vdbwrap::grid {
 
@@ -19,11 +19,18 @@ struct RefineResult {
   std::vector<Vec3> unresolved_contacts;  // cell centres, local frame
 };
 
+// The spec's criteria for refining a cell the input passes through.
+struct RefineCriteria {
+  int max_triangles = 64;          // more triangles than this in a cell: refine
+  double normal_spread_deg = 20;   // normals spread more than this: refine
+  bool at_features = true;         // sharp, boundary or intersection edges: refine
+};
+
 // base_size in model units. The grid pads the input's bounding box by `padding` level-0
 // cells on every side so the outside volume wraps around everything.
 // The refinement criteria apply down to controls.criteria_levels; control volumes, part
 // sizes and contact prevention down to their own levels (the grid has controls.max_level).
-RefineResult build_refined_grid(const prep::PreparedInput& input, const WrapParams& params, double base_size,
+RefineResult build_refined_grid(const prep::PreparedInput& input, const RefineCriteria& criteria, double base_size,
                                 const SizeControls& controls, ProgressSink* progress, int padding = 2);
 
 // Exact-enough separating-axis tests of a triangle or segment against an axis-aligned box.

@@ -89,7 +89,7 @@ int region_level(const SizeControls& controls, const Vec3& lo, double h) {
   return level;
 }
 
-SizeControls make_size_controls(const WrapParams& params, const Mesh& mesh, const Vec3& origin, double diagonal,
+SizeControls make_size_controls(const SizeRequests& params, const Mesh& mesh, const Vec3& origin, double diagonal,
                                 double base) {
   SizeControls sc;
   sc.criteria_levels = params.levels;

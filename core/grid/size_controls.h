@@ -1,12 +1,13 @@
 // Stage 2a, user sizing: control volumes, per-part cell sizes and contact prevention, turned
 // into the grid level each asks for (level l has cells of base / 2^l).
 #pragma once
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
 
 #include "vdbwrap/mesh.h"
-#include "vdbwrap/wrap.h"
+#include "vdbwrap/params.h"
 
 namespace vdbwrap::grid {
 
@@ -42,7 +43,14 @@ int level_for_size(double base, double size);
 // Resolves the parameters against the input: sizes to levels, part names to part indices,
 // control volumes moved into the local frame (local = world - origin). Throws
 // Error(InvalidArgument) for unknown part names or sizes needing more than kMaxGridLevels.
-SizeControls make_size_controls(const WrapParams& params, const Mesh& local_mesh, const Vec3& origin, double diagonal,
+struct SizeRequests {
+  int levels = 1;  // the refinement criteria's depth below the base size
+  std::vector<ControlVolume> control_volumes;
+  std::vector<PartSize> part_sizes;
+  std::vector<ContactRule> contact_prevention;
+  std::optional<Length> contact_floor;  // default: the finest cell / 8
+};
+SizeControls make_size_controls(const SizeRequests& params, const Mesh& local_mesh, const Vec3& origin, double diagonal,
                                 double base);
 
 // Signed distance from p to a control volume's solid (negative or zero inside).

@@ -8,7 +8,10 @@
 
 #include "grid/adaptive_grid.h"
 #include "grid/flood_fill.h"
-#include "vdbwrap/wrap.h"
+#include "vdbwrap/errors.h"
+#include "vdbwrap/params.h"
+#include "vdbwrap/progress.h"
+#include "vdbwrap/report.h"
 
 namespace vdbwrap::grid {
 

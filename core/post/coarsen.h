@@ -12,7 +12,7 @@
 #include <vector>
 
 #include "fit/surface_index.h"
-#include "vdbwrap/wrap.h"
+#include "vdbwrap/progress.h"
 
 namespace vdbwrap::post {
 

@@ -12,7 +12,8 @@
 #include "fit/surface_index.h"
 #include "post/nearest_memo.h"
 #include "prep/prepare.h"
-#include "vdbwrap/wrap.h"
+#include "vdbwrap/params.h"
+#include "vdbwrap/report.h"
 
 namespace vdbwrap::post {
 

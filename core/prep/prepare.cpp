@@ -199,7 +199,7 @@ InputIntersections input_intersections(const std::vector<check::TrianglePair>& m
   return counts;
 }
 
-PreparedInput prepare(const Mesh& input, const WrapParams& params, ProgressSink* progress, const ExactWeld* input_weld) {
+PreparedInput prepare(const Mesh& input, const PrepareParams& params, ProgressSink* progress, const ExactWeld* input_weld) {
   PreparedInput out;
   if (input.triangles.empty()) throw Error(ErrorKind::InvalidInput, "input contains no triangles");
   for (const Vec3& p : input.points)

@@ -9,7 +9,8 @@
 #include "common/edge_triangles.h"
 #include "common/exact_weld.h"
 #include "vdbwrap/mesh.h"
-#include "vdbwrap/wrap.h"
+#include "vdbwrap/progress.h"
+#include "vdbwrap/report.h"
 
 namespace vdbwrap::prep {
 
@@ -71,6 +72,12 @@ InputIntersections input_intersections(const std::vector<check::TrianglePair>& m
 // The whole stage. Throws Error(InvalidInput) when nothing usable is left. `input_weld`, when
 // given, is the exact weld of input.points (the input's diagnosis makes one): the welding
 // starts from its distinct points instead of all of them, with the same result.
-PreparedInput prepare(const Mesh& input, const WrapParams& params, ProgressSink* progress, const ExactWeld* input_weld = nullptr);
+// What prepare needs of the wrap's parameters.
+struct PrepareParams {
+  double weld_tolerance = 1e-7;   // fraction of the diagonal under which vertices merge
+  double feature_angle_deg = 30;  // dihedral angle (between normals) that makes an edge sharp
+};
+PreparedInput prepare(const Mesh& input, const PrepareParams& params, ProgressSink* progress,
+                      const ExactWeld* input_weld = nullptr);
 
 }  // namespace vdbwrap::prep
