@@ -41,7 +41,7 @@ inline bool triangle_overlaps_box(const Vec3& a, const Vec3& b, const Vec3& c, c
 // triangle_overlaps_box, with the triangle's extent along each computed once (from its first
 // vertex), so that each box costs a dot product per axis. The voxel stage and the
 // nearest-point index test each triangle against the blocks and cells of its bounding box:
-// tens of millions of tests on a 2M-triangle assembly. (A cell's eight children are tested
+// tens of millions of tests on big assemblies. (A cell's eight children are tested
 // at once by octants_overlapped, below.)
 // Mathematically the same test; the rounding differs only far below the callers' margins.
 class TriangleBoxTester {

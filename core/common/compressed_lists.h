@@ -1,7 +1,6 @@
 // Lists of indices for items 0..n-1 in one array (compressed rows): the neighbours of every
 // node of a wrap, the triangles around every vertex. A vector per item is a heap block per
-// item: on the 2.37M assembly's 1.4M-node wrap, building such lists serially was a second of
-// the projection stage with one core idle.
+// item, and allocating them is serial: one array filled in parallel instead.
 #pragma once
 #include <algorithm>
 #include <cstddef>

@@ -41,9 +41,8 @@ template <typename T>
 using FillVector = std::vector<T, DefaultInitAllocator<T>>;
 
 // The same for plain structs with default member initialisers (a Box3 starts empty): resize
-// leaves new elements unwritten, so that a parallel loop faults their pages in. (Making the
-// 2.8M boxes of a triangle bucket grid empty first cost the 2.37M assembly a serial 0.1 s
-// of page clearing, four times.) resize(n, value) still writes them. Every element must be
+// leaves new elements unwritten, so that a parallel loop faults their pages in (making
+// millions of boxes empty first is serial page clearing). resize(n, value) still writes them. Every element must be
 // written before it is read, initialisers or not.
 template <typename T>
 using RawFillVector = std::vector<T, DefaultInitAllocator<T, true>>;

@@ -117,8 +117,8 @@ class TriangleBuckets {
         for (int64_t z = lo[2]; z <= hi[2]; ++z) fn(Key{x, y, z});
   }
   // Entries are never removed, so f is already in every cell of the box it had: only cells new
-  // to it get an entry. (Appending to all of them again made most entries duplicates: on a
-  // 2.4M-triangle wrap, 6 billion entries read for 300 million distinct triangles.)
+  // to it get an entry. (Appending to all of them again made most entries duplicates, read
+  // over and over.)
   void insert(uint32_t f) {
     if (f >= boxes_.size()) boxes_.resize(f + 1, Box3{});
     Box3 b;
@@ -135,8 +135,7 @@ class TriangleBuckets {
   }
   // All triangles at once, as inserting them one by one in order would leave the cells (each
   // cell's list in increasing order): their (cell, triangle) entries made in parallel and
-  // radix-sorted by cell, then one list per cell. Inserting them one by one was 1.5 s of the
-  // 2.37M assembly at 0.25 % with one core idle (four such buckets, up to 713k cells).
+  // radix-sorted by cell, then one list per cell (inserting them one by one is serial).
   // False, with nothing done, when the cells' numbers would not fit in 64 bits.
   bool build_sorted() {
     const size_t n = tris_.size();

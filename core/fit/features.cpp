@@ -36,8 +36,7 @@ struct Candidate {
 
 // Nodes by grid cell, a node in the cell of each of its two given positions, each cell's
 // nodes in increasing order: (cell, node) pairs sorted in parallel, and a map from each cell
-// to its run. (A map of per-cell vectors, filled serially, was 0.4 s of the 2.37M assembly's
-// snapping with one core idle.)
+// to its run. (A map of per-cell vectors is filled serially, with the other cores idle.)
 class SortedNodeCells {
  public:
   SortedNodeCells(const std::vector<Vec3>& at, const std::vector<Vec3>& also_at, double inv_cell) {
@@ -540,7 +539,6 @@ std::vector<std::pair<uint32_t, uint32_t>> snap_to_curves(const std::vector<Feat
   // can lie apart), and only through maps safe for that. A curve that may meet an earlier one
   // (they share a cell of 8 radii) starts after it ends, so it sees that curve's nodes as a
   // trace one by one in order would, and the result is the same on any number of threads.
-  // (Tracing one by one was 1.35 s of the 2.37M assembly at 0.25 %.)
   const double shift = tbb::parallel_reduce(
       tbb::blocked_range<size_t>(0, n, 8192), 0.0,
       [&](const tbb::blocked_range<size_t>& r, double most) {

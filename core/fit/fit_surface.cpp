@@ -80,8 +80,7 @@ bool split_along_02(const std::array<uint32_t, 4>& q, const std::vector<Vec3>& p
   const double d02 = input.closest((p[q[0]] + p[q[2]]) * 0.5, foot[q[0]]).squared_distance;
   // The other midpoint is only compared with it: a query bounded a little beyond d02 finds
   // its exact distance when it is that near (the two may then tie), and else 0-2 is nearer.
-  // (The bounded query prunes more: choosing diagonals was 1.9 s of the 2.37M assembly's
-  // projection at 0.25 %.)
+  // (The bounded query prunes more: choosing diagonals is a visible part of the projection.)
   SurfaceIndex::Hit near13;
   if (!input.closest_within((p[q[1]] + p[q[3]]) * 0.5, std::sqrt(d02 * (1 + 1e-9)), near13, foot[q[1]])) return true;
   const double d13 = near13.squared_distance;

@@ -40,7 +40,7 @@ using Triangle = K::Triangle_3;
 // into parts whose boxes overlap their neighbours' parts, so a query tested (part length / w)
 // triangles, and the part length is fixed by the triangle's length. Finer tessellation of the
 // same cylinder made w smaller, so the cost per query grew with the square of the
-// tessellation, and the tree held 16 parts per sliver (1.5 GB for a 2.4M-triangle assembly). A
+// tessellation, and the tree held many parts per sliver (gigabytes on big assemblies). A
 // cell holds (cell size / w) slivers and each sliver is in (length / cell size) cells.
 constexpr uint32_t kNoLane = UINT32_MAX;
 struct Piece {
@@ -73,10 +73,9 @@ struct Lane {
 // plane, along its normal) and its extent along each from its first vertex, so flat along the
 // normal. The distance from a point to this box bounds its distance to the triangle from
 // below, and tightly for a sliver: an axis-aligned box is fat around a sliver lying
-// diagonally, and a sliver's plane passes near every point beside a convex surface. On the
-// 2.37M-triangle assembly at 0.25 %, nearest queries looked at 1.26 billion triangles, and
-// 62 % of them passed the axis-box and plane tests used before and had their closest point
-// computed.
+// diagonally, and a sliver's plane passes near every point beside a convex surface. On
+// finely tessellated assemblies most triangles a query looks at pass the axis-box and plane
+// tests, and each then costs a closest-point computation.
 // Floats: the extents are rounded outward, so the triangle stays inside whatever the axes'
 // rounding; the axes are orthonormal to float precision, allowed for in triangle_gap2.
 struct Frame {
@@ -255,18 +254,14 @@ void cells_of(const Vec3& a, const Vec3& b, const Vec3& c, const CellGrid& grid,
 
 // A cell's long triangles as pieces: one piece when they are few, else the cell is cut into
 // eighths (`depth` times at most), each a piece with the triangles passing through it. Side
-// by side slivers crowd a cell, and a fan cap's spokes all meet in the one at its centre: on
-// the 146k-triangle assembly, 94 % of the cut entries were in cells of more than 32
-// triangles, and a nearest query tested 42 triangles on average (13 with cells cut three
-// times). Measured on the 2.37M assembly at 0.25 % (medians of 2, alternated):
-//   not cut 114.0 s; cut once above 32 triangles 108.2 s (peak +157 MB); above 16, 107.4 s
-//   (+188 MB); twice above 64, 111.0 s (the index build, 11 s once cut, grows to 18 s).
+// by side slivers crowd a cell, and a fan cap's spokes all meet in the one at its centre:
+// cutting crowded cells once cuts the triangles a nearest query tests by about three, and
+// deeper cuts cost more in the index build and memory than they save in queries (the
+// measurements: bench/results/archive, the nearest-index speed runs).
 // A crowded cell whose triangles lie side by side (spread across the first one by less than
 // kTightLane of the cell) stays one piece: its lane (below) already visits only the few beside
 // a query, and cutting such cells was a third of the index build. Fans and crossing slivers
-// are still cut. 2.37M assembly: index build 3.3 -> 2.6 s (peak -80 to -100 MB); at 0.5 %,
-// 4 alternated runs, 28.8 -> 26.6 s (the projection had waited 2.1 s for the index, now
-// 0.8 s); at 0.25 %, CPU -1.3 s; outputs byte-identical there and on the corpus.
+// are still cut.
 // `lo` and `side`: the cell without padding; `pad` enlarges every test and box (see CellGrid).
 constexpr size_t kPieceTriangles = 32;
 constexpr int kCellCuts = 1;

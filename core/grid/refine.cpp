@@ -121,8 +121,8 @@ class ContactBuckets {
 // parallel chunks of triangles, then a stable radix sort by block keeps each block's
 // triangles in order); then each block, in parallel, tests its triangles against its own
 // cells and sorts its hits by cell with a counting sort in cache; a sort of the cells by
-// their numbers joins the blocks. (A global list of (cell, triangle) hits, 29.7M on the
-// 2.37M assembly at 0.25 %, took 1.7 s to radix-sort and 240 MB twice.)
+// their numbers joins the blocks. (A global list of (cell, triangle) hits has tens of
+// millions of entries on big assemblies: slow to sort, and twice its memory.)
 std::vector<CellTris> level0_cells(const prep::PreparedInput& in, const Vec3& origin, double h0, const Coord& dims0,
                                    double margin_fraction) {
   const auto& pts = in.mesh.points;
@@ -269,8 +269,8 @@ RefineResult build_refined_grid(const prep::PreparedInput& in, const RefineCrite
     std::vector<uint8_t> refine(level_cells.size(), 0), unresolved(level_cells.size(), 0);
     // The children's triangles are needed when they may be split in turn or checked for
     // contacts; else only which children the input meets, and a child is settled by its first
-    // triangle (the 2.37M assembly at 0.25 % has 23M triangles in split cells: listing them
-    // for each child was 2.6 s).
+    // triangle (split cells can hold tens of millions of triangles in all: listing them for
+    // each child is costly).
     const bool child_lists = level + 1 < levels || contact;
     std::vector<std::array<std::vector<uint32_t>, 8>> children(level < levels && child_lists ? level_cells.size() : 0);
     std::vector<uint8_t> children_met(level < levels ? level_cells.size() : 0, 0);

@@ -117,7 +117,7 @@ Mesh parse(std::string_view bytes, Format format, const std::string& name) {
 }
 
 // A file's bytes in a buffer that is never zero-filled first: the read writes every byte
-// used (a std::string's resize cleared 118 MB on one core before the read filled them again).
+// used (a std::string's resize clears the whole buffer on one core before the read fills it again).
 struct FileBytes {
   std::unique_ptr<char[]> data;
   size_t size = 0;

@@ -129,8 +129,7 @@ class Coarsener {
       std::vector<Plan>& plans = plans_;
       batch_made_.clear();
       // One plan per task at the finest: plans differ in cost by far (most refusals come
-      // early), and coarser chunks left one thread waiting at the end of a batch (146k assembly,
-      // medians of 7 alternated runs: coarsening 4.5 s against 5.0 s with 4 plans, 4.8 s with 32).
+      // early), and coarser chunks left one thread waiting at the end of a batch.
       tbb::parallel_for(tbb::blocked_range<size_t>(0, batch.size(), 1), [&](const tbb::blocked_range<size_t>& r) {
         for (size_t i = r.begin(); i != r.end(); ++i) {
           const Entry& e = batch[i];
@@ -308,13 +307,13 @@ class Coarsener {
   // collapse at a time; the eight colours take turns. An edge belongs to the block holding
   // its first end; an edge whose 1-rings leave the reach, or whose new triangles would need a
   // bucket cell that does not exist yet, is left to the batches. Each block's work depends on
-  // its own edges alone, so the result is the same for any number of threads.
-  // (2.37M assembly at 0.25 %: coarsening 31.7 -> 13.7 s. The batches' serial forming and
-  // applying had been 7.5 s of it, and their order over the whole surface read cold memory.)
+  // its own edges alone, so the result is the same for any number of threads. (The batches'
+  // forming and applying is serial, and their order over the whole surface reads cold memory:
+  // blocks keep most edges out of them.)
   size_t in_blocks(const std::vector<Entry>& edges, std::vector<Entry>& left, ProgressSink* progress) {
     // Each edge's block, numbered densely (in the order of the blocks' keys); a stable radix
-    // sort by it, then each block's run sorted longest first on its own, in parallel. (A
-    // comparison sort of all the edges had been 0.7 s of the 2.37M assembly at 0.25 %.)
+    // sort by it, then each block's run sorted longest first on its own, in parallel (a
+    // comparison sort of all the edges is serial and was slower).
     struct Range {
       GridKey lo{INT64_MAX, INT64_MAX, INT64_MAX}, hi{INT64_MIN, INT64_MIN, INT64_MIN};
       void add(const GridKey& k) {

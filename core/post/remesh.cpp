@@ -97,8 +97,8 @@ class Remesher {
         if (progress && (i & 63) == 63 && progress->cancelled()) throw Error(ErrorKind::Cancelled, "cancelled");
         settle(regions[i], verdicts[i]);
       }
-      // A round that rebuilt under a tenth of its regions (a wrap bridging gaps everywhere,
-      // soup.stl: 6 %) would not do better with bigger regions: stop there.
+      // A round that rebuilt under a tenth of its regions (a wrap bridging gaps everywhere)
+      // would not do better with bigger regions: stop there.
       if (10 * (stats_.on_input + stats_.ear_clipping - rebuilt_before) < regions.size()) break;
     }
     compact();
@@ -207,7 +207,7 @@ class Remesher {
 
   // grow() for gathering, which is serial: marks drop the repeats before the sort (each
   // triangle is listed from the fans of up to three vertices, and sorting every listing was
-  // most of gathering: 2.37M assembly at 0.25 %, its serial part 1.8 -> 0.7 s).
+  // most of gathering).
   std::vector<uint32_t> grow_marked(const std::vector<uint32_t>& set) {
     const uint32_t in = next_mark();
     std::vector<uint32_t> out;
