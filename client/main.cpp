@@ -23,6 +23,7 @@
 #endif
 #include "io/mesh_io.h"
 #include "vdbwrap/repair.h"
+#include "vdbwrap/source.h"
 #include "vdbwrap/wrap.h"
 
 namespace {
@@ -93,35 +94,6 @@ void print_repair_report(const std::string& output, const RepairReport& r) {
   }
   if (r.unfixed.size() > 20) std::printf("  ... %zu more unfixed regions in the JSON report\n", r.unfixed.size() - 20);
   std::printf("  %.2fs; %s\n", r.total_seconds, r.all_fixed() ? "no intersections left" : "INTERSECTIONS LEFT");
-}
-
-// What the report says about the run's origin: the tool's version, the input's file name and
-// its parts with their triangle counts (the core library never sees a file name).
-WrapReport::Source source_of(const std::string& path, const Mesh& mesh) {
-  WrapReport::Source src;
-  src.tool_version = VDBWRAP_VERSION;
-  src.file_name = std::filesystem::path(path).filename().string();
-  std::vector<size_t> counts(std::max<size_t>(mesh.part_names.size(), 1), 0);
-  for (size_t t = 0; t < mesh.triangles.size(); ++t) {
-    const int32_t p = mesh.part_of(t);
-    if (p < 0) continue;
-    if (size_t(p) >= counts.size()) counts.resize(size_t(p) + 1, 0);
-    ++counts[size_t(p)];
-  }
-  for (size_t p = 0; p < counts.size(); ++p)
-    src.parts.emplace_back(p < mesh.part_names.size() ? mesh.part_names[p] : std::string(), counts[p]);
-  return src;
-}
-
-// The same keys as the wrap report's, added to the JSON of the reports built elsewhere
-// (repair's, check's).
-std::string with_source(const std::string& report_json, const WrapReport::Source& src) {
-  nlohmann::json j = nlohmann::json::parse(report_json);
-  j["vdbwrap_version"] = src.tool_version;
-  nlohmann::json parts = nlohmann::json::array();
-  for (const auto& [name, triangles] : src.parts) parts.push_back({{"name", name}, {"triangles", triangles}});
-  j["source"] = {{"file_name", src.file_name}, {"parts", parts}};
-  return j.dump(2);
 }
 
 bool looks_like_number(const std::string& t) {

@@ -15,6 +15,7 @@
 #include "job_store.h"
 #include "params_mapping.h"
 #include "vdbwrap/repair.h"
+#include "vdbwrap/source.h"
 #include "vdbwrap/wrap.h"
 #include "worker_protocol.h"
 
@@ -119,6 +120,7 @@ int run_worker(const std::string& job_dir_text) {
 
   const fs::path dir = job_dir_text;
   FrameSink sink;
+  WrapReport::Source source;  // the reports' vdbwrap_version and source, as the CLI's
   try {
     const pb::JobStatus record = JobStore::read_record(dir);
     const pb::JobSpec& spec = record.spec();
@@ -140,6 +142,7 @@ int run_worker(const std::string& job_dir_text) {
       input = io::read_mesh_from_bytes(bytes, api::to_io_format(spec.input_format()),
                                        spec.file_name().empty() ? "upload" : spec.file_name());
       sink.progress("read", 1.0, std::to_string(input.triangles.size()) + " triangles");
+      source = source_of(spec.file_name().empty() ? "upload" : spec.file_name(), input);
     }
     // The job's work: a wrap, or a repair (whose result is written even with intersections
     // left, as `vdbwrap repair` does; the status says how many).
@@ -150,12 +153,13 @@ int run_worker(const std::string& job_dir_text) {
     if (api::is_repair(spec)) {
       RepairResult result = repair(input, repair_params, &sink);
       surface = std::move(result.mesh);
-      report = to_json(result.report);
+      report = with_source(to_json(result.report), source);
       seconds = result.report.total_seconds;
       pairs_left = result.report.after.intersecting_pairs;
     } else {
       WrapResult result = wrap(input, params, &sink);
       surface = std::move(result.surface);
+      result.report.source = source;
       report = to_json(result.report);
       seconds = result.report.total_seconds;
     }
@@ -186,7 +190,9 @@ int run_worker(const std::string& job_dir_text) {
   } catch (const WrapFailure& f) {
     // A leak or a failed validation: the report says where, so it is kept with the job.
     try {
-      JobStore::write_file_atomic(dir / JobStore::kReportFile, to_json(f.report()) + "\n");
+      WrapReport report = f.report();
+      report.source = source;
+      JobStore::write_file_atomic(dir / JobStore::kReportFile, to_json(report) + "\n");
     } catch (const std::exception&) {
     }
     return send_verdict(pb::JOB_STATE_FAILED, api::to_proto(f.kind()), f.what()) ? 0 : 1;

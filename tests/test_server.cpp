@@ -31,6 +31,7 @@
 #include "io/mesh_io.h"
 #include "params_mapping.h"
 #include "test_meshes.h"
+#include "vdbwrap/source.h"
 #include "vdbwrap/v1/jobs.grpc.pb.h"
 
 #ifndef VDBWRAP_SERVER
@@ -584,6 +585,12 @@ TEST_F(Service, RepairJobRepairsAnUploadedMesh) {
   EXPECT_NE(st.report_json().find("\"all_fixed\": true"), std::string::npos) << st.report_json();
   EXPECT_NE(st.report_json().find("\"fixed_by_local_operations\""), std::string::npos);
   EXPECT_EQ(st.report_json().find("\"quality\""), std::string::npos) << "a repair's report, not a wrap's";
+  // The tool and the input, as in `vdbwrap repair --report`.
+  const nlohmann::json repair_report = nlohmann::json::parse(st.report_json());
+  EXPECT_EQ(repair_report.value("vdbwrap_version", ""), vdbwrap::version());
+  EXPECT_EQ(repair_report["source"].value("file_name", ""), "folded.obj");
+  ASSERT_EQ(repair_report["source"]["parts"].size(), 1u);
+  EXPECT_EQ(repair_report["source"]["parts"][0].value("triangles", size_t(0)), folded.triangles.size());
   std::string result;
   ASSERT_TRUE(c.download(st.job_id(), result).ok());
   const vdbwrap::MeshDiagnostics after = vdbwrap::diagnose(vdbwrap::io::read_mesh_from_bytes(result, vdbwrap::io::Format::Obj, "r"), true);
@@ -640,6 +647,13 @@ TEST_F(Service, ConcurrentSubmissionsGiveValidResults) {
     EXPECT_NE(st.report_json().find("\"valid_closed_surface\": true"), std::string::npos);
     EXPECT_NE(st.report_json().find("distance_output_to_input"), std::string::npos);
     EXPECT_GT(st.output_triangles(), 0u);
+    // The tool and the input, as in `vdbwrap wrap --report`.
+    const nlohmann::json report = nlohmann::json::parse(st.report_json());
+    EXPECT_EQ(report.value("vdbwrap_version", ""), vdbwrap::version());
+    EXPECT_EQ(report["source"].value("file_name", ""), names[i]);
+    size_t source_triangles = 0;
+    for (const auto& part : report["source"]["parts"]) source_triangles += part.value("triangles", size_t(0));
+    EXPECT_EQ(source_triangles, report["input"].value("triangles", size_t(1) << 40)) << names[i];
     std::string bytes;
     ASSERT_TRUE(c.download(ids[i], bytes).ok());
     // The result comes in the input's format by default.

@@ -118,6 +118,12 @@ def checks(args):
            "the job's report does not say the result is valid")
     with open(report_path) as f:
         expect(json.load(f) == result.report, "the report file differs from the job's report")
+    # The job's report names the tool and the input as the CLI's does.
+    version = subprocess.run([args.cli, "--version"], capture_output=True, text=True).stdout.split()[-1]
+    expect(result.report.get("vdbwrap_version") == version,
+           "report vdbwrap_version %r, the CLI is %r" % (result.report.get("vdbwrap_version"), version))
+    expect(result.report.get("source") == {"file_name": "fuze.obj", "parts": [{"name": "default", "triangles": 1000}]},
+           "report source %r" % (result.report.get("source"),))
 
     # Watch events arrived in order, and the last one is final.
     expect(len(events) >= 2, "only %d progress events" % len(events))
