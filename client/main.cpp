@@ -265,10 +265,10 @@ int main(int argc, char** argv) {
       cli::check_output_path("-o", output);
       cli::check_output_path("--report", report_path);
       cli::check_output_path("--leak-path", leak_path);
+      html_output.check();  // three.js too: exit 2 before the work
       cli::StderrProgress progress(quiet, cli::wrap_stage_weights());
       progress.progress("read", 0.0, input);
       Mesh mesh = io::read_mesh(input);
-      html_output.check();  // three.js too: exit 2 before the work
       progress.progress("read", 1.0, std::to_string(mesh.triangles.size()) + " triangles");
       const WrapReport::Source source = source_of(input, mesh);
       WrapResult result;
