@@ -2,16 +2,11 @@
 #include <algorithm>
 #include <cmath>
 
+#include "common/vec.h"
 #include "io/readers.h"
 
 namespace vdbwrap::io::detail {
 namespace {
-
-Vec3 sub(const Vec3& a, const Vec3& b) { return {a[0] - b[0], a[1] - b[1], a[2] - b[2]}; }
-double dot(const Vec3& a, const Vec3& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
-Vec3 cross(const Vec3& a, const Vec3& b) {
-  return {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
-}
 
 // Newell's normal: twice the vector area, robust for non-planar and non-convex polygons.
 // Coordinates are taken relative to the first vertex to keep precision far from the origin.
@@ -19,8 +14,8 @@ Vec3 newell_normal(const std::vector<Vec3>& points, const uint32_t* poly, size_t
   const Vec3& origin = points[poly[0]];
   Vec3 normal{0, 0, 0};
   for (size_t i = 0; i < n; ++i) {
-    Vec3 a = sub(points[poly[i]], origin);
-    Vec3 b = sub(points[poly[(i + 1) % n]], origin);
+    Vec3 a = points[poly[i]] - origin;
+    Vec3 b = points[poly[(i + 1) % n]] - origin;
     normal[0] += (a[1] - b[1]) * (a[2] + b[2]);
     normal[1] += (a[2] - b[2]) * (a[0] + b[0]);
     normal[2] += (a[0] - b[0]) * (a[1] + b[1]);
@@ -74,7 +69,7 @@ bool PolygonTriangulator::project(const std::vector<Vec3>& points, const uint32_
   v_.resize(n);
   const Vec3& origin = points[poly[0]];
   for (size_t i = 0; i < n; ++i) {
-    Vec3 d = sub(points[poly[i]], origin);
+    Vec3 d = points[poly[i]] - origin;
     u_[i] = dot(d, e1);
     v_[i] = dot(d, e2);
   }

@@ -9,25 +9,20 @@
 #include <list>
 
 #include "common/vec.h"
+#include "common/vec2.h"
 #include "post/region_fill.h"
 
 namespace vdbwrap::post {
 
-using P2 = std::array<double, 2>;
+using P2 = Vec2;
 
 namespace {
 
-P2 sub(const P2& a, const P2& b) { return {a[0] - b[0], a[1] - b[1]}; }
-double cross2(const P2& a, const P2& b) { return a[0] * b[1] - a[1] * b[0]; }
-double dot2(const P2& a, const P2& b) { return a[0] * b[0] + a[1] * b[1]; }
-double len2(const P2& a) { return std::sqrt(dot2(a, a)); }
-double orient(const P2& a, const P2& b, const P2& c) { return cross2(sub(b, a), sub(c, a)); }
-
 // Segments ab and cd share a point (touching counts).
 bool segments_meet(const P2& a, const P2& b, const P2& c, const P2& d) {
-  const double o1 = orient(a, b, c), o2 = orient(a, b, d), o3 = orient(c, d, a), o4 = orient(c, d, b);
+  const double o1 = orient2(a, b, c), o2 = orient2(a, b, d), o3 = orient2(c, d, a), o4 = orient2(c, d, b);
   if (((o1 > 0 && o2 < 0) || (o1 < 0 && o2 > 0)) && ((o3 > 0 && o4 < 0) || (o3 < 0 && o4 > 0))) return true;
-  auto on = [](const P2& p, const P2& q, const P2& r, double o) {  // r on segment pq, given orient(p, q, r) = o
+  auto on = [](const P2& p, const P2& q, const P2& r, double o) {  // r on segment pq, given orient2(p, q, r) = o
     if (o != 0) return false;
     return std::min(p[0], q[0]) <= r[0] && r[0] <= std::max(p[0], q[0]) && std::min(p[1], q[1]) <= r[1] &&
            r[1] <= std::max(p[1], q[1]);
@@ -37,7 +32,7 @@ bool segments_meet(const P2& a, const P2& b, const P2& c, const P2& d) {
 
 // Strictly inside triangle abc (counter-clockwise), with a margin relative to its size.
 bool inside_triangle(const P2& p, const P2& a, const P2& b, const P2& c) {
-  return orient(a, b, p) > 0 && orient(b, c, p) > 0 && orient(c, a, p) > 0;
+  return orient2(a, b, p) > 0 && orient2(b, c, p) > 0 && orient2(c, a, p) > 0;
 }
 
 P2 rotate(const P2& v, double angle) {
@@ -88,7 +83,7 @@ bool is_simple(const std::vector<P2>& poly) {
         const P2& s = i == 0 && j == n - 1 ? poly[0] : poly[j];
         const P2& u = i == 0 && j == n - 1 ? poly[1] : poly[i];
         const P2& w = i == 0 && j == n - 1 ? poly[n - 1] : poly[(j + 1) % n];
-        if (orient(u, s, w) == 0 && dot2(sub(u, s), sub(w, s)) > 0) return false;
+        if (orient2(u, s, w) == 0 && dot2(sub2(u, s), sub2(w, s)) > 0) return false;
         continue;
       }
       if (segments_meet(poly[i], poly[(i + 1) % n], poly[j], poly[(j + 1) % n])) return false;
@@ -140,7 +135,7 @@ RegionFill fill_by_ear_clipping(const RegionProblem& problem) {
         // Edges sharing a corner node: only a crossing away from that node counts.
         const P2& s = it->q;
         const P2& e = nx->q;
-        const double o1 = orient(p, q, s), o2 = orient(p, q, e), o3 = orient(s, e, p), o4 = orient(s, e, q);
+        const double o1 = orient2(p, q, s), o2 = orient2(p, q, e), o3 = orient2(s, e, p), o4 = orient2(s, e, q);
         if (((o1 > 0 && o2 < 0) || (o1 < 0 && o2 > 0)) && ((o3 > 0 && o4 < 0) || (o3 < 0 && o4 > 0))) return true;
         continue;
       }
@@ -155,7 +150,7 @@ RegionFill fill_by_ear_clipping(const RegionProblem& problem) {
   };
   auto near_front = [&](const P2& q, uint32_t ia, uint32_t ii, uint32_t ib) {
     for (const Node& n : front)
-      if (n.id != ia && n.id != ii && n.id != ib && len2(sub(n.q, q)) < 0.4 * L) return true;
+      if (n.id != ia && n.id != ii && n.id != ib && length2(sub2(n.q, q)) < 0.4 * L) return true;
     return false;
   };
 
@@ -165,7 +160,7 @@ RegionFill fill_by_ear_clipping(const RegionProblem& problem) {
     // Corners by increasing interior angle; the first one that can be cut is.
     std::vector<std::pair<double, std::list<Node>::iterator>> corners;
     for (auto it = front.begin(); it != front.end(); ++it) {
-      const P2 to_next = sub(next_of(it)->q, it->q), to_prev = sub(prev_of(it)->q, it->q);
+      const P2 to_next = sub2(next_of(it)->q, it->q), to_prev = sub2(prev_of(it)->q, it->q);
       double angle = std::atan2(cross2(to_next, to_prev), dot2(to_next, to_prev));  // from next, counter-clockwise, to prev
       if (angle <= 0) angle += 2 * M_PI;
       corners.push_back({angle, it});
@@ -179,17 +174,17 @@ RegionFill fill_by_ear_clipping(const RegionProblem& problem) {
         if (angle >= M_PI) break;  // only convex corners are cut
         auto pv = prev_of(it), nx = next_of(it);
         const P2 &a = pv->q, &i = it->q, &b = nx->q;
-        const double la = len2(sub(a, i)), lb = len2(sub(b, i));
+        const double la = length2(sub2(a, i)), lb = length2(sub2(b, i));
         const double ha = height[pv->id], hi = height[it->id], hb = height[nx->id];
         // An ear when the corner is sharp, or not wide and its new edge stays within the
         // characteristic length; else new nodes at that length inside the corner.
-        const double chord = len2(sub(a, b));
+        const double chord = length2(sub2(a, b));
         const double deg = angle * 180 / M_PI;
         const int new_nodes = (pass == 1 || deg < 75 || (deg < 100 && chord <= 1.25 * L) || front.size() == 4) ? 0
                               : deg < 135                                                                    ? 1
                                                                                                               : 2;
         if (new_nodes == 0) {
-          if (orient(a, i, b) <= 0 || any_inside(a, i, b, pv->id, it->id, nx->id) ||
+          if (orient2(a, i, b) <= 0 || any_inside(a, i, b, pv->id, it->id, nx->id) ||
               crosses_front(a, b, pv->id, it->id, nx->id))
             continue;
           out.triangles.push_back({pv->id, it->id, nx->id});
@@ -209,7 +204,7 @@ RegionFill fill_by_ear_clipping(const RegionProblem& problem) {
         chain.insert(chain.end(), at.begin(), at.end());
         chain.push_back(b);
         bool ok = true;
-        for (size_t k = 0; k + 1 < chain.size() && ok; ++k) ok &= orient(i, chain[k + 1], chain[k]) > 0;
+        for (size_t k = 0; k + 1 < chain.size() && ok; ++k) ok &= orient2(i, chain[k + 1], chain[k]) > 0;
         for (const P2& q : at) ok = ok && !near_front(q, pv->id, it->id, nx->id);
         for (size_t k = 0; k + 1 < chain.size() && ok; ++k) ok &= !crosses_front(chain[k], chain[k + 1], pv->id, it->id, nx->id);
         for (const P2& q : at) ok = ok && !crosses_front(i, q, pv->id, it->id, nx->id);
@@ -231,7 +226,7 @@ RegionFill fill_by_ear_clipping(const RegionProblem& problem) {
   {
     auto it = front.begin();
     const Node a = *it++, b = *it++, c = *it;
-    if (orient(a.q, b.q, c.q) <= 0) return fail("ear clipping closed with a folded triangle");
+    if (orient2(a.q, b.q, c.q) <= 0) return fail("ear clipping closed with a folded triangle");
     out.triangles.push_back({a.id, b.id, c.id});
   }
   // Fair the heights of the new nodes: the average of their neighbours', a few times.

@@ -24,6 +24,7 @@
 #include "common/closest_point.h"
 #include "common/edge_key.h"
 #include "common/vec.h"
+#include "common/vec2.h"
 #include "post/region_fill.h"
 
 namespace vdbwrap::post {
@@ -36,11 +37,7 @@ using Fb = CGAL::Constrained_triangulation_face_base_2<K, Fbi>;
 using Tds = CGAL::Triangulation_data_structure_2<Vb, Fb>;
 using CDT = CGAL::Constrained_Delaunay_triangulation_2<K, Tds, CGAL::No_constraint_intersection_tag>;
 
-using P2 = std::array<double, 2>;
-
-P2 sub2(const P2& a, const P2& b) { return {a[0] - b[0], a[1] - b[1]}; }
-double dot2(const P2& a, const P2& b) { return a[0] * b[0] + a[1] * b[1]; }
-double cross2(const P2& a, const P2& b) { return a[0] * b[1] - a[1] * b[0]; }
+using P2 = Vec2;
 
 double segment_distance(const P2& p, const P2& a, const P2& b) {
   const P2 ab = sub2(b, a), ap = sub2(p, a);

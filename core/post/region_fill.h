@@ -14,6 +14,7 @@
 #include <utility>
 #include <vector>
 
+#include "common/vec2.h"
 #include "vdbwrap/mesh.h"
 
 namespace vdbwrap::post {
@@ -51,15 +52,15 @@ RegionFill fill_by_ear_clipping(const RegionProblem& problem);
 // A frame for the region's plane: origin at the contour's centroid, axes e1, e2, normal n.
 struct PlaneFrame {
   Vec3 origin, e1, e2, n;
-  std::array<double, 2> to_2d(const Vec3& p) const;
-  Vec3 to_3d(const std::array<double, 2>& q, double height) const;
+  Vec2 to_2d(const Vec3& p) const;
+  Vec3 to_3d(const Vec2& q, double height) const;
   double height(const Vec3& p) const;
 };
 PlaneFrame plane_frame(const RegionProblem& problem);
 
 // Twice the signed area of a 2D polygon (positive: counter-clockwise).
-double signed_area2(const std::vector<std::array<double, 2>>& polygon);
+double signed_area2(const std::vector<Vec2>& polygon);
 // True when no two non-adjacent edges of the closed 2D polygon touch.
-bool is_simple(const std::vector<std::array<double, 2>>& polygon);
+bool is_simple(const std::vector<Vec2>& polygon);
 
 }  // namespace vdbwrap::post
