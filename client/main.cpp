@@ -22,6 +22,7 @@
 #include "remote.h"  // submit, wait, jobs, cancel (gRPC job service)
 #endif
 #include "io/mesh_io.h"
+#include "vdbwrap/deviation.h"
 #include "vdbwrap/repair.h"
 #include "vdbwrap/source.h"
 #include "vdbwrap/wrap.h"
@@ -94,6 +95,14 @@ void print_repair_report(const std::string& output, const RepairReport& r) {
   }
   if (r.unfixed.size() > 20) std::printf("  ... %zu more unfixed regions in the JSON report\n", r.unfixed.size() - 20);
   std::printf("  %.2fs; %s\n", r.total_seconds, r.all_fixed() ? "no intersections left" : "INTERSECTIONS LEFT");
+}
+
+// --deviation: a .vtp or .ply in a folder that exists, checked before any work.
+void check_deviation_path(const std::string& path) {
+  if (path.empty()) return;
+  if (!is_deviation_path(path))
+    throw Error(ErrorKind::InvalidArgument, "--deviation " + path + ": the deviation field is written as .vtp or .ply");
+  cli::check_output_path("--deviation", path);
 }
 
 bool looks_like_number(const std::string& t) {
@@ -173,7 +182,7 @@ int main(int argc, char** argv) {
 
   // wrap
   auto* wrap_cmd = app.add_subcommand("wrap", "Wrap INPUT into a closed, valid surface written to OUTPUT");
-  std::string input, output, report_path, leak_path;
+  std::string input, output, report_path, leak_path, deviation_path;
   cli::WrapOptions wrap_options;
   bool quiet = false;
   wrap_cmd->add_option("input", input, "Input mesh (.stl .obj .off .ply .vtp .nas .bdf)")->required();
@@ -185,6 +194,11 @@ int main(int argc, char** argv) {
   wrap_cmd
       ->add_option("--leak-path", leak_path,
                    "When a seed point's volume leaks: write the narrowest passage and the path to it here (OBJ)")
+      ->group("Output");
+  wrap_cmd
+      ->add_option("--deviation", deviation_path,
+                   "Write the wrap with its signed distance to the input per vertex and its defect flags per triangle "
+                   "(.vtp for ParaView, or .ply)")
       ->group("Output");
   cli::HtmlOutput html_output;
   html_output.add_to(wrap_cmd);
@@ -200,10 +214,13 @@ int main(int argc, char** argv) {
 
   // check
   auto* check_cmd = app.add_subcommand("check", "Diagnose a mesh: watertight? manifold? self-intersecting?");
-  std::string check_input, against, check_report;
+  std::string check_input, against, check_report, check_deviation;
   check_cmd->add_option("input", check_input, "Mesh to check")->required();
   check_cmd->add_option("--against", against, "Reference mesh: also report the two-sided (Metro-style) distance");
   check_cmd->add_option("--report", check_report, "Write the diagnostics as JSON");
+  check_cmd->add_option("--deviation", check_deviation,
+                        "With --against: write the mesh with its signed distance to the reference per vertex and its "
+                        "sliver and small-triangle flags per triangle (.vtp or .ply)");
   bool require_valid = false;
   check_cmd->add_flag("--require-valid", require_valid,
                       "Exit with code 4 unless the mesh is a valid closed surface (for scripts)");
@@ -266,6 +283,7 @@ int main(int argc, char** argv) {
       cli::check_output_path("--report", report_path);
       cli::check_output_path("--leak-path", leak_path);
       html_output.check();  // three.js too: exit 2 before the work
+      check_deviation_path(deviation_path);
       cli::StderrProgress progress(quiet, cli::wrap_stage_weights());
       progress.progress("read", 0.0, input);
       Mesh mesh = io::read_mesh(input);
@@ -302,6 +320,10 @@ int main(int argc, char** argv) {
       io::write_mesh(result.surface, output);
       result.report.source = source;
       if (!report_path.empty()) write_text(report_path, to_json(result.report));
+      if (!deviation_path.empty()) {
+        progress.progress("deviation", 0.0, deviation_path);
+        write_deviation(deviation_path, result.surface, measure_deviation(result.surface, mesh, &result.triangle_flags));
+      }
       progress.complete(output);
       if (html_output.wanted()) {
         const std::string page = html_output.write(mesh, &result.surface, to_json(result.report), nullptr, source.file_name);
@@ -311,10 +333,12 @@ int main(int argc, char** argv) {
       if (!quiet)
         std::fprintf(stderr,
                      "wrote %s: %zu triangles, closed, manifold, outward, no self-intersections; distance to input mean %s, "
-                     "p95 %s of the diagonal; %.2fs%s%s\n",
+                     "p95 %s of the diagonal, max %.6g at (%.6g, %.6g, %.6g); %.2fs%s%s%s%s\n",
                      output.c_str(), result.surface.triangles.size(), percent(r.output_to_input.mean, r.diagonal).c_str(),
-                     percent(r.output_to_input.p95, r.diagonal).c_str(), r.total_seconds,
-                     report_path.empty() ? "" : "; report ", report_path.c_str());
+                     percent(r.output_to_input.p95, r.diagonal).c_str(), r.output_to_input.max, r.output_to_input.max_at[0],
+                     r.output_to_input.max_at[1], r.output_to_input.max_at[2], r.total_seconds,
+                     report_path.empty() ? "" : "; report ", report_path.c_str(),
+                     deviation_path.empty() ? "" : "; deviation field ", deviation_path.c_str());
       return 0;
     }
     if (*repair_cmd) {
@@ -339,6 +363,9 @@ int main(int argc, char** argv) {
     }
     if (*check_cmd) {
       cli::check_output_path("--report", check_report);
+      if (!check_deviation.empty() && against.empty())
+        throw Error(ErrorKind::InvalidArgument, "--deviation needs --against REFERENCE (the distances are to the reference)");
+      check_deviation_path(check_deviation);
       Mesh mesh = io::read_mesh(check_input);
       MeshDiagnostics d = diagnose(mesh, true);
       print_diagnostics(check_input, d);
@@ -348,10 +375,10 @@ int main(int argc, char** argv) {
         DistanceStats ab = sampled_distance(mesh, ref), ba = sampled_distance(ref, mesh);
         double diag = ab.diagonal;
         std::printf("distance to %s (percent of its diagonal %.6g):\n", against.c_str(), diag);
-        std::printf("  mesh -> reference: mean %s, p95 %s, max %s\n", percent(ab.mean, diag).c_str(),
-                    percent(ab.p95, diag).c_str(), percent(ab.max, diag).c_str());
-        std::printf("  reference -> mesh: mean %s, p95 %s, max %s\n", percent(ba.mean, diag).c_str(),
-                    percent(ba.p95, diag).c_str(), percent(ba.max, diag).c_str());
+        std::printf("  mesh -> reference: mean %s, p95 %s, max %s at (%.6g, %.6g, %.6g)\n", percent(ab.mean, diag).c_str(),
+                    percent(ab.p95, diag).c_str(), percent(ab.max, diag).c_str(), ab.max_at[0], ab.max_at[1], ab.max_at[2]);
+        std::printf("  reference -> mesh: mean %s, p95 %s, max %s at (%.6g, %.6g, %.6g)\n", percent(ba.mean, diag).c_str(),
+                    percent(ba.p95, diag).c_str(), percent(ba.max, diag).c_str(), ba.max_at[0], ba.max_at[1], ba.max_at[2]);
         std::printf("  two-sided (Hausdorff) max %s\n", percent(std::max(ab.max, ba.max), diag).c_str());
         // How well the mesh keeps the reference's sharp edges (samples every 0.1 % of the diagonal).
         DistanceStats edges = sharp_edge_distance(ref, mesh);
@@ -361,6 +388,16 @@ int main(int argc, char** argv) {
                       edges.samples);
         json += ", \"to_reference\": " + to_json(ab) + ", \"from_reference\": " + to_json(ba) +
                 ", \"sharp_edges_from_reference\": " + to_json(edges);
+        if (!check_deviation.empty()) {
+          const DeviationField field = measure_deviation(mesh, ref);
+          write_deviation(check_deviation, mesh, field);
+          const Vec3& at = field.max_at;
+          std::printf("  deviation field (per vertex, %s): max %.6g (%s) at (%.6g, %.6g, %.6g) -> %s\n",
+                      field.sign == DistanceSign::Outside     ? "signed, + outside the reference"
+                      : field.sign == DistanceSign::FrontSide ? "signed, + on the side the reference faces"
+                                                              : "unsigned: the reference's orientation is inconsistent",
+                      field.max_abs, percent(field.max_abs, diag).c_str(), at[0], at[1], at[2], check_deviation.c_str());
+        }
       }
       json += "}";
       if (!check_report.empty()) write_text(check_report, with_source(json, source_of(check_input, mesh)));

@@ -44,6 +44,7 @@ json dist_json(const DistanceStats& s) {
               {"mean", s.mean},
               {"p95", s.p95},
               {"max", s.max},
+              {"max_at", s.max_at},
               {"mean_percent_of_diagonal", 100 * s.mean / dg},
               {"p95_percent_of_diagonal", 100 * s.p95 / dg},
               {"max_percent_of_diagonal", 100 * s.max / dg}};

@@ -31,6 +31,7 @@
 #include "post/quality.h"
 #include "post/remesh.h"
 #include "post/repair_wrap.h"
+#include "post/wrap_defects.h"
 #include "prep/check_input.h"
 #include "prep/prepare.h"
 #include "vdbwrap/wrap.h"
@@ -322,6 +323,7 @@ WrapResult run_pipeline(const Mesh& input, const WrapParams& params, ProgressSin
   // The final quality analysis runs beside the first validation: it holds when the validation
   // finds no intersection (nothing to count for it, nothing repaired); else it runs again after.
   QualityCounts quality_beside;
+  std::vector<uint8_t> final_flags;  // per triangle, for WrapResult::triangle_flags
   double quality_beside_seconds = 0;
   bool repaired_in_validation = false;
   {
@@ -337,7 +339,7 @@ WrapResult run_pipeline(const Mesh& input, const WrapParams& params, ProgressSin
         checks.run([&] {
           const auto start = std::chrono::steady_clock::now();
           const std::vector<uint32_t> none;
-          quality_beside = post::analyse_quality(surface.points, surface.triangles, surface.cell_size, quality_ref, nullptr, &none,
+          quality_beside = post::analyse_quality(surface.points, surface.triangles, surface.cell_size, quality_ref, &final_flags, &none,
                                                  &deviation_memo);
           quality_beside_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
         });
@@ -394,8 +396,11 @@ WrapResult run_pipeline(const Mesh& input, const WrapParams& params, ProgressSin
     report.stages.push_back(beside);
   } else {
     StageTimer timer("quality", report.stages);
-    report.quality.after = post::analyse_quality(surface.points, surface.triangles, surface.cell_size, quality_ref, nullptr, &crossing, &deviation_memo);
+    report.quality.after = post::analyse_quality(surface.points, surface.triangles, surface.cell_size, quality_ref, &final_flags, &crossing, &deviation_memo);
   }
+
+  result.triangle_flags = post::wrap_defect_flags(result.surface.points, result.surface.triangles, std::move(final_flags),
+                                                  std::move(fitted.held_back_points));
 
   if (params.compute_distances) {
     StageTimer timer("distances", report.stages);

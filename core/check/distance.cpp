@@ -66,9 +66,11 @@ DistanceStats distances_to(const std::vector<Vec3>& samples, const Mesh& to, dou
   for (double d : dist) sum += d;
   s.mean = sum / double(dist.size());
   size_t k95 = std::min(dist.size() - 1, size_t(0.95 * double(dist.size())));
+  const size_t farthest = size_t(std::max_element(dist.begin(), dist.end()) - dist.begin());
+  s.max = dist[farthest];
+  s.max_at = samples[farthest];
   std::nth_element(dist.begin(), dist.begin() + k95, dist.end());
   s.p95 = dist[k95];
-  s.max = *std::max_element(dist.begin(), dist.end());
   return s;
 }
 

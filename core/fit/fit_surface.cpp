@@ -390,7 +390,7 @@ FittedSurface fit_to_input(const extract::LatticeSurface& surf, const grid::Adap
   if (!valid && progress)
     progress->progress("project", 1.0, "the validity loop ran out of rounds: intersections left for the repair");
   for (size_t i = 0; i < n; ++i)
-    if (t[i] < 1.0 && norm2(target[i] - lattice[i]) > 0) ++out.held_back;
+    if (t[i] < 1.0 && norm2(target[i] - lattice[i]) > 0) ++out.held_back, out.held_back_points.push_back(p[i]);
   if (progress) progress->progress("project", 1.0, std::to_string(out.held_back) + " nodes held back to stay valid");
   out.snapped = std::move(snapped);
   out.cell_size = std::move(cell_size);

@@ -20,6 +20,7 @@ struct FittedSurface {
   std::vector<double> cell_size; // per point: edge of the smallest lattice face at it (the local target size)
   std::vector<std::pair<uint32_t, uint32_t>> feature_edges;  // edges traced along the feature curves
   size_t held_back = 0;       // nodes that could not go all the way to the input
+  std::vector<Vec3> held_back_points;  // where they are (output frame): flagged on the wrap's triangles
   size_t validity_rounds = 0;
   // False when the validity loop ran out of rounds: intersecting or degenerate triangles are
   // left for the post-processing (remeshing, then intersection repair) to fix.

@@ -52,6 +52,18 @@ std::string one_line(const std::string& name) {
   return out;
 }
 
+DataArray& data_array(std::vector<DataArray>& arrays, const std::string& name, DataArray::Type type, size_t size) {
+  for (DataArray& a : arrays)
+    if (a.name == name) return a;
+  arrays.push_back({name, type, std::vector<double>(size, NAN)});
+  return arrays.back();
+}
+
+void pad_arrays(std::vector<DataArray>& arrays, size_t size) {
+  for (DataArray& a : arrays)
+    if (a.values.size() < size) a.values.resize(size, NAN);
+}
+
 void check_point_count(const std::string& name, uint64_t count) {
   if (count > uint64_t(UINT32_MAX))
     fail(name, "has " + std::to_string(count) + " vertices, more than 32-bit indices can address");
@@ -101,13 +113,13 @@ void reject_binary_text(std::string_view bytes, const std::string& name, const c
                    format + " text");
 }
 
-Mesh parse(std::string_view bytes, Format format, const std::string& name) {
+Mesh parse(std::string_view bytes, Format format, const std::string& name, MeshData* data) {
   switch (format) {
     case Format::Stl: return detail::read_stl(bytes, name);
     case Format::Obj: reject_binary_text(bytes, name, "OBJ"); return detail::read_obj(bytes, name);
     case Format::Off: reject_binary_text(bytes, name, "OFF"); return detail::read_off(bytes, name);
-    case Format::Ply: return detail::read_ply(bytes, name);
-    case Format::Vtp: return detail::read_vtp(bytes, name);
+    case Format::Ply: return detail::read_ply(bytes, name, data);
+    case Format::Vtp: return detail::read_vtp(bytes, name, data);
     case Format::Nastran:
       reject_binary_text(bytes, name, "Nastran");
       return detail::read_nastran(bytes, name);
@@ -179,6 +191,37 @@ void check_writable(const Mesh& mesh, Format format, const std::string& path) {
           " but the mesh has " + std::to_string(mesh.part_names.size()) + " part names");
 }
 
+// Arrays beside the mesh: one value per point or triangle, names the formats can carry and
+// the writers do not use themselves.
+void check_data(const Mesh& mesh, Format format, const MeshData& data, const std::string& path) {
+  auto bad = [&](const std::string& what) {
+    throw Error(ErrorKind::OutputFailed, path + ": cannot write: " + what);
+  };
+  if (format != Format::Vtp && format != Format::Ply) bad("only .vtp and .ply carry point and cell data");
+  const bool ply = format == Format::Ply;
+  auto check = [&](const std::vector<DataArray>& arrays, size_t count, const char* what,
+                   std::vector<std::string> names) {
+    for (const DataArray& a : arrays) {
+      if (a.name.empty() || !std::all_of(a.name.begin(), a.name.end(), [](char c) {
+            return (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '_';
+          }))
+        bad(std::string(what) + " array name " + detail::quoted(a.name) + " is not letters, digits and '_'");
+      if (std::find(names.begin(), names.end(), a.name) != names.end())
+        bad(std::string(what) + " array name " + a.name + " is taken (by the format or another array)");
+      names.push_back(a.name);
+      if (a.values.size() != count)
+        bad(std::string(what) + " array " + a.name + " has " + std::to_string(a.values.size()) + " values for " +
+            std::to_string(count) + (std::string(what) == "point" ? " points" : " triangles"));
+    }
+  };
+  check(data.point_data, mesh.points.size(), "point", ply ? std::vector<std::string>{"x", "y", "z"} : std::vector<std::string>{});
+  std::vector<std::string> cell_names;
+  if (ply) cell_names = {"vertex_indices", "vertex_index"};
+  if (ply && !mesh.part_names.empty()) cell_names.push_back("part");
+  if (!ply) cell_names.push_back("part_id");
+  check(data.cell_data, mesh.triangles.size(), "cell", cell_names);
+}
+
 bool stl_is_ascii(const Mesh& mesh, StlEncoding encoding) {
   switch (encoding) {
     case StlEncoding::Ascii: return true;
@@ -193,8 +236,8 @@ void write_to(const Mesh& mesh, Format format, const WriteOptions& options, deta
     case Format::Stl: return detail::write_stl(mesh, out, stl_is_ascii(mesh, options.stl));
     case Format::Obj: return detail::write_obj(mesh, out);
     case Format::Off: return detail::write_off(mesh, out);
-    case Format::Ply: return detail::write_ply(mesh, out);
-    case Format::Vtp: return detail::write_vtp(mesh, out);
+    case Format::Ply: return detail::write_ply(mesh, out, options.data);
+    case Format::Vtp: return detail::write_vtp(mesh, out, options.data);
     case Format::Nastran: return detail::write_nastran(mesh, out);
     case Format::Unknown: break;
   }
@@ -217,22 +260,26 @@ Format format_from_extension(std::string_view path) {
   return Format::Unknown;
 }
 
-Mesh read_mesh(const std::string& path) {
-  FileBytes bytes;
-  try {
-    bytes = read_whole_file(path);
-  } catch (const std::bad_alloc&) {
-    fail(path, "too large to load into memory");
-  }
-  return read_mesh_from_bytes(bytes.view(), format_from_extension(path), path);
+const DataArray* MeshData::point_array(const std::string& name) const {
+  for (const DataArray& a : point_data)
+    if (a.name == name) return &a;
+  return nullptr;
 }
 
-Mesh read_mesh_from_bytes(std::string_view bytes, Format format, const std::string& display_name) {
+const DataArray* MeshData::cell_array(const std::string& name) const {
+  for (const DataArray& a : cell_data)
+    if (a.name == name) return &a;
+  return nullptr;
+}
+
+namespace {
+
+Mesh read_mesh_with(std::string_view bytes, Format format, const std::string& display_name, MeshData* data) {
   if (bytes.empty()) fail(display_name, "file is empty");
   if (format == Format::Unknown) format = sniff_format(bytes);
   Mesh mesh;
   try {
-    mesh = parse(bytes, format, display_name);
+    mesh = parse(bytes, format, display_name, data);
   } catch (const std::bad_alloc&) {
     fail(display_name, "not enough memory to load this mesh");
   }
@@ -242,9 +289,29 @@ Mesh read_mesh_from_bytes(std::string_view bytes, Format format, const std::stri
   return mesh;
 }
 
+}  // namespace
+
+Mesh read_mesh(const std::string& path) { return read_mesh(path, nullptr); }
+
+Mesh read_mesh(const std::string& path, MeshData* data) {
+  FileBytes bytes;
+  try {
+    bytes = read_whole_file(path);
+  } catch (const std::bad_alloc&) {
+    fail(path, "too large to load into memory");
+  }
+  if (data) *data = MeshData();
+  return read_mesh_with(bytes.view(), format_from_extension(path), path, data);
+}
+
+Mesh read_mesh_from_bytes(std::string_view bytes, Format format, const std::string& display_name) {
+  return read_mesh_with(bytes, format, display_name, nullptr);
+}
+
 std::string write_mesh_to_bytes(const Mesh& mesh, Format format, const WriteOptions& options) {
   if (format == Format::Unknown) throw Error(ErrorKind::OutputFailed, "unknown output format");
   check_writable(mesh, format, "output");
+  if (options.data) check_data(mesh, format, *options.data, "output");
   detail::Sink sink;
   write_to(mesh, format, options, sink);
   return sink.take();
@@ -258,6 +325,7 @@ void write_mesh(const Mesh& mesh, const std::string& path, const WriteOptions& o
   if (format == Format::Unknown)
     failed("unknown output format (use .stl, .obj, .off, .ply, .vtp, .nas or .bdf)");
   check_writable(mesh, format, path);
+  if (options.data) check_data(mesh, format, *options.data, path);
 
   // Write beside the target, then rename: readers never see a half-written file.
   const std::string tmp = path + ".tmp";

@@ -3,6 +3,7 @@
 #pragma once
 #include <string>
 #include <string_view>
+#include <vector>
 
 #include "vdbwrap/mesh.h"
 
@@ -16,9 +17,31 @@ enum class Format { Unknown, Stl, Obj, Off, Ply, Vtp, Nastran };
 // always writes floats and drops the part names.
 enum class StlEncoding { Auto, Ascii, Binary };
 
+// A named value per point or per triangle, carried beside a mesh by the VTP writer (point and
+// cell data) and the PLY writer (vertex and face properties), and read back from those formats.
+// Values are held as doubles (integer types exactly); `type` is how they are written.
+struct DataArray {
+  enum class Type { Float64, Int32, UInt8 };
+  std::string name;  // letters, digits and '_'
+  Type type = Type::Float64;
+  std::vector<double> values;
+};
+
+struct MeshData {
+  std::vector<DataArray> point_data;  // one value per point
+  std::vector<DataArray> cell_data;   // one value per triangle
+  // The array of that name, nullptr when there is none.
+  const DataArray* point_array(const std::string& name) const;
+  const DataArray* cell_array(const std::string& name) const;
+};
+
 // Per-format choices of the writers; formats without a choice ignore it.
 struct WriteOptions {
   StlEncoding stl = StlEncoding::Auto;
+  // Arrays written with the mesh: .vtp and .ply only (other formats refuse them). Names the
+  // writer uses itself are refused: x, y, z, vertex_indices and (with parts) part in PLY,
+  // part_id in VTP.
+  const MeshData* data = nullptr;
 };
 
 // Format from a file name's extension (case-insensitive); Unknown when none matches.
@@ -38,6 +61,11 @@ Format format_from_extension(std::string_view path);
 // without those, have none. Nastran: GRID, CTRIA3/6, CQUAD4/8 in the basic coordinate system. Parts are in order of first appearance and only
 // parts with triangles exist. With at most one part, triangle_part is left empty.
 Mesh read_mesh(const std::string& path);
+// The same, with the single-component numeric arrays of a .vtp (point and cell data) or the
+// scalar properties of a .ply (vertex and face, besides x, y, z) in `data`; cell values follow
+// their polygon onto each of its triangles; values missing from a piece are NaN. Other formats
+// leave `data` empty.
+Mesh read_mesh(const std::string& path, MeshData* data);
 
 // The same from bytes already in memory (the server receives uploads this way).
 // display_name is used in error messages.

@@ -1,9 +1,10 @@
 // PLY: ascii, binary_little_endian and binary_big_endian. Reads vertex x/y/z, face
 // vertex_indices (or vertex_index) and an optional integer face property "part", and triangle
 // strips (element "tristrips", as many scanned models in the Stanford repository are stored);
-// skips the rest.
+// skips the rest unless asked for the other scalar vertex and face properties (MeshData).
 // Part names survive a round trip through "comment vdbwrap_part INDEX NAME" header lines.
 #include <algorithm>
+#include <initializer_list>
 #include <unordered_map>
 
 #include "io/readers.h"
@@ -66,6 +67,11 @@ size_t type_size(Type t) {
 }
 
 bool is_integer(Type t) { return t != Type::F32 && t != Type::F64; }
+
+DataArray::Type data_type(Type t) {
+  if (t == Type::U8) return DataArray::Type::UInt8;
+  return is_integer(t) ? DataArray::Type::Int32 : DataArray::Type::Float64;
+}
 
 // ---- header -------------------------------------------------------------------------------
 
@@ -320,8 +326,8 @@ uint64_t min_element_bytes(const Element& e, bool binary) {
 template <class Source>
 class BodyReader {
  public:
-  BodyReader(const Header& h, Source& src, const std::string& name)
-      : h_(h), src_(src), name_(name) {}
+  BodyReader(const Header& h, Source& src, const std::string& name, MeshData* data)
+      : h_(h), src_(src), name_(name), data_(data) {}
 
   Mesh read() {
     const Element* vertices = find("vertex");
@@ -340,6 +346,10 @@ class BodyReader {
     }
     src_.check_end();
     name_parts();
+    if (data_) {
+      pad_arrays(data_->point_data, mesh_.points.size());
+      pad_arrays(data_->cell_data, mesh_.triangles.size());
+    }
     return std::move(mesh_);
   }
 
@@ -348,6 +358,22 @@ class BodyReader {
     for (const Element& e : h_.elements)
       if (e.name == element) return &e;
     return nullptr;
+  }
+
+  // Per property of `e`: the array its values go to (scalar properties, when arrays are asked
+  // for), else nullptr. New arrays are NaN up to `size`.
+  std::vector<DataArray*> scalar_arrays(const Element& e, std::vector<DataArray>* out, size_t size,
+                                        std::initializer_list<int> coordinates = {}) {
+    std::vector<DataArray*> arrays(e.props.size(), nullptr);
+    if (!out) return arrays;
+    auto wanted = [&](size_t j) {
+      return !e.props[j].is_list && std::find(coordinates.begin(), coordinates.end(), int(j)) == coordinates.end();
+    };
+    for (size_t j = 0; j < e.props.size(); ++j)  // all added first: adding may move the earlier ones
+      if (wanted(j)) data_array(*out, e.props[j].name, data_type(e.props[j].type), size);
+    for (size_t j = 0; j < e.props.size(); ++j)
+      if (wanted(j)) arrays[j] = &data_array(*out, e.props[j].name, data_type(e.props[j].type), size);
+    return arrays;
   }
 
   [[noreturn]] void error(const Element& e, uint64_t i, const std::string& what) {
@@ -373,6 +399,8 @@ class BodyReader {
     if (axis[0] < 0 || axis[1] < 0 || axis[2] < 0)
       fail_line(name_, e.header_line, "vertex element lacks an x, y or z property");
     mesh_.points.resize(size_t(e.count));  // count checked against the data size already
+    const std::vector<DataArray*> arrays =
+        scalar_arrays(e, data_ ? &data_->point_data : nullptr, 0, {axis[0], axis[1], axis[2]});
     for (uint64_t i = 0; i < e.count; ++i) {
       begin(e, i);
       Vec3& p = mesh_.points[size_t(i)];
@@ -380,6 +408,8 @@ class BodyReader {
         int c = int(j) == axis[0] ? 0 : int(j) == axis[1] ? 1 : int(j) == axis[2] ? 2 : -1;
         if (c >= 0)
           p[c] = src_.real(e.props[j].type);
+        else if (arrays[j])
+          arrays[j]->values.push_back(src_.real(e.props[j].type));
         else
           skip_property(e.props[j]);
       }
@@ -400,6 +430,8 @@ class BodyReader {
       fail_line(name_, e.header_line, "face element before the vertex element is not supported");
     // A triangle face takes at least 4 bytes in any encoding; a lying count reserves no more.
     mesh_.triangles.reserve(size_t(std::min<uint64_t>(e.count, src_.remaining() / 4)));
+    const std::vector<DataArray*> arrays = scalar_arrays(e, data_ ? &data_->cell_data : nullptr, mesh_.triangles.size());
+    std::vector<double> values(e.props.size(), 0.0);
     for (uint64_t i = 0; i < e.count; ++i) {
       begin(e, i);
       int64_t part_value = 0;
@@ -407,11 +439,16 @@ class BodyReader {
         if (int(j) == list)
           read_polygon(e, i, e.props[j]);
         else if (int(j) == part)
-          part_value = src_.integer(e.props[j].type);
+          values[j] = double(part_value = src_.integer(e.props[j].type));
+        else if (arrays[j])
+          values[j] = src_.real(e.props[j].type);
         else
           skip_property(e.props[j]);
       }
       add_face(part >= 0, part_value);
+      // The face's values go to each of its triangles.
+      for (size_t j = 0; j < arrays.size(); ++j)
+        if (arrays[j]) arrays[j]->values.resize(mesh_.triangles.size(), values[j]);
     }
   }
 
@@ -509,6 +546,7 @@ class BodyReader {
   const Header& h_;
   Source& src_;
   const std::string& name_;
+  MeshData* data_;
   Mesh mesh_;
   const Element* elem_ = nullptr;
   uint64_t vertex_count_ = 0;
@@ -538,45 +576,80 @@ void check_counts(const Header& h, uint64_t body_bytes, const std::string& name)
 
 }  // namespace
 
-Mesh read_ply(std::string_view bytes, const std::string& name) {
+Mesh read_ply(std::string_view bytes, const std::string& name, MeshData* data) {
   Header h = HeaderParser(bytes, name).parse();
   std::string_view body = bytes.substr(h.body_offset);
   check_counts(h, body.size(), name);
   if (h.encoding == Encoding::Ascii) {
     AsciiSource src(body, h.body_line + 1, name);
-    return BodyReader<AsciiSource>(h, src, name).read();
+    return BodyReader<AsciiSource>(h, src, name, data).read();
   }
   BinarySource src(body, h.encoding == Encoding::BinaryLittle, name);
-  return BodyReader<BinarySource>(h, src, name).read();
+  return BodyReader<BinarySource>(h, src, name, data).read();
 }
 
-// Binary little-endian, double coordinates (lossless), int indices, int "part" when parts exist.
-void write_ply(const Mesh& mesh, Sink& out) {
+namespace {
+
+const char* ply_type(DataArray::Type t) {
+  switch (t) {
+    case DataArray::Type::Int32: return "int";
+    case DataArray::Type::UInt8: return "uchar";
+    case DataArray::Type::Float64: break;
+  }
+  return "double";
+}
+
+// One value of an extra array, at p; returns the bytes written.
+size_t store_value(char* p, DataArray::Type t, double v) {
+  v = storable(t, v);
+  switch (t) {
+    case DataArray::Type::Int32: store_le<int32_t>(p, int32_t(v)); return 4;
+    case DataArray::Type::UInt8: *p = char(uint8_t(v)); return 1;
+    case DataArray::Type::Float64: break;
+  }
+  store_le<double>(p, v);
+  return 8;
+}
+
+}  // namespace
+
+// Binary little-endian, double coordinates (lossless), int indices, int "part" when parts exist,
+// then the extra arrays as vertex and face properties.
+void write_ply(const Mesh& mesh, Sink& out, const MeshData* data) {
   const bool parts = !mesh.part_names.empty();
+  const std::vector<DataArray> none;
+  const std::vector<DataArray>& point_data = data ? data->point_data : none;
+  const std::vector<DataArray>& cell_data = data ? data->cell_data : none;
   out.put("ply\nformat binary_little_endian 1.0\ncomment written by vdbwrap\n");
   for (size_t p = 0; parts && p < mesh.part_names.size(); ++p)
     out.put("comment vdbwrap_part " + std::to_string(p) + " " + one_line(mesh.part_names[p]) +
             "\n");
   out.put("element vertex " + std::to_string(mesh.points.size()) + "\n");
   out.put("property double x\nproperty double y\nproperty double z\n");
+  for (const DataArray& a : point_data) out.put(std::string("property ") + ply_type(a.type) + " " + a.name + "\n");
   out.put("element face " + std::to_string(mesh.triangles.size()) + "\n");
   out.put(mesh.points.size() <= uint64_t(INT32_MAX) ? "property list uchar int vertex_indices\n"
                                                     : "property list uchar uint vertex_indices\n");
   if (parts) out.put("property int part\n");
+  for (const DataArray& a : cell_data) out.put(std::string("property ") + ply_type(a.type) + " " + a.name + "\n");
   out.put("end_header\n");
 
-  char vertex[24];
-  for (const Vec3& p : mesh.points) {
-    for (int k = 0; k < 3; ++k) store_le<double>(vertex + 8 * k, p[k]);
-    out.put_bytes(vertex, sizeof vertex);
+  std::vector<char> record(24 + 8 * point_data.size());
+  for (size_t i = 0; i < mesh.points.size(); ++i) {
+    size_t used = 0;
+    for (int k = 0; k < 3; ++k) store_le<double>(record.data() + 8 * k, mesh.points[i][k]), used += 8;
+    for (const DataArray& a : point_data) used += store_value(record.data() + used, a.type, a.values[i]);
+    out.put_bytes(record.data(), used);
   }
-  char face[1 + 12 + 4];
+  record.assign(1 + 12 + 4 + 8 * cell_data.size(), 0);
+  char* face = record.data();
   face[0] = 3;
-  const size_t face_size = parts ? sizeof face : sizeof face - 4;
   for (size_t t = 0; t < mesh.triangles.size(); ++t) {
     for (int k = 0; k < 3; ++k) store_le<uint32_t>(face + 1 + 4 * k, mesh.triangles[t][k]);
-    if (parts) store_le<int32_t>(face + 13, mesh.part_of(t));
-    out.put_bytes(face, face_size);
+    size_t used = 13;
+    if (parts) store_le<int32_t>(face + 13, mesh.part_of(t)), used += 4;
+    for (const DataArray& a : cell_data) used += store_value(face + used, a.type, a.values[t]);
+    out.put_bytes(face, used);
   }
 }
 

@@ -11,6 +11,7 @@
 #include <utility>
 #include <vector>
 
+#include "io/mesh_io.h"
 #include "vdbwrap/errors.h"
 #include "vdbwrap/mesh.h"
 
@@ -153,9 +154,10 @@ bool looks_like_ascii_stl(std::string_view bytes);
 Mesh read_stl(std::string_view bytes, const std::string& name);
 Mesh read_obj(std::string_view bytes, const std::string& name);
 Mesh read_off(std::string_view bytes, const std::string& name);
-Mesh read_ply(std::string_view bytes, const std::string& name);
+// `data`, when given, receives the extra arrays (mesh_io.h: read_mesh).
+Mesh read_ply(std::string_view bytes, const std::string& name, MeshData* data = nullptr);
 bool looks_like_vtp(std::string_view bytes);  // an XML VTKFile of type PolyData
-Mesh read_vtp(std::string_view bytes, const std::string& name);
+Mesh read_vtp(std::string_view bytes, const std::string& name, MeshData* data = nullptr);
 Mesh read_nastran(std::string_view bytes, const std::string& name);
 
 // ---- writers ------------------------------------------------------------------------------
@@ -204,8 +206,22 @@ std::string one_line(const std::string& name);
 void write_stl(const Mesh& mesh, Sink& out, bool ascii);
 void write_obj(const Mesh& mesh, Sink& out);
 void write_off(const Mesh& mesh, Sink& out);
-void write_ply(const Mesh& mesh, Sink& out);
-void write_vtp(const Mesh& mesh, Sink& out);
+// `data`: extra arrays, sizes and names checked by the caller.
+void write_ply(const Mesh& mesh, Sink& out, const MeshData* data = nullptr);
+void write_vtp(const Mesh& mesh, Sink& out, const MeshData* data = nullptr);
+// A value of an extra array as its written type holds it: integers clamped to the type's range
+// and NaN as 0 (converting them as they are would be undefined behaviour).
+inline double storable(DataArray::Type t, double v) {
+  if (t == DataArray::Type::Float64) return v;
+  if (std::isnan(v)) return 0;
+  const double lo = t == DataArray::Type::UInt8 ? 0.0 : double(INT32_MIN);
+  const double hi = t == DataArray::Type::UInt8 ? 255.0 : double(INT32_MAX);
+  return v < lo ? lo : v > hi ? hi : v;
+}
+// Finds or adds the array `name` (added arrays are NaN up to `size`).
+DataArray& data_array(std::vector<DataArray>& arrays, const std::string& name, DataArray::Type type, size_t size);
+// Pads every array with NaN up to `size` (values a piece or an element did not give).
+void pad_arrays(std::vector<DataArray>& arrays, size_t size);
 // Grid and element IDs are 8-character fields: the caller checks the counts against this.
 constexpr uint64_t kNastranMaxId = 99999999;
 void write_nastran(const Mesh& mesh, Sink& out);

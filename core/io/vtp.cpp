@@ -4,6 +4,7 @@
 // Reads uncompressed files: ascii, inline binary (base64) and appended (raw or base64) arrays,
 // any byte order and header type, several pieces; polygons are triangulated, triangle strips
 // split, vertices and lines ignored. Compressed files are refused with a clear error.
+// Extra arrays (MeshData) are written as point and cell data, and read back when asked for.
 #include <algorithm>
 #include <limits>
 #include <type_traits>
@@ -429,8 +430,8 @@ std::vector<std::string> read_strings(const File& f, const XmlElement& a) {
 
 class VtpReader {
  public:
-  VtpReader(std::string_view bytes, const std::string& name)
-      : xml_(bytes, name), file_{name}, file_size_(bytes.size()) {}
+  VtpReader(std::string_view bytes, const std::string& name, MeshData* data)
+      : xml_(bytes, name), file_{name}, file_size_(bytes.size()), data_(data) {}
 
   Mesh read() {
     xml_.parse();
@@ -452,6 +453,10 @@ class VtpReader {
     for (size_t c : poly->children)
       if (element(c).name == "Piece") read_piece(element(c), pieces++);
     name_parts();
+    if (data_) {
+      pad_arrays(data_->point_data, mesh_.points.size());
+      pad_arrays(data_->cell_data, mesh_.triangles.size());
+    }
     return std::move(mesh_);
   }
 
@@ -560,12 +565,18 @@ class VtpReader {
       has_parts_ = true;
     }
     auto cell_part = [&](uint64_t cell) { return part_id.empty() ? 0 : part_id[cell]; };
+    const size_t first_triangle = mesh_.triangles.size();
+    std::vector<uint64_t> triangle_cell;  // of this piece's triangles, when arrays are read
+    auto from_cell = [&](uint64_t cell) {
+      if (data_) triangle_cell.resize(mesh_.triangles.size() - first_triangle, cell);
+    };
 
     read_cells(piece, "Polys", n_polys, base, n_points, where, [&](const std::vector<uint32_t>& poly, uint64_t i) {
       if (poly.size() < 3)
         bad("polygon " + std::to_string(i) + " has " + std::to_string(poly.size()) + " points (needs at least 3)");
       triangulator_.run(mesh_.points, poly.data(), poly.size(), mesh_.triangles);
       values_.resize(mesh_.triangles.size(), cell_part(n_verts + n_lines + i));
+      from_cell(n_verts + n_lines + i);
     });
     // Strip triangle k is (k, k+1, k+2), every other one turned to keep one orientation;
     // triangles that repeat a point are joins, not geometry.
@@ -576,7 +587,46 @@ class VtpReader {
         mesh_.triangles.push_back(k % 2 == 0 ? Tri{a, b, c} : Tri{b, a, c});
       }
       values_.resize(mesh_.triangles.size(), cell_part(n_verts + n_lines + n_polys + i));
+      from_cell(n_verts + n_lines + n_polys + i);
     });
+    if (data_) {
+      read_data(child(piece, "PointData"), data_->point_data, base, n_points, where + ": point data", {});
+      read_data(child(piece, "CellData"), data_->cell_data, first_triangle, n_cells, where + ": cell data", triangle_cell);
+    }
+  }
+
+  // The single-component numeric arrays of <PointData> or <CellData> (`count` values each),
+  // appended to `arrays` from `first` on (earlier values missing are NaN): a point's value, or
+  // for cells the value of the cell each new triangle came from (`triangle_cell`).
+  void read_data(const XmlElement* parent, std::vector<DataArray>& arrays, size_t first, uint64_t count,
+                 const std::string& where, const std::vector<uint64_t>& triangle_cell) {
+    if (!parent) return;
+    const bool cells = &arrays == &data_->cell_data;
+    for (size_t c : parent->children) {
+      const XmlElement& a = element(c);
+      const std::string* array_name = a.attribute("Name");
+      const std::string* type_text = a.attribute("type");
+      const std::string* components = a.attribute("NumberOfComponents");
+      Type type;
+      if (a.name != "DataArray" || !array_name || !type_text || !parse_type(*type_text, type) || type == Type::String ||
+          (components && *components != "1"))
+        continue;
+      const std::vector<double> values = read_array<double>(file_, a);
+      if (values.size() != count)
+        fail(name(), where + ": array " + quoted(*array_name) + " has " + std::to_string(values.size()) + " values for " +
+                         std::to_string(count));
+      const DataArray::Type kind = type == Type::U8 ? DataArray::Type::UInt8
+                                   : is_integer(type) ? DataArray::Type::Int32
+                                                      : DataArray::Type::Float64;
+      DataArray& out = data_array(arrays, *array_name, kind, first);
+      out.values.resize(first, NAN);
+      if (!cells) {
+        out.values.insert(out.values.end(), values.begin(), values.end());
+      } else {
+        for (uint64_t cell : triangle_cell) out.values.push_back(values[size_t(cell)]);
+      }
+    }
+    pad_arrays(arrays, first + (cells ? triangle_cell.size() : size_t(count)));
   }
 
   // Calls `cell(points, i)` for each of the `count` cells of <Polys> or <Strips>, with global
@@ -637,6 +687,7 @@ class VtpReader {
   std::vector<std::string> part_names_;
   std::vector<int64_t> values_;  // part_id of each triangle
   bool has_parts_ = false;
+  MeshData* data_;
   PolygonTriangulator triangulator_;
 };
 
@@ -658,6 +709,19 @@ void put_block(Sink& out, size_t count, Values&& value_at) {
   out.put_bytes(buffer, used);
 }
 
+const char* data_type_name(DataArray::Type t) {
+  switch (t) {
+    case DataArray::Type::Int32: return "Int32";
+    case DataArray::Type::UInt8: return "UInt8";
+    case DataArray::Type::Float64: break;
+  }
+  return "Float64";
+}
+
+size_t data_type_size(DataArray::Type t) {
+  return t == DataArray::Type::Int32 ? 4 : t == DataArray::Type::UInt8 ? 1 : 8;
+}
+
 }  // namespace
 
 bool looks_like_vtp(std::string_view bytes) {
@@ -667,10 +731,15 @@ bool looks_like_vtp(std::string_view bytes) {
          head.find("PolyData", tag) != std::string_view::npos;
 }
 
-Mesh read_vtp(std::string_view bytes, const std::string& name) { return VtpReader(bytes, name).read(); }
+Mesh read_vtp(std::string_view bytes, const std::string& name, MeshData* data) {
+  return VtpReader(bytes, name, data).read();
+}
 
-void write_vtp(const Mesh& mesh, Sink& out) {
+void write_vtp(const Mesh& mesh, Sink& out, const MeshData* data) {
   const size_t n_points = mesh.points.size(), n_tris = mesh.triangles.size();
+  const std::vector<DataArray> none;
+  const std::vector<DataArray>& point_data = data ? data->point_data : none;
+  const std::vector<DataArray>& cell_data = data ? data->cell_data : none;
   const bool parts = !mesh.part_names.empty();
   // 32-bit cell arrays when the values fit (half the size), else 64-bit.
   const bool wide = 3 * uint64_t(n_tris) > uint64_t(INT32_MAX) || n_points > size_t(INT32_MAX);
@@ -681,6 +750,21 @@ void write_vtp(const Mesh& mesh, Sink& out) {
   const size_t connectivity_offset = points_offset + 8 + 24 * n_points;
   const size_t offsets_offset = connectivity_offset + 8 + 3 * n_tris * index_size;
   const size_t part_offset = offsets_offset + 8 + n_tris * index_size;
+  // The extra arrays follow: point data, then cell data.
+  std::vector<size_t> data_offsets;
+  size_t next_offset = part_offset + (parts ? 8 + 4 * n_tris : 0);
+  for (const auto* arrays : {&point_data, &cell_data})
+    for (const DataArray& a : *arrays) {
+      data_offsets.push_back(next_offset);
+      next_offset += 8 + a.values.size() * data_type_size(a.type);
+    }
+  size_t next_array = 0;
+  auto declare = [&](const DataArray& a) {
+    out.put(std::string("        <DataArray type=\"") + data_type_name(a.type) + "\" Name=\"" + a.name +
+            "\" format=\"appended\" offset=\"");
+    out.put_uint(data_offsets[next_array++]);
+    out.put("\"/>\n");
+  };
 
   out.put("<?xml version=\"1.0\"?>\n");
   out.put("<VTKFile type=\"PolyData\" version=\"1.0\" byte_order=\"LittleEndian\" header_type=\"UInt64\">\n");
@@ -704,11 +788,20 @@ void write_vtp(const Mesh& mesh, Sink& out) {
   out.put("\" NumberOfVerts=\"0\" NumberOfLines=\"0\" NumberOfStrips=\"0\" NumberOfPolys=\"");
   out.put_uint(n_tris);
   out.put("\">\n");
-  if (parts) {
-    out.put("      <CellData Scalars=\"part_id\">\n");
-    out.put("        <DataArray type=\"Int32\" Name=\"part_id\" format=\"appended\" offset=\"");
-    out.put_uint(part_offset);
-    out.put("\"/>\n      </CellData>\n");
+  if (!point_data.empty()) {
+    out.put("      <PointData Scalars=\"" + point_data.front().name + "\">\n");
+    for (const DataArray& a : point_data) declare(a);
+    out.put("      </PointData>\n");
+  }
+  if (parts || !cell_data.empty()) {
+    out.put(std::string("      <CellData Scalars=\"") + (parts ? "part_id" : cell_data.front().name.c_str()) + "\">\n");
+    if (parts) {
+      out.put("        <DataArray type=\"Int32\" Name=\"part_id\" format=\"appended\" offset=\"");
+      out.put_uint(part_offset);
+      out.put("\"/>\n");
+    }
+    for (const DataArray& a : cell_data) declare(a);
+    out.put("      </CellData>\n");
   }
   out.put("      <Points>\n");
   out.put("        <DataArray type=\"Float64\" Name=\"Points\" NumberOfComponents=\"3\" format=\"appended\" offset=\"0\"/>\n");
@@ -728,6 +821,19 @@ void write_vtp(const Mesh& mesh, Sink& out) {
     put_block<int32_t>(out, n_tris, [&](size_t i) { return int32_t(3 * (i + 1)); });
   }
   if (parts) put_block<int32_t>(out, n_tris, [&](size_t t) { return mesh.part_of(t); });
+  for (const auto* arrays : {&point_data, &cell_data})
+    for (const DataArray& a : *arrays) {
+      auto value = [&](size_t i) { return storable(a.type, a.values[i]); };
+      switch (a.type) {
+        case DataArray::Type::Float64: put_block<double>(out, a.values.size(), value); break;
+        case DataArray::Type::Int32:
+          put_block<int32_t>(out, a.values.size(), [&](size_t i) { return int32_t(value(i)); });
+          break;
+        case DataArray::Type::UInt8:
+          put_block<uint8_t>(out, a.values.size(), [&](size_t i) { return uint8_t(value(i)); });
+          break;
+      }
+    }
   out.put("\n  </AppendedData>\n</VTKFile>\n");
 }
 

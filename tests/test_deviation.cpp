@@ -1,0 +1,319 @@
+// Deviation fields: per-vertex signed distances to the reference, per-triangle defect flags, the
+// .vtp / .ply files that carry them, and `--deviation` through the CLI.
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+
+#include "check/distance_stats.h"
+#include "common/vec.h"
+#include "fit/surface_index.h"
+#include "io/mesh_io.h"
+#include "test_meshes.h"
+#include "vdbwrap/deviation.h"
+
+#ifndef VDBWRAP_CLI
+#define VDBWRAP_CLI "vdbwrap"
+#endif
+
+using namespace vdbwrap;
+using namespace vdbwrap::testing;
+namespace fs = std::filesystem;
+
+namespace {
+
+// One wrap of fandisk for the tests that look at a real wrap (a few seconds).
+const WrapResult& fandisk_wrap() {
+  static const WrapResult r = [] {
+    WrapParams p;
+    p.base_size = Length::parse("1%");
+    return wrap(io::read_mesh(data_path("fandisk.obj")), p);
+  }();
+  return r;
+}
+
+const Mesh& fandisk() {
+  static const Mesh m = io::read_mesh(data_path("fandisk.obj"));
+  return m;
+}
+
+double longest_edge(const Mesh& m) {
+  double longest = 0;
+  for (const Tri& t : m.triangles)
+    for (int k = 0; k < 3; ++k) longest = std::max(longest, norm(m.points[t[(k + 1) % 3]] - m.points[t[k]]));
+  return longest;
+}
+
+Mesh scaled_about_centre(Mesh m, double s) {
+  Vec3 c{0, 0, 0};
+  for (const Vec3& p : m.points) c = c + p;
+  c = c * (1.0 / double(m.points.size()));
+  for (Vec3& p : m.points) p = c + (p - c) * s;
+  return m;
+}
+
+class TempDir {
+ public:
+  TempDir() {
+    path_ = fs::temp_directory_path() / ("vdbwrap_deviation_" + std::to_string(::getpid()) + "_" +
+                                         ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::create_directories(path_);
+  }
+  ~TempDir() { fs::remove_all(path_); }
+  std::string file(const std::string& name) const { return (path_ / name).string(); }
+
+ private:
+  fs::path path_;
+};
+
+int run_cli(const std::string& args, const TempDir& dir, std::string* err = nullptr) {
+  const std::string err_path = dir.file("stderr.txt");
+  const std::string cmd = std::string(VDBWRAP_CLI) + " " + args + " > " + dir.file("stdout.txt") + " 2> " + err_path;
+  const int status = std::system(cmd.c_str());
+  if (err) {
+    std::ifstream in(err_path);
+    *err = std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  }
+  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+}  // namespace
+
+TEST(Deviation, VertexDistancesAgreeWithSampledDistanceOnFandisk) {
+  const WrapResult& r = fandisk_wrap();
+  const DeviationField field = measure_deviation(r.surface, fandisk(), &r.triangle_flags);
+  ASSERT_EQ(field.distance.size(), r.surface.points.size());
+  // Every vertex's |distance| is its distance to the input's nearest point.
+  const DistanceStats at_vertices = check::distances_to(r.surface.points, fandisk(), field.diagonal);
+  EXPECT_NEAR(field.max_abs, at_vertices.max, 1e-12 * field.diagonal);
+  EXPECT_NEAR(field.mean_abs, at_vertices.mean, 1e-9 * field.diagonal);
+  EXPECT_EQ(field.max_at, r.surface.points[field.max_vertex]);
+  EXPECT_NEAR(std::fabs(field.distance[field.max_vertex]), field.max_abs, 0.0);
+  // The sampled distance also samples inside the triangles, every one within an edge of a vertex
+  // (distance to a surface changes no faster than the point moves).
+  const DistanceStats sampled = sampled_distance(r.surface, fandisk());
+  EXPECT_LE(field.max_abs, sampled.max * (1 + 1e-12));
+  EXPECT_LE(sampled.max, field.max_abs + longest_edge(r.surface));
+  EXPECT_NEAR(field.diagonal, sampled.diagonal, 1e-12 * sampled.diagonal);
+}
+
+TEST(Deviation, ReportCarriesWhereTheMaximumIs) {
+  const WrapResult& r = fandisk_wrap();
+  const DistanceStats& d = r.report.output_to_input;
+  ASSERT_GT(d.samples, 0u);
+  // max_at is a sample on the wrap, at distance max from the input.
+  fit::SurfaceIndex input(fandisk().points, fandisk().triangles);
+  fit::SurfaceIndex wrap_index(r.surface.points, r.surface.triangles);
+  EXPECT_NEAR(std::sqrt(input.squared_distance(d.max_at)), d.max, 1e-12 * d.diagonal);
+  EXPECT_LT(std::sqrt(wrap_index.squared_distance(d.max_at)), 1e-9 * d.diagonal);
+  const std::string json = to_json(d);
+  EXPECT_NE(json.find("\"max_at\""), std::string::npos) << json;
+}
+
+TEST(Deviation, AWrapLiesOutsideAClosedModel) {
+  const WrapResult& r = fandisk_wrap();
+  const DeviationField field = measure_deviation(r.surface, fandisk());
+  EXPECT_EQ(field.sign, DistanceSign::Outside);
+  size_t outside = 0;
+  for (double d : field.distance) outside += d > 0 ? 1 : 0;
+  EXPECT_GT(double(outside), 0.9 * double(field.distance.size())) << outside << " of " << field.distance.size();
+  // The largest deviations (the wrap bridging concave corners) are outside.
+  EXPECT_GT(field.distance[field.max_vertex], 0.0);
+}
+
+TEST(Deviation, SignFollowsTheClosedReferenceWhateverItsOrientation) {
+  const Mesh sphere = icosphere_mesh(1.0, 3);
+  const Mesh inner = scaled_about_centre(sphere, 0.8), outer = scaled_about_centre(sphere, 1.25);
+  Mesh inward_mesh = sphere;  // closed, consistently oriented, facing in: + is still outside
+  for (Tri& t : inward_mesh.triangles) std::swap(t[1], t[2]);
+  const Mesh& inward = inward_mesh;
+  for (const Mesh* ref : {&sphere, &inward}) {
+    const DeviationField in = measure_deviation(inner, *ref), out = measure_deviation(outer, *ref);
+    EXPECT_EQ(in.sign, DistanceSign::Outside);
+    for (double d : in.distance) EXPECT_LT(d, -0.1);
+    for (double d : out.distance) EXPECT_GT(d, 0.1);
+  }
+}
+
+TEST(Deviation, OpenAndInconsistentReferencesSaySoInTheSign) {
+  const Mesh sphere = icosphere_mesh(1.0, 3);
+  const Mesh outer = scaled_about_centre(sphere, 1.25);
+  Mesh open = sphere;
+  open.triangles.resize(open.triangles.size() - 10);
+  const DeviationField front = measure_deviation(outer, open);
+  EXPECT_EQ(front.sign, DistanceSign::FrontSide);
+  size_t positive = 0;
+  for (double d : front.distance) positive += d > 0 ? 1 : 0;
+  EXPECT_GT(double(positive), 0.9 * double(front.distance.size()));
+
+  Mesh mixed = sphere;  // every other triangle turned: no orientation to trust
+  for (size_t t = 0; t < mixed.triangles.size(); t += 2) std::swap(mixed.triangles[t][1], mixed.triangles[t][2]);
+  const DeviationField unsigned_field = measure_deviation(outer, mixed);
+  EXPECT_EQ(unsigned_field.sign, DistanceSign::Unsigned);
+  for (double d : unsigned_field.distance) EXPECT_GE(d, 0.0);
+  EXPECT_NEAR(unsigned_field.max_abs, measure_deviation(outer, sphere).max_abs, 1e-12);  // same geometry
+}
+
+TEST(Deviation, WrapFlagsAreTheFinalQualityAnalysis) {
+  const WrapResult& r = fandisk_wrap();
+  ASSERT_EQ(r.triangle_flags.size(), r.surface.triangles.size());
+  size_t slivers = 0, small = 0, normals = 0, held = 0;
+  for (uint8_t f : r.triangle_flags) {
+    slivers += (f & kDefectSliver) ? 1 : 0;
+    small += (f & kDefectSmallArea) ? 1 : 0;
+    normals += (f & kDefectNormalDeviation) ? 1 : 0;
+    held += (f & kDefectHeldBack) ? 1 : 0;
+  }
+  const QualityCounts& q = r.report.quality.after;
+  EXPECT_EQ(slivers, q.slivers);
+  EXPECT_EQ(small, q.small_area);
+  EXPECT_EQ(normals, q.normal_deviation);
+  if (r.report.nodes_held_back == 0) EXPECT_EQ(held, 0u);
+}
+
+TEST(Deviation, GeometricFlagsFindSliversAndDegenerateTriangles) {
+  Mesh m = box_mesh({0, 0, 0}, {1, 1, 1});
+  const uint32_t n = uint32_t(m.points.size());
+  m.points.push_back({3, 0, 0});
+  m.points.push_back({4, 0, 0});
+  m.points.push_back({3.5, 0.001, 0});  // a needle: smallest angle far under 5 degrees
+  m.points.push_back({5, 0, 0});        // with 3 and 4: on one line, zero area
+  m.triangles.push_back({n, n + 1, n + 2});
+  m.triangles.push_back({n, n + 1, n + 3});
+  const std::vector<uint8_t> flags = geometric_defect_flags(m);
+  ASSERT_EQ(flags.size(), m.triangles.size());
+  for (size_t t = 0; t + 2 < m.triangles.size(); ++t) EXPECT_EQ(flags[t] & kDefectSliver, 0) << t;
+  EXPECT_TRUE(flags[m.triangles.size() - 2] & kDefectSliver);
+  EXPECT_TRUE(flags.back() & kDefectSelfIntersecting);
+  EXPECT_EQ(defect_flag_names(kDefectSliver | kDefectHeldBack), (std::vector<std::string>{"sliver", "held_back"}));
+}
+
+TEST(Deviation, BadInputIsAClearError) {
+  const Mesh sphere = icosphere_mesh(1.0, 2);
+  std::vector<uint8_t> wrong(sphere.triangles.size() + 1, 0);
+  try {
+    measure_deviation(sphere, sphere, &wrong);
+    FAIL() << "no error for flags of the wrong size";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.kind(), ErrorKind::InvalidArgument);
+  }
+  Mesh broken = sphere;
+  broken.triangles.push_back({0, 1, uint32_t(broken.points.size())});
+  EXPECT_THROW(measure_deviation(broken, sphere), Error);
+  EXPECT_THROW(measure_deviation(sphere, broken), Error);
+  // An empty reference: zero distances, no sign.
+  const DeviationField none = measure_deviation(sphere, Mesh());
+  EXPECT_EQ(none.sign, DistanceSign::Unsigned);
+  EXPECT_EQ(none.max_abs, 0.0);
+
+  TempDir dir;
+  DeviationField field = measure_deviation(sphere, sphere);
+  EXPECT_THROW(write_deviation(dir.file("a.stl"), sphere, field), Error);
+  field.distance.pop_back();
+  EXPECT_THROW(write_deviation(dir.file("a.vtp"), sphere, field), Error);
+  EXPECT_FALSE(fs::exists(dir.file("a.vtp")));
+  io::MeshData data;
+  data.point_data.push_back({"distance", io::DataArray::Type::Float64, std::vector<double>(sphere.points.size(), 1.0)});
+  io::WriteOptions options;
+  options.data = &data;
+  EXPECT_THROW(io::write_mesh(sphere, dir.file("a.obj"), options), Error);  // OBJ has no point data
+  data.point_data.back().values.pop_back();
+  EXPECT_THROW(io::write_mesh(sphere, dir.file("a.vtp"), options), Error);  // one value short
+}
+
+class DeviationFile : public ::testing::TestWithParam<std::string> {};
+
+// The field written and read back by the project's own readers: the same mesh, parts and arrays.
+TEST_P(DeviationFile, RoundTripsWithItsArrays) {
+  const WrapResult& r = fandisk_wrap();
+  const DeviationField field = measure_deviation(r.surface, fandisk(), &r.triangle_flags);
+  TempDir dir;
+  const std::string path = dir.file("field." + GetParam());
+  write_deviation(path, r.surface, field);
+  io::MeshData data;
+  const Mesh back = io::read_mesh(path, &data);
+  ASSERT_EQ(back.points, r.surface.points);
+  ASSERT_EQ(back.triangles, r.surface.triangles);
+  EXPECT_EQ(back.part_names, r.surface.part_names);
+  const io::DataArray* distance = data.point_array("distance");
+  const io::DataArray* percent = data.point_array("distance_percent_of_diagonal");
+  const io::DataArray* part = data.cell_array("part");
+  const io::DataArray* defects = data.cell_array("defects");
+  ASSERT_TRUE(distance && percent && part && defects);
+  EXPECT_EQ(distance->values, field.distance);
+  ASSERT_EQ(percent->values.size(), field.distance.size());
+  for (size_t i = 0; i < field.distance.size(); ++i)
+    EXPECT_NEAR(percent->values[i], 100 * field.distance[i] / field.diagonal, 1e-12);
+  ASSERT_EQ(part->values.size(), r.surface.triangles.size());
+  ASSERT_EQ(defects->values.size(), r.surface.triangles.size());
+  for (size_t t = 0; t < r.surface.triangles.size(); ++t) {
+    EXPECT_EQ(part->values[t], r.surface.part_of(t));
+    EXPECT_EQ(defects->values[t], r.triangle_flags[t]);
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(Formats, DeviationFile, ::testing::Values("vtp", "ply"));
+
+// ParaView's reader (VTK's vtkXMLPolyDataReader) finds the arrays, when python3-vtk9 is there.
+TEST(Deviation, VtkReadsTheArrays) {
+  if (std::system("/usr/bin/python3 -c 'import vtk' > /dev/null 2>&1") != 0) GTEST_SKIP() << "no python3-vtk9";
+  const Mesh sphere = icosphere_mesh(1.0, 2);
+  const Mesh outer = scaled_about_centre(sphere, 1.5);
+  TempDir dir;
+  const std::string path = dir.file("field.vtp");
+  write_deviation(path, outer, measure_deviation(outer, sphere));
+  const std::string script = dir.file("read.py");
+  std::ofstream(script) << "import sys, vtk\n"
+                           "r = vtk.vtkXMLPolyDataReader(); r.SetFileName(sys.argv[1]); r.Update()\n"
+                           "o = r.GetOutput()\n"
+                           "assert o.GetNumberOfPoints() == " << outer.points.size() << "\n"
+                           "assert o.GetNumberOfCells() == " << outer.triangles.size() << "\n"
+                           "d = o.GetPointData().GetArray('distance')\n"
+                           "lo, hi = d.GetRange()\n"
+                           "assert 0.4 < lo <= hi < 0.55, (lo, hi)\n"
+                           "assert o.GetPointData().GetArray('distance_percent_of_diagonal') is not None\n"
+                           "for name in ('part', 'defects'):\n"
+                           "    a = o.GetCellData().GetArray(name)\n"
+                           "    assert a is not None and a.GetNumberOfTuples() == o.GetNumberOfCells(), name\n";
+  EXPECT_EQ(std::system(("/usr/bin/python3 " + script + " " + path).c_str()), 0);
+}
+
+TEST(Deviation, CheckWritesTheFieldThroughTheCli) {
+  TempDir dir;
+  const std::string field = dir.file("tray.vtp");
+  const std::string tray = data_path("1002_tray_bottom.STL");
+  // The tray against itself shifted a little: every distance is within the shift.
+  Mesh shifted = io::read_mesh(tray);
+  for (Vec3& p : shifted.points) p[2] += 0.5;
+  io::write_mesh(shifted, dir.file("shifted.stl"));
+  std::string err;
+  ASSERT_EQ(run_cli("check " + dir.file("shifted.stl") + " --against " + tray + " --deviation " + field, dir, &err), 0) << err;
+  io::MeshData data;
+  const Mesh back = io::read_mesh(field, &data);
+  const io::DataArray* distance = data.point_array("distance");
+  ASSERT_TRUE(distance);
+  ASSERT_EQ(distance->values.size(), back.points.size());
+  for (double d : distance->values) EXPECT_LE(std::fabs(d), 0.5 + 1e-3);  // STL stores floats
+}
+
+TEST(Deviation, CliRefusesABadDeviationPathBeforeTheWork) {
+  TempDir dir;
+  const std::string out = dir.file("wrap.obj");
+  std::string err;
+  EXPECT_EQ(run_cli("wrap " + data_path("fandisk.obj") + " -o " + out + " --deviation " + dir.file("missing/field.vtp"), dir, &err), 2);
+  EXPECT_NE(err.find("--deviation"), std::string::npos) << err;
+  EXPECT_FALSE(fs::exists(out));  // refused before the wrap ran
+  EXPECT_EQ(run_cli("wrap " + data_path("fandisk.obj") + " -o " + out + " --deviation " + dir.file("field.stl"), dir, &err), 2);
+  EXPECT_NE(err.find(".vtp or .ply"), std::string::npos) << err;
+  EXPECT_FALSE(fs::exists(out));
+  EXPECT_EQ(run_cli("check " + data_path("fandisk.obj") + " --deviation " + dir.file("field.vtp"), dir, &err), 2);
+  EXPECT_NE(err.find("--against"), std::string::npos) << err;
+  EXPECT_EQ(run_cli("check " + data_path("fandisk.obj") + " --against " + data_path("fandisk.obj") + " --deviation " +
+                        dir.file("missing/field.ply"), dir, &err),
+            2);
+}
