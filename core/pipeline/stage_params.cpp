@@ -27,4 +27,36 @@ grid::RefineCriteria refine_criteria(const WrapParams& params) {
   return c;
 }
 
+fit::FeatureInsertParams feature_insert_params(const WrapParams& params, double base, double fine) {
+  fit::FeatureInsertParams p;
+  p.spacing = 0.5 * fine;     // curve samples: twice per finest cell, so no cell's worth of curve is skipped
+  p.tolerance = 0.02 * fine;  // a sample nearer than this is kept; looser tolerances leave CAD edges visibly off
+  p.max_move = base;          // a node moves at most a base cell onto its curve
+  p.offset = params.surface_offset * fine;
+  p.min_area2 = 1e-6 * fine * fine;  // no triangle flatter than this from a split
+  p.min_separation = 0.05 * fine;    // nor nodes crowded closer
+  p.max_deviation = 0.1 * fine;      // nor a triangle farther off the input
+  p.float_coordinates = params.float_coordinates;
+  return p;
+}
+
+post::CoarsenParams coarsen_params(const WrapParams& params, double base, double fine) {
+  post::CoarsenParams p;
+  p.max_deviation = params.coarsen_tolerance * base;
+  p.max_edge = 4.0 * base;  // longer edges halve no further the triangle count, at the same distances
+  p.min_area2 = 1e-6 * fine * fine;
+  return p;
+}
+
+post::RemeshParams remesh_params(const WrapParams& params, double base, double fine) {
+  post::RemeshParams p;
+  // Rebuilds are held to the coarsening's tolerance (its default when coarsening is off).
+  p.max_deviation = (params.coarsen_tolerance > 0 ? params.coarsen_tolerance : WrapParams().coarsen_tolerance) * base;
+  p.offset = params.surface_offset * fine;
+  p.float_coordinates = params.float_coordinates;
+  return p;
+}
+
+double repair_bound(double base) { return 0.5 * base; }
+
 }  // namespace vdbwrap::pipeline

@@ -1,15 +1,34 @@
 // The one place where the user's WrapParams become the stages' own parameter structs: a stage
-// sees only what it uses, with its defaults beside it in its header.
+// sees only what it uses. The factors that scale a stage's tolerances to the cell sizes are
+// here, with the reason for each.
 #pragma once
+#include <cstddef>
+
+#include "fit/feature_insert.h"
 #include "grid/refine.h"
 #include "grid/size_controls.h"
+#include "post/coarsen.h"
+#include "post/remesh.h"
 #include "prep/prepare.h"
 #include "vdbwrap/params.h"
 
 namespace vdbwrap::pipeline {
 
+// A base size giving more cells than this across the diagonal is refused (memory and time).
+inline constexpr double kMostCellsAcross = 20000;
+// Unresolved contacts listed in the report, one per base cell.
+inline constexpr size_t kMostContactLocations = 100;
+// Stage 4 samples the input's sharp edges every this fraction of the diagonal.
+inline constexpr double kFeatureSampleSpacing = 1e-3;
+
 prep::PrepareParams prepare_params(const WrapParams& params);
 grid::SizeRequests size_requests(const WrapParams& params);
 grid::RefineCriteria refine_criteria(const WrapParams& params);
+// base: the base size, fine: the finest cell, both in model units.
+fit::FeatureInsertParams feature_insert_params(const WrapParams& params, double base, double fine);
+post::CoarsenParams coarsen_params(const WrapParams& params, double base, double fine);
+post::RemeshParams remesh_params(const WrapParams& params, double base, double fine);
+// The intersection repair of stage 4 moves nothing farther than this.
+double repair_bound(double base);
 
 }  // namespace vdbwrap::pipeline

@@ -1,0 +1,71 @@
+// Stage 3: the lattice surface projected onto the input with its feature curves, nodes
+// inserted where the traced chains missed a curve, and flat parts coarsened.
+#include "common/stage_timer.h"
+#include "fit/feature_insert.h"
+#include "pipeline/stage_params.h"
+#include "pipeline/stages.h"
+#include "post/coarsen.h"
+
+namespace vdbwrap::pipeline {
+namespace {
+
+void report_snapping(WrapReport& report, const fit::FittedSurface& fitted) {
+  report.nodes_held_back = fitted.held_back;
+  report.nodes_projected = fitted.points.size();
+  report.features.curves = fitted.snap.curves;
+  report.features.corners = fitted.snap.corners;
+  report.features.curves_captured = fitted.snap.curves_captured;
+  report.features.corners_captured = fitted.snap.corners_captured;
+  report.features.nodes_snapped = fitted.snap.nodes_snapped;
+}
+
+// Curve points the traced chains missed get nodes of their own (edge splits).
+void insert_feature_nodes(WrapRun& run, const std::vector<fit::FeatureCurve>& curves) {
+  StageTimer timer("insert feature nodes", run.report.stages);
+  if (run.progress) run.progress->progress("project", 0.97, "inserting nodes where the wrap misses a feature curve");
+  const fit::FeatureInsertParams fp = feature_insert_params(run.params, run.base, run.refined.grid->fine_size());
+  const auto fs = fit::insert_feature_nodes(run.fitted, curves, run.index(), run.prepared.origin, fp);
+  FeatureStats& features = run.report.features;
+  features.points_missed = fs.samples_missed;
+  features.nodes_inserted = fs.nodes_inserted;
+  features.nodes_moved = fs.nodes_moved;
+  features.inserts_refused = fs.refused;
+  features.points_unreachable = fs.unreachable;
+}
+
+void coarsen(WrapRun& run) {
+  StageTimer timer("coarsen", run.report.stages);
+  fit::FittedSurface& fitted = run.fitted;
+  const post::CoarsenParams cp = coarsen_params(run.params, run.base, run.refined.grid->fine_size());
+  const post::CoarsenStats cs =
+      post::coarsen(fitted.points, fitted.triangles, fitted.snapped, run.index(), run.prepared.origin, cp, run.progress);
+  // The per-point data follow their points (snapped nodes are never merged away).
+  std::vector<double> cell(fitted.points.size());
+  std::vector<uint8_t> snapped(fitted.points.size());
+  for (size_t i = 0; i < cs.remap.size(); ++i)
+    if (cs.remap[i] != UINT32_MAX) cell[cs.remap[i]] = fitted.cell_size[i], snapped[cs.remap[i]] = fitted.snapped[i];
+  std::vector<std::pair<uint32_t, uint32_t>> edges;
+  for (const auto& [a, b] : fitted.feature_edges)
+    if (cs.remap[a] != UINT32_MAX && cs.remap[b] != UINT32_MAX) edges.push_back({cs.remap[a], cs.remap[b]});
+  fitted.cell_size.swap(cell);
+  fitted.snapped.swap(snapped);
+  fitted.feature_edges.swap(edges);
+}
+
+}  // namespace
+
+void fit_surface(WrapRun& run) {
+  WrapReport& report = run.report;
+  const fit::SurfaceIndex& index = run.index();
+  StageTimer timer("project", report.stages);
+  const std::vector<fit::FeatureCurve>& curves = run.curves_builder->get();
+  run.fitted = fit::fit_to_input(run.lattice, *run.refined.grid, index, curves, run.prepared.origin, run.params, run.progress);
+  report_snapping(report, run.fitted);
+  if (!curves.empty() && run.fitted.valid) insert_feature_nodes(run, curves);
+
+  report.triangles_before_coarsening = run.fitted.triangles.size();
+  if (run.params.coarsen_tolerance > 0) coarsen(run);
+  run.check_cancel();
+}
+
+}  // namespace vdbwrap::pipeline

@@ -1,0 +1,47 @@
+// Stages 0 and 1: the input's diagnosis and its preparation.
+#include "check/diagnostics.h"
+#include "common/stage_timer.h"
+#include "pipeline/stage_params.h"
+#include "pipeline/stages.h"
+
+namespace vdbwrap::pipeline {
+
+void diagnose_input(WrapRun& run) {
+  StageTimer timer("diagnose input", run.report.stages);
+  if (run.progress) run.progress->progress("diagnose input", 0.0, "checking the input for defects");
+  // Intersections are left to prepare, whose one search serves both the report and the
+  // intersection lines; the counts are filled in there.
+  run.input_weld = exact_weld(run.input.points);
+  run.report.input = check::diagnose_welded(run.input, run.input_weld, false);
+  run.check_cancel();
+}
+
+void prepare_input(WrapRun& run) {
+  WrapReport& report = run.report;
+  {
+    StageTimer timer("prepare", report.stages);
+    run.prepared = prep::prepare(run.input, prepare_params(run.params), run.progress, &run.input_weld);
+    run.input_weld = ExactWeld();  // its memory back
+  }
+  const prep::PreparedInput& prepared = run.prepared;
+  const prep::InputIntersections crossing =
+      prep::input_intersections(prepared.intersecting_pairs, prepared.input_to_mesh, prepared.mesh.triangles.size());
+  report.input.intersecting_pairs = crossing.pairs;
+  report.input.intersecting_triangles = crossing.triangles;
+  report.input.self_intersecting = crossing.pairs > 0;
+  for (const auto& f : prepared.feature_edges) {
+    if (f.kind == prep::FeatureKind::Sharp) ++report.features.sharp_edges;
+    if (f.kind == prep::FeatureKind::Boundary) ++report.features.boundary_edges;
+    if (f.kind == prep::FeatureKind::NonManifold) ++report.features.nonmanifold_edges;
+  }
+  report.features.intersection_segments = prepared.intersections.size();
+  report.diagonal = prepared.diagonal;
+  run.base = run.params.base_size.resolve(prepared.diagonal);
+  report.base_size = run.base;
+  if (prepared.diagonal / run.base > kMostCellsAcross)
+    throw Error(ErrorKind::InvalidArgument, "base size " + run.params.base_size.to_string() +
+                                                " is too small for this model (over " + std::to_string(kMostCellsAcross) +
+                                                " cells across its diagonal)");
+}
+
+}  // namespace vdbwrap::pipeline

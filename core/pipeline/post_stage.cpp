@@ -1,0 +1,61 @@
+// Stage 4: quality analysis of the fitted surface, remeshing of bad regions, the intersection
+// repair where anything still intersects, sliver removal; then the output's part labels.
+#include "common/stage_timer.h"
+#include "pipeline/stage_params.h"
+#include "pipeline/stages.h"
+
+namespace vdbwrap::pipeline {
+namespace {
+
+// What stage 4 measures against: the input, its sharp edges, the cell sizes, the thresholds.
+void set_quality_reference(WrapRun& run) {
+  post::QualityReference& ref = run.quality_ref;
+  ref.input = &run.index();
+  ref.origin = run.prepared.origin;
+  ref.feature_samples = post::sample_sharp_edges(run.prepared, kFeatureSampleSpacing * run.prepared.diagonal);
+  ref.finest_size = run.report.finest_size;
+  ref.thresholds = run.params.quality;
+  // Nearest input points asked again and again by the analysis, the rebuilds and the part labels.
+  run.nearest_memo = std::make_unique<post::NearestMemo>(run.index());
+  ref.nearest = run.nearest_memo.get();
+}
+
+void remesh(WrapRun& run) {
+  WrapReport& report = run.report;
+  post::PostSurface& surface = run.surface;
+  StageTimer timer("remesh", report.stages);
+  if (run.progress)
+    run.progress->progress("remesh", 0.0, "quality analysis of " + std::to_string(surface.triangles.size()) + " triangles");
+  std::vector<uint8_t> flags;
+  report.quality.before = post::analyse_quality(surface.points, surface.triangles, surface.cell_size, run.quality_ref,
+                                                &flags, nullptr, &run.deviation_memo);
+  if (run.params.remesh) {
+    const post::RemeshParams rp = remesh_params(run.params, run.base, run.refined.grid->fine_size());
+    const post::RemeshStats st = post::remesh_bad_regions(surface, flags, run.quality_ref, run.prepared, rp, run.progress);
+    report.quality.regions = st.regions;
+    report.quality.remeshed_on_input = st.on_input;
+    report.quality.remeshed_by_ear_clipping = st.ear_clipping;
+    report.quality.restored = st.restored;
+    report.quality.refusals = st.refusals;
+  }
+  // Rebuilds never add an intersection: only a surface that had some can have any left.
+  if (report.quality.before.self_intersecting > 0 || !run.fitted.valid) run.repair_if_intersecting();
+}
+
+}  // namespace
+
+void post_process(WrapRun& run) {
+  fit::FittedSurface& fitted = run.fitted;
+  run.surface = post::PostSurface{std::move(fitted.points), std::move(fitted.triangles), std::move(fitted.cell_size),
+                                  std::move(fitted.snapped), std::move(fitted.feature_edges)};
+  set_quality_reference(run);
+  remesh(run);
+  run.check_cancel();
+
+  run.result.surface = run.labelled_surface();
+  run.quality_ref.nearest = nullptr;  // its memory goes; the final analysis has its own memo
+  run.nearest_memo.reset();
+  run.check_cancel();
+}
+
+}  // namespace vdbwrap::pipeline
