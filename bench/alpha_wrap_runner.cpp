@@ -9,7 +9,7 @@
 #include <cstdio>
 #include <string>
 
-#include "io/mesh_io.h"
+#include "vdbwrap/io.h"
 #include "vdbwrap/errors.h"
 
 using K = CGAL::Exact_predicates_inexact_constructions_kernel;

@@ -15,7 +15,7 @@
 
 #include "fit/surface_index.h"
 #include "common/vec.h"
-#include "io/mesh_io.h"
+#include "vdbwrap/io.h"
 
 using namespace vdbwrap;
 

@@ -17,7 +17,7 @@
 #include <string>
 
 #include "common/vec.h"
-#include "io/mesh_io.h"
+#include "vdbwrap/io.h"
 
 using namespace vdbwrap;
 

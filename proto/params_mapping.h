@@ -5,7 +5,7 @@
 
 #include <string>
 
-#include "io/mesh_io.h"
+#include "vdbwrap/io.h"
 #include "vdbwrap/errors.h"
 #include "vdbwrap/repair.h"
 #include "vdbwrap/v1/jobs.pb.h"

@@ -2,8 +2,7 @@
 
 #include <fstream>
 
-#include "common/float_round.h"
-#include "io/mesh_io.h"
+#include "vdbwrap/io.h"
 #include "params_mapping.h"
 #include "upload_check.h"
 
@@ -281,9 +280,7 @@ grpc::Status JobsService::Download(grpc::ServerContext* ctx, const pb::DownloadR
       // Binary STL stores floats: a result validated in double precision is checked again
       // as it will be written, and refused rather than handed back invalid (a repair's
       // result: with more intersections than the repair left).
-      Mesh rounded = mesh;
-      for (auto& p : rounded.points) p = round_to_float(p);
-      MeshDiagnostics d = diagnose(rounded, true);
+      MeshDiagnostics d = diagnose(io::rounded_to_float(mesh), true);
       const bool worse = api::is_repair(r.spec()) ? d.intersecting_pairs > r.intersecting_pairs_left() : !d.valid_closed_surface();
       if (worse)
         return status(grpc::StatusCode::FAILED_PRECONDITION,

@@ -8,7 +8,7 @@
 #include <optional>
 #include <thread>
 
-#include "io/mesh_io.h"
+#include "vdbwrap/io.h"
 #include "job_process.h"
 #include "job_store.h"
 #include "params_mapping.h"

@@ -11,7 +11,7 @@
 #include <mutex>
 #include <new>
 
-#include "io/mesh_io.h"
+#include "vdbwrap/io.h"
 #include "job_store.h"
 #include "params_mapping.h"
 #include "vdbwrap/repair.h"

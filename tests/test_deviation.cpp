@@ -13,7 +13,7 @@
 #include "check/distance_stats.h"
 #include "common/vec.h"
 #include "fit/surface_index.h"
-#include "io/mesh_io.h"
+#include "vdbwrap/io.h"
 #include "test_meshes.h"
 #include "vdbwrap/deviation.h"
 

@@ -9,7 +9,7 @@
 #include "check/intersections.h"
 #include "fit/feature_insert.h"
 #include "fit/features.h"
-#include "io/mesh_io.h"
+#include "vdbwrap/io.h"
 #include "prep/prepare.h"
 #include "test_meshes.h"
 

@@ -16,7 +16,7 @@
 
 #include "check/intersections.h"
 #include "grid/adaptive_grid.h"
-#include "io/mesh_io.h"
+#include "vdbwrap/io.h"
 #include "test_meshes.h"
 #include "vdbwrap/errors.h"
 #include "vdbwrap/wrap.h"

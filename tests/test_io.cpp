@@ -13,7 +13,7 @@
 #include <string>
 #include <vector>
 
-#include "io/mesh_io.h"
+#include "vdbwrap/io.h"
 #include "vdbwrap/errors.h"
 #include "vdbwrap/mesh.h"
 

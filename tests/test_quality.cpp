@@ -12,7 +12,7 @@
 #include "check/intersections.h"
 #include "common/vec.h"
 #include "fit/surface_index.h"
-#include "io/mesh_io.h"
+#include "vdbwrap/io.h"
 #include "post/nearest_memo.h"
 #include "post/quality.h"
 #include "post/region_fill.h"

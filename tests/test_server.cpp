@@ -28,7 +28,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "io/mesh_io.h"
+#include "vdbwrap/io.h"
 #include "params_mapping.h"
 #include "test_meshes.h"
 #include "vdbwrap/source.h"

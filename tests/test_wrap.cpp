@@ -1,7 +1,7 @@
 // The whole pipeline through the public API: validity by CGAL, fidelity, errors, cancellation.
 #include <gtest/gtest.h>
 
-#include "io/mesh_io.h"
+#include "vdbwrap/io.h"
 #include "test_meshes.h"
 
 using namespace vdbwrap;

@@ -2,7 +2,7 @@
 // defect flags as cell data, through the VTP and PLY writers' extra arrays.
 #include <string>
 
-#include "io/mesh_io.h"
+#include "vdbwrap/io.h"
 #include "vdbwrap/deviation.h"
 
 namespace vdbwrap {

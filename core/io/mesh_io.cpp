@@ -1,6 +1,6 @@
 // Public entry points of the mesh I/O layer: format detection, whole-file reading, final
 // checks, and atomic writing. The formats themselves live in stl/obj/off/ply/vtp/nastran.cpp.
-#include "io/mesh_io.h"
+#include "vdbwrap/io.h"
 
 #include <algorithm>
 #include <cerrno>
@@ -12,6 +12,7 @@
 #include <string_view>
 #include <system_error>
 
+#include "common/float_round.h"
 #include "io/readers.h"
 
 namespace vdbwrap::io {
@@ -357,6 +358,12 @@ void write_mesh(const Mesh& mesh, const std::string& path, const WriteOptions& o
     failed(std::string("cannot rename ") + tmp + " to the target (" + std::strerror(saved_errno) +
            ")");
   }
+}
+
+Mesh rounded_to_float(const Mesh& mesh) {
+  Mesh out = mesh;
+  for (Vec3& p : out.points) p = round_to_float(p);
+  return out;
 }
 
 }  // namespace vdbwrap::io

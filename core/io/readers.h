@@ -11,7 +11,7 @@
 #include <utility>
 #include <vector>
 
-#include "io/mesh_io.h"
+#include "vdbwrap/io.h"
 #include "vdbwrap/errors.h"
 #include "vdbwrap/mesh.h"
 

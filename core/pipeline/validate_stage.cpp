@@ -10,7 +10,7 @@
 #include "check/intersections.h"
 #include "common/debug_switch.h"
 #include "common/stage_timer.h"
-#include "io/mesh_io.h"
+#include "vdbwrap/io.h"
 #include "pipeline/stages.h"
 #include "post/wrap_defects.h"
 

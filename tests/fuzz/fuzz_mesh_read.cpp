@@ -11,7 +11,7 @@
 #include <vector>
 
 #include "fuzz_check.h"
-#include "io/mesh_io.h"
+#include "vdbwrap/io.h"
 #include "vdbwrap/errors.h"
 
 using namespace vdbwrap;

@@ -10,7 +10,7 @@
 #include <random>
 #include <stdexcept>
 
-#include "io/mesh_io.h"
+#include "vdbwrap/io.h"
 #include "test_meshes.h"
 
 namespace vdbwrap::stress {

@@ -34,7 +34,7 @@
 #include <vector>
 
 #include "hostile_meshes.h"
-#include "io/mesh_io.h"
+#include "vdbwrap/io.h"
 #include "test_meshes.h"
 
 #ifndef VDBWRAP_CLI
