@@ -203,6 +203,11 @@ int main(int argc, char** argv) {
       ->group("Output");
   cli::HtmlOutput html_output;
   html_output.add_to(wrap_cmd);
+  std::string features_path;
+  wrap_cmd
+      ->add_option("--features", features_path,
+                   "Write the input's feature curves (the sharp edges the wrap snaps to) as OBJ lines or OpenFOAM's .eMesh")
+      ->group("Output");
   wrap_cmd->add_flag("-q,--quiet", quiet, "No progress on stderr")->group("Output");
   wrap_cmd->footer(
       "Examples:\n"
@@ -283,6 +288,13 @@ int main(int argc, char** argv) {
       cli::check_output_path("-o", output);
       cli::check_output_path("--report", report_path);
       cli::check_output_path("--leak-path", leak_path);
+      if (!features_path.empty()) {
+        if (io::curve_format_from_extension(features_path) == io::CurveFormat::Unknown)
+          throw Error(ErrorKind::InvalidArgument, "--features " + features_path + ": feature curves are written as .obj or .eMesh");
+        if (!params.snap_features)
+          throw Error(ErrorKind::InvalidArgument, "--features: --no-features turns the feature curves off");
+        cli::check_output_path("--features", features_path);
+      }
       html_output.check();  // three.js too: exit 2 before the work
       check_deviation_path(deviation_path);
       cli::StderrProgress progress(quiet, cli::wrap_stage_weights());
@@ -319,6 +331,7 @@ int main(int argc, char** argv) {
       }
       progress.progress("write", 0.0, output);
       io::write_mesh(result.surface, output);
+      if (!features_path.empty()) io::write_feature_curves(features_path, result.feature_curves);
       result.report.source = source;
       if (!report_path.empty()) write_text(report_path, to_json(result.report));
       if (!deviation_path.empty()) {

@@ -59,6 +59,10 @@ void fit_surface(WrapRun& run) {
   const fit::SurfaceIndex& index = run.index();
   StageTimer timer("project", report.stages);
   const std::vector<fit::FeatureCurve>& curves = run.curves_builder->get();
+  for (const fit::FeatureCurve& c : curves) {  // WrapResult::feature_curves, in model coordinates
+    std::vector<Vec3>& out = run.result.feature_curves.emplace_back();
+    for (const Vec3& p : c.points) out.push_back(p + run.prepared.origin);
+  }
   run.fitted = fit::fit_to_input(run.lattice, *run.refined.grid, index, curves, run.prepared.origin, run.params, run.progress);
   report_snapping(report, run.fitted);
   if (!curves.empty() && run.fitted.valid) insert_feature_nodes(run, curves);

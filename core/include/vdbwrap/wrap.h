@@ -22,6 +22,10 @@ struct WrapResult {
   // Per surface triangle: DefectFlag bits (vdbwrap/deviation.h) of the final quality analysis,
   // and held-back nodes at its corners.
   std::vector<uint8_t> triangle_flags;
+  // The input's feature curves the surface was snapped to (sharp, boundary and non-manifold
+  // edges, intersection lines), as polylines in model coordinates; a closed curve ends on its
+  // first point. Empty when params.snap_features is false.
+  std::vector<std::vector<Vec3>> feature_curves;
 };
 
 // A wrap that stopped with a report worth keeping (a leak, a surface that failed
