@@ -16,6 +16,7 @@
 #include "html_output.h"
 #include "output_paths.h"
 #include "repair_options.h"
+#include "stl_option.h"
 #include "suggest.h"
 #include "wrap_options.h"
 #ifdef VDBWRAP_WITH_REMOTE
@@ -203,6 +204,8 @@ int main(int argc, char** argv) {
       ->group("Output");
   cli::HtmlOutput html_output;
   html_output.add_to(wrap_cmd);
+  cli::StlOption wrap_stl;
+  wrap_stl.add_to(wrap_cmd);
   std::string features_path;
   wrap_cmd
       ->add_option("--features", features_path,
@@ -250,6 +253,8 @@ int main(int argc, char** argv) {
   bool repair_quiet = false;
   repair_cmd->add_option("input", repair_input, "Input mesh (.stl .obj .off .ply .vtp .nas .bdf)")->required();
   repair_options.add_to(repair_cmd, true);
+  cli::StlOption repair_stl;
+  repair_stl.add_to(repair_cmd);
   repair_cmd->add_option("-o,--output", repair_output, "Output mesh; the format follows the extension")
       ->required()
       ->group("Output");
@@ -286,6 +291,7 @@ int main(int argc, char** argv) {
       if (io::format_from_extension(output) == io::Format::Unknown)
         throw Error(ErrorKind::InvalidArgument, output + ": unknown output format (use .stl, .obj, .off, .ply, .vtp, .nas or .bdf)");
       cli::check_output_path("-o", output);
+      const io::WriteOptions write_options = wrap_stl.write_options(output);
       cli::check_output_path("--report", report_path);
       cli::check_output_path("--leak-path", leak_path);
       if (!features_path.empty()) {
@@ -330,7 +336,7 @@ int main(int argc, char** argv) {
         throw;
       }
       progress.progress("write", 0.0, output);
-      io::write_mesh(result.surface, output);
+      io::write_mesh(result.surface, output, write_options);
       if (!features_path.empty()) io::write_feature_curves(features_path, result.feature_curves);
       result.report.source = source;
       if (!report_path.empty()) write_text(report_path, to_json(result.report));
@@ -362,13 +368,14 @@ int main(int argc, char** argv) {
       if (io::format_from_extension(repair_output) == io::Format::Unknown)
         throw Error(ErrorKind::InvalidArgument, repair_output + ": unknown output format (use .stl, .obj, .off, .ply, .vtp, .nas or .bdf)");
       cli::check_output_path("-o", repair_output);
+      const io::WriteOptions repair_write_options = repair_stl.write_options(repair_output);
       cli::check_output_path("--report", repair_report);
       cli::StderrProgress progress(repair_quiet, cli::repair_stage_weights());
       progress.progress("read", 0.0, repair_input);
       Mesh mesh = io::read_mesh(repair_input);
       RepairResult result = repair(mesh, rparams, &progress);
       progress.progress("write", 0.0, repair_output);
-      io::write_mesh(result.mesh, repair_output);
+      io::write_mesh(result.mesh, repair_output, repair_write_options);
       if (!repair_report.empty())
         write_text(repair_report, with_source(to_json(result.report), source_of(repair_input, mesh)));
       progress.complete(repair_output);

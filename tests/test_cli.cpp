@@ -514,3 +514,55 @@ TEST_F(Cli, RepairErrors) {
   CliRun ok = run("repair " + in + " -o " + (dir / "o.obj").string());  // clean: nothing to do
   EXPECT_EQ(ok.code, 0) << ok.err;
 }
+
+// --stl ascii|binary: the same mesh in either encoding (STL output is validated in single
+// precision whichever it is), and binary even where the default would be ASCII (several parts).
+TEST_F(Cli, StlEncodingOptionWritesAsciiOrBinaryOfOneMesh) {
+  auto slurp = [](const fs::path& p) {
+    std::ifstream in(p, std::ios::binary);
+    return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  };
+  auto triangles_by_coordinates = [](const Mesh& m) {
+    std::multiset<std::array<Vec3, 3>> out;
+    for (const Tri& t : m.triangles) out.insert({m.points[t[0]], m.points[t[1]], m.points[t[2]]});
+    return out;
+  };
+  const std::string fuze = std::string(VDBWRAP_TEST_DATA_DIR) + "/fuze.obj";
+  const fs::path ascii = dir / "ascii.stl", binary = dir / "binary.stl";
+  CliRun a = run("wrap " + fuze + " -o " + ascii.string() + " --base-size 3% --no-distances -q --stl ascii");
+  ASSERT_EQ(a.code, 0) << a.err;
+  CliRun b = run("wrap " + fuze + " -o " + binary.string() + " --base-size 3% --no-distances -q --stl binary");
+  ASSERT_EQ(b.code, 0) << b.err;
+  const std::string ascii_text = slurp(ascii), binary_bytes = slurp(binary);
+  EXPECT_EQ(ascii_text.rfind("solid", 0), 0u);
+  EXPECT_NE(ascii_text.find("facet normal"), std::string::npos);
+  const Mesh from_ascii = io::read_mesh(ascii.string()), from_binary = io::read_mesh(binary.string());
+  ASSERT_GT(from_binary.triangles.size(), 0u);
+  EXPECT_EQ(binary_bytes.size(), 84 + 50 * from_binary.triangles.size()) << "not a binary STL";
+  EXPECT_EQ(from_ascii.points, from_binary.points);
+  EXPECT_EQ(from_ascii.triangles, from_binary.triangles);
+
+  // Several parts: ASCII (the default) keeps them as solids; --stl binary drops the names but
+  // holds the same triangles.
+  const std::string parts = std::string(VDBWRAP_TEST_DATA_DIR) + "/two_objects_mixed_case_names.stl";
+  const fs::path solids = dir / "solids.stl", plain = dir / "plain.stl";
+  ASSERT_EQ(run("wrap " + parts + " -o " + solids.string() + " --base-size 3% --no-distances -q").code, 0);
+  CliRun p = run("wrap " + parts + " -o " + plain.string() + " --base-size 3% --no-distances -q --stl binary");
+  ASSERT_EQ(p.code, 0) << p.err;
+  const Mesh with_names = io::read_mesh(solids.string()), without = io::read_mesh(plain.string());
+  EXPECT_GT(with_names.part_names.size(), 1u);
+  EXPECT_LE(without.part_names.size(), 1u);
+  EXPECT_EQ(slurp(plain).size(), 84 + 50 * without.triangles.size());
+  EXPECT_EQ(triangles_by_coordinates(with_names), triangles_by_coordinates(without));
+
+  // repair takes it too; a value or an output it does not fit is exit code 2 before any work.
+  CliRun r = run("repair " + fuze + " -o " + (dir / "r.stl").string() + " -q --stl ascii");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(slurp(dir / "r.stl").rfind("solid", 0), 0u);
+  CliRun bad = run("wrap " + fuze + " -o " + (dir / "x.stl").string() + " -q --stl text");
+  EXPECT_EQ(bad.code, 2);
+  CliRun obj = run("wrap " + fuze + " -o " + (dir / "x.obj").string() + " -q --stl ascii");
+  EXPECT_EQ(obj.code, 2);
+  EXPECT_NE(obj.err.find("not an .stl file"), std::string::npos) << obj.err;
+  EXPECT_FALSE(fs::exists(dir / "x.obj"));
+}
