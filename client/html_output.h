@@ -4,7 +4,9 @@
 #pragma once
 #include <CLI/CLI.hpp>
 
+#include <cstdint>
 #include <string>
+#include <vector>
 
 #include "vdbwrap/deviation.h"
 #include "vdbwrap/mesh.h"
@@ -17,11 +19,12 @@ class HtmlOutput {
   bool wanted() const { return !path_.empty(); }
   // Throws Error(InvalidArgument) for a path in a missing folder or when three.js is not found.
   void check();
-  // wrap: null when the run stopped (the page then shows the leak of the report, if any).
-  // Returns the line to print when not quiet ("page FILE (SIZE, TIME)"). Throws
-  // Error(OutputFailed) when the file cannot be written.
-  std::string write(const Mesh& input, const Mesh* wrap, const std::string& report_json, const DeviationField* deviation,
-                    const std::string& title) const;
+  // wrap: null when the run stopped (the page then shows the leak of the report, if any);
+  // else its deviation from the input is measured for the page, with the wrap's defect flags
+  // (WrapResult::triangle_flags) when given. Returns the line to print when not quiet
+  // ("page FILE (SIZE, TIME)"). Throws Error(OutputFailed) when the file cannot be written.
+  std::string write(const Mesh& input, const Mesh* wrap, const std::string& report_json,
+                    const std::vector<uint8_t>* wrap_flags, const std::string& title) const;
   const std::string& path() const { return path_; }
 
  private:

@@ -346,7 +346,8 @@ int main(int argc, char** argv) {
       }
       progress.complete(output);
       if (html_output.wanted()) {
-        const std::string page = html_output.write(mesh, &result.surface, to_json(result.report), nullptr, source.file_name);
+        const std::string page = html_output.write(mesh, &result.surface, to_json(result.report), &result.triangle_flags,
+                                                     source.file_name);
         if (!quiet) std::fprintf(stderr, "wrote %s\n", page.c_str());
       }
       const auto& r = result.report;

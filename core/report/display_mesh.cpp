@@ -6,6 +6,7 @@
 #include <array>
 #include <cmath>
 
+#include "common/exact_weld.h"
 #include "common/vec.h"
 
 namespace vdbwrap::report {
@@ -19,7 +20,8 @@ void copy_points(const Mesh& mesh, const Vec3& origin, DisplayMesh& d) {
   for (size_t i = 0; i < d.vertex_of.size(); ++i) d.vertex_of[i] = uint32_t(i);
 }
 
-// One clustering pass at cell h: false when the grid would be too fine to key.
+// One clustering pass at cell h over the distinct points (mesh.points welded exactly): false
+// when the grid would be too fine to key. d.vertex_of is per distinct point.
 bool cluster(const Mesh& mesh, const Box3& box, const Vec3& origin, double h, DisplayMesh& d) {
   const uint64_t kMaxCells = uint64_t(1) << 21;
   for (int k = 0; k < 3; ++k)
@@ -33,8 +35,8 @@ bool cluster(const Mesh& mesh, const Box3& box, const Vec3& origin, double h, Di
   for (size_t i = 0; i < mesh.points.size(); ++i) {
     uint64_t key = 0;
     for (int k = 0; k < 3; ++k) {
-      const double c = std::floor((mesh.points[i][k] - box.lo[k]) / h);
-      key = (key << 21) | uint64_t(std::clamp(c, 0.0, double(kMaxCells - 1)));
+      const double c = std::floor((mesh.points[i][k] - box.lo[k]) / h);  // NaN: cell 0
+      key = (key << 21) | uint64_t(c > 0 ? std::min(c, double(kMaxCells - 1)) : 0.0);
     }
     keyed[i] = {key, uint32_t(i)};
   }
@@ -99,15 +101,25 @@ DisplayMesh display_mesh(const Mesh& mesh, const Vec3& origin, size_t max_triang
     for (uint32_t v : t) box.add(mesh.points[v]);
     area += 0.5 * norm(area_vector(mesh.points[t[0]], mesh.points[t[1]], mesh.points[t[2]]));
   }
-  // About one cluster per h^2 of surface and two triangles per cluster.
-  double h = std::sqrt(2 * area / double(max_triangles));
+  // An STL repeats every point about six times: clustering sorts the distinct ones.
+  ExactWeld weld = exact_weld(mesh.points);
+  Mesh distinct;
+  distinct.points = std::move(weld.unique);
+  distinct.triangles.resize(mesh.triangles.size());
+  for (size_t t = 0; t < mesh.triangles.size(); ++t)
+    for (int k = 0; k < 3; ++k) distinct.triangles[t][k] = weld.remap[mesh.triangles[t][k]];
+  // A surface crosses about 1.5 cells per h^2 of its area (more when tilted against the
+  // grid), and there are about two triangles per cluster.
+  double h = std::sqrt(3 * area / double(max_triangles));
   if (!(h > 0)) h = std::max(box.diagonal(), 1e-30) * 1e-3;
   d.clustered = true;
-  for (int round = 0; round < 60; ++round, h *= 1.25) {
-    if (!cluster(mesh, box, origin, h, d)) continue;
+  for (int round = 0; round < 60; ++round, h *= 1.2) {
+    if (!cluster(distinct, box, origin, h, d)) continue;
     d.cluster_size = h;
     if (d.source_triangle.size() <= max_triangles) break;
   }
+  for (uint32_t& v : weld.remap) v = d.vertex_of[v];
+  d.vertex_of = std::move(weld.remap);
   return d;
 }
 

@@ -112,20 +112,20 @@ class Tables {
  public:
   explicit Tables(const json& report) : report_(report) {}
 
+  // Opened by its first row: a section the report has nothing for is left out.
   void section(const std::string& title, const std::string& id) {
     close();
-    html_ << "<section id=\"" << id << "\"><h2>" << escape_html(title) << "</h2><table>";
-    open_ = true;
+    pending_ = "<section id=\"" + id + "\"><h2>" + escape_html(title) + "</h2><table>";
   }
   void row(const std::string& label, const std::string& path, Shown how = Shown::Plain) {
     if (const json* v = at_path(report_, path)) value_row(label, path, *v, how);
   }
   void value_row(const std::string& label, const std::string& path, const json& v, Shown how = Shown::Plain) {
+    if (!open_) html_ << pending_, open_ = true;
     html_ << "<tr><th>" << escape_html(label) << "</th><td data-key=\"" << escape_html(path) << "\" data-value=\""
           << escape_html(v.dump(-1, ' ', false, json::error_handler_t::replace)) << "\">"
           << escape_html(shown(v, how)) << "</td></tr>";
   }
-  void raw(const std::string& html) { html_ << html; }
   std::string done() {
     close();
     return html_.str();
@@ -137,6 +137,7 @@ class Tables {
     open_ = false;
   }
   const json& report_;
+  std::string pending_;
   std::ostringstream html_;
   bool open_ = false;
 };
@@ -287,15 +288,18 @@ std::string html_report(const HtmlReportData& data, const std::string& three_js)
 
   double feature_angle = 30;
   if (const json* a = at_path(r, "parameters.feature_angle_deg"); a && a->is_number()) feature_angle = a->get<double>();
-  const report::InputMarks marks =
-      report::mark_input(input, feature_angle, input.triangles.size() <= data.intersection_search_limit);
+  // The report's count says when there is nothing to find: the search is most of the marking.
+  const json* crossing = at_path(r, "input.intersecting_triangles");
+  const bool none_crossing = crossing && crossing->is_number() && crossing->get<double>() == 0;
+  const report::InputMarks marks = report::mark_input(
+      input, feature_angle, !none_crossing && input.triangles.size() <= data.intersection_search_limit);
 
   json scene{{"origin", origin}, {"diagonal", box.diagonal()}, {"display_limit", data.display_triangles}};
   const report::DisplayMesh input_display = report::display_mesh(input, origin, data.display_triangles);
   scene["input"] = mesh_data(input, input_display);
   scene["input"]["flags"] = report::base64(report::display_per_triangle(input_display, marks.flags));
   scene["input"]["flag_counts"] = bit_counts(marks.flags);
-  scene["input"]["intersections_searched"] = marks.intersections_searched;
+  scene["input"]["intersections_searched"] = none_crossing || marks.intersections_searched;
   // Feature curves: every sharp edge up to a display budget, evenly thinned beyond it.
   const size_t max_segments = std::max<size_t>(data.display_triangles / 2, 1);
   const size_t stride = (marks.sharp_edges.size() + max_segments - 1) / max_segments;

@@ -81,8 +81,10 @@
   var camera = new THREE.PerspectiveCamera(35, 1, 0.01, 100);
   camera.up.set(0, 0, 1);
   world.add(camera);
-  world.add(new THREE.AmbientLight(0xffffff, 0.45));
-  var headlight = new THREE.DirectionalLight(0xffffff, 0.65);
+  var sky = new THREE.HemisphereLight(0xffffff, 0x8a96a3, 0.55);
+  sky.position.set(0, 0, 1);
+  world.add(sky);
+  var headlight = new THREE.DirectionalLight(0xffffff, 0.6);
   headlight.position.set(0.3, 0.6, 1);
   camera.add(headlight);
   var VERTEX_COLOURS = THREE.VertexColors !== undefined ? THREE.VertexColors : true;
@@ -122,12 +124,19 @@
     };
   }
 
+  // A few far points would leave the rest white on a scale to the largest deviation: by
+  // default the scale ends at 5 x the 95th percentile, and farther points show its end colour.
+  function deviationRange() {
+    var dv = scene.deviation;
+    return state.fullRange || !(dv.p95_abs > 0) ? dv.max_abs : Math.min(dv.max_abs, 5 * dv.p95_abs);
+  }
+
   function paint(d, mode, plain) {
     var C = d.colours, n = d.n, c, t, k;
     for (t = 0; t < n; ++t) {
       for (k = 0; k < 3; ++k) {
         if (mode === 'deviation' && d.deviation) {
-          c = deviationColour(d.deviation[d.tri[3 * t + k]], scene.deviation.max_abs, scene.deviation.sign !== 'unsigned');
+          c = deviationColour(d.deviation[d.tri[3 * t + k]], deviationRange(), scene.deviation.sign !== 'unsigned');
         } else if (mode === 'part' && d.parts) {
           c = partColour(d.parts[t]);
         } else if (mode === 'defect' && d.flags) {
@@ -258,7 +267,7 @@
   if (window.ResizeObserver) new ResizeObserver(resize).observe(canvas); else window.addEventListener('resize', resize);
 
   // ---- toolbar, legend, note ----
-  var state = { show: wrap ? 'wrap' : 'input', colour: 'plain', features: false, leak: !!leak, edges: false };
+  var state = { show: wrap ? 'wrap' : 'input', colour: wrap && wrap.deviation ? 'deviation' : 'plain', fullRange: false, features: false, leak: !!leak, edges: false };
   var hasParts = scene.input.part_names.length > 1 || (wrap && scene.wrap.part_names.length > 1);
   var toolbar = $('toolbar'), buttons = {};
   function group(label) {
@@ -342,22 +351,33 @@
       var dv = scene.deviation, signed = dv.sign !== 'unsigned';
       L.appendChild(el('div', 'title', signed ? 'Distance of the wrap to the input (' +
         (dv.sign === 'outside' ? '+ outside, - inside' : '+ in front of its triangles') + ')' : 'Distance of the wrap to the input'));
+      var range = deviationRange(), clipped = range < dv.max_abs;
       var stops = [];
       for (var i = 0; i <= 10; ++i) {
         var x = signed ? -1 + i / 5 : i / 10;
-        stops.push(css(deviationColour(x * dv.max_abs, dv.max_abs, signed)) + ' ' + (i * 10) + '%');
+        stops.push(css(deviationColour(x * range, range, signed)) + ' ' + (i * 10) + '%');
       }
       var bar = el('div', 'bar');
       bar.style.background = 'linear-gradient(to right,' + stops.join(',') + ')';
       L.appendChild(bar);
       var ticks = el('div', 'ticks');
-      var pct = function (v) { return dv.diagonal > 0 ? ' (' + real(100 * v / dv.diagonal) + ' %)' : ''; };
-      ticks.appendChild(el('span', '', signed ? '-' + real(dv.max_abs) : '0'));
+      var pct = function (v) { return dv.diagonal > 0 ? ' (' + real(100 * v / dv.diagonal) + ' % of the diagonal)' : ''; };
+      ticks.appendChild(el('span', '', signed ? (clipped ? '\u2264 ' : '') + '\u2212' + real(range) : '0'));
       if (signed) ticks.appendChild(el('span', '', '0'));
-      ticks.appendChild(el('span', '', '+' + real(dv.max_abs) + pct(dv.max_abs)));
+      ticks.appendChild(el('span', '', (clipped ? '\u2265 ' : '') + '+' + real(range)));
       L.appendChild(ticks);
-      var stats = el('div', '', 'mean ' + real(dv.mean_abs) + ', 95th percentile ' + real(dv.p95_abs) + ', max ' +
-                     real(dv.max_abs) + ' (model units, absolute)');
+      L.appendChild(el('div', '', 'scale \u00b1' + real(range) + pct(range) +
+                       (clipped ? ', 5 \u00d7 the 95th percentile' : '')));
+      var full = el('label'), box = el('input');
+      box.type = 'checkbox';
+      box.id = 'toggle-full-range';
+      box.checked = state.fullRange;
+      box.addEventListener('change', function () { state.fullRange = box.checked; update(); });
+      full.appendChild(box);
+      full.appendChild(document.createTextNode(' scale to the largest deviation'));
+      L.appendChild(full);
+      var stats = el('div', '', '|distance|: mean ' + real(dv.mean_abs) + ', 95th percentile ' + real(dv.p95_abs) +
+                     ', max ' + real(dv.max_abs) + pct(dv.max_abs));
       stats.setAttribute('data-deviation-max', dv.max_abs);
       L.appendChild(stats);
     } else if (state.colour === 'part') {

@@ -363,6 +363,15 @@ def main():
                                "distance_output_to_input.max_percent_of_diagonal", "parameters.base_size",
                                "stages.0.seconds", "total_seconds"])
         print("%s: %d numbers on the page match the JSON report" % (args.model, shown))
+        # The wrap's deviation field: offered, and its largest vertex distance within the report's
+        # sampled wrap-to-input maximum (the samples include every vertex).
+        check(devtools.evaluate("!document.querySelector('[data-colour=deviation]').disabled"),
+              "%s: no deviation colouring" % args.model)
+        devtools.evaluate("document.querySelector('[data-colour=deviation]').click()")
+        deviation_max = float(devtools.evaluate("document.querySelector('[data-deviation-max]').dataset.deviationMax"))
+        sampled_max = report["distance_output_to_input"]["max"]
+        check(0 < deviation_max <= sampled_max * (1 + 1e-9),
+              "%s: largest deviation %r, the report's sampled maximum %r" % (args.model, deviation_max, sampled_max))
         if args.screenshot:
             with open(args.screenshot, "wb") as f:
                 f.write(devtools.screenshot())
