@@ -201,6 +201,18 @@ def checks(args):
     except vdbwrap.InputError as e:
         expect(e.kind == "INVALID_INPUT" and e.exit_code == 3, "junk mesh: %s" % e)
 
+    # A job that fails: JobError with the pipeline's error kind, and no output.
+    failed_out = os.path.join(args.work, "tube_inside.stl")
+    try:
+        client.wrap(os.path.join(data, "tube.obj"), failed_out, volume="inside", base_size_percent=3)
+        fail("wrapping the inside of an open tube succeeded")
+    except vdbwrap.JobError as e:
+        expect(e.state == "failed" and e.kind == "WRAP_FAILED" and e.exit_code == 4 and e.job_id,
+               "failed job: %s (state %s, kind %s)" % (e, e.state, e.kind))
+        expect("encloses no volume" in e.message, "failed job's message: %s" % e.message)
+        expect(not os.path.exists(failed_out), "a failed job left an output")
+        client.delete(e.job_id)
+
     # A YAML parameter file in the form of WrapParameters, and a wrong token.
     with open(params_file, "w") as f:
         f.write("base_size_percent: 4\nvolume: outside\n")
