@@ -351,6 +351,12 @@ def main():
     check(r.returncode == 4, "leak: exit code %d, not 4: %s" % (r.returncode, r.stderr.strip()))
     check(os.path.exists(leak_page), "leak: no page written")
 
+    # Parts: two STL solids.
+    parts_page, parts_report = os.path.join(work, "parts.html"), os.path.join(work, "parts.json")
+    r, _ = run([args.cli, "wrap", os.path.join(args.data, "multibody.stl"), "-o", os.path.join(work, "parts.obj"),
+                "--report", parts_report, "--html", parts_page, "-q"])
+    check(r.returncode == 0, "multibody.stl: exit code %d: %s" % (r.returncode, r.stderr.strip()))
+
     devtools = DevTools(chromium, work)
     try:
         state = devtools.load(page)
@@ -385,6 +391,19 @@ def main():
                 check_drawn(devtools.screenshot("#canvas", 0.25), "%s after %s" % (args.model, button))
         for e in devtools.errors():
             check(False, "%s: %s" % (args.model, e))
+
+        state = devtools.load(parts_page)
+        check(state == "ready", "multibody.stl: the viewer ended '%s'" % state)
+        names = [p["name"] for p in json.load(open(parts_report))["source"]["parts"]]
+        clicked = devtools.evaluate("(() => { const b = document.querySelector('[data-colour=part]');"
+                                    " if (b.disabled) return false; b.click(); return true; })()")
+        check(clicked, "multibody.stl: no colouring by part")
+        devtools.evaluate("new Promise(r => requestAnimationFrame(() => requestAnimationFrame(r)))")
+        legend = devtools.evaluate("document.getElementById('legend').textContent")
+        check(len(names) == 2 and all(n in legend for n in names), "multibody.stl: legend %r, parts %r" % (legend, names))
+        check_drawn(devtools.screenshot("#canvas", 0.5), "multibody.stl by part")
+        for e in devtools.errors():
+            check(False, "multibody.stl: %s" % e)
 
         state = devtools.load(leak_page)
         check(state == "ready", "leak: the viewer ended '%s'" % state)
