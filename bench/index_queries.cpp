@@ -1,4 +1,4 @@
-// Nearest-point index micro-benchmark: builds fit::SurfaceIndex on a mesh file and times
+// Nearest-point index micro-benchmark: builds mesh::SurfaceIndex on a mesh file and times
 // closest(), within() and touches() on points near the surface (input vertices moved off the
 // surface by up to `offset` of the diagonal, in random directions). Prints build time, memory
 // growth and the median of several rounds per query kind.
@@ -13,7 +13,7 @@
 #include <string>
 #include <vector>
 
-#include "fit/surface_index.h"
+#include "mesh/surface_index.h"
 #include "common/vec.h"
 #include "vdbwrap/io.h"
 
@@ -53,7 +53,7 @@ int main(int argc, char** argv) {
   const double diag = box.diagonal();
   const long rss_before = peak_rss_mb();
   auto t0 = std::chrono::steady_clock::now();
-  fit::SurfaceIndex index(mesh.points, mesh.triangles);
+  mesh::SurfaceIndex index(mesh.points, mesh.triangles);
   const double build = seconds_since(t0);
   const long rss_after = peak_rss_mb();
 

@@ -12,7 +12,7 @@
 
 #include "check/distance_stats.h"
 #include "common/vec.h"
-#include "fit/surface_index.h"
+#include "mesh/surface_index.h"
 #include "vdbwrap/io.h"
 #include "test_meshes.h"
 #include "vdbwrap/deviation.h"
@@ -107,8 +107,8 @@ TEST(Deviation, ReportCarriesWhereTheMaximumIs) {
   const DistanceStats& d = r.report.output_to_input;
   ASSERT_GT(d.samples, 0u);
   // max_at is a sample on the wrap, at distance max from the input.
-  fit::SurfaceIndex input(fandisk().points, fandisk().triangles);
-  fit::SurfaceIndex wrap_index(r.surface.points, r.surface.triangles);
+  mesh::SurfaceIndex input(fandisk().points, fandisk().triangles);
+  mesh::SurfaceIndex wrap_index(r.surface.points, r.surface.triangles);
   EXPECT_NEAR(std::sqrt(input.squared_distance(d.max_at)), d.max, 1e-12 * d.diagonal);
   EXPECT_LT(std::sqrt(wrap_index.squared_distance(d.max_at)), 1e-9 * d.diagonal);
   const std::string json = to_json(d);

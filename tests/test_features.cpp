@@ -145,7 +145,7 @@ TEST(FeatureInsertion, ChamferedConcaveCreaseGetsNodesOnIt) {
   Mesh input;
   input.points = {{0, -0.5, 0}, {2, -0.5, 0}, {2, 1.5, 0}, {0, 1.5, 0}, {0, -0.5, 2}, {0, 1.5, 2}};
   input.triangles = {{0, 1, 2}, {0, 2, 3}, {0, 3, 5}, {0, 5, 4}};
-  fit::SurfaceIndex index(input.points, input.triangles);
+  mesh::SurfaceIndex index(input.points, input.triangles);
 
   // The strip: floor part, chamfer, wall part; rows at y = 0, 0.25, ... 1; 0.001 off the input.
   const double off = 0.001;
@@ -168,7 +168,7 @@ TEST(FeatureInsertion, ChamferedConcaveCreaseGetsNodesOnIt) {
   crease.points = {{0, 0, 0}, {0, 1, 0}};
   const fit::FeatureInsertParams prm = insert_params(0.05, 0.5);
   auto distance_to_wrap = [&](const Vec3& q) {
-    fit::SurfaceIndex w(wrap.points, wrap.triangles);
+    mesh::SurfaceIndex w(wrap.points, wrap.triangles);
     return std::sqrt(w.squared_distance(q));
   };
   ASSERT_GT(distance_to_wrap({0, 0.5, 0}), 0.2);  // the chamfer misses the crease
@@ -192,7 +192,7 @@ TEST(FeatureInsertion, RefusesAMoveThroughTheInput) {
   Mesh input;
   input.points = {{-1, -1, 0.5}, {2, -1, 0.5}, {2, 2, 0.5}, {-1, 2, 0.5}};
   input.triangles = {{0, 1, 2}, {0, 2, 3}};
-  fit::SurfaceIndex index(input.points, input.triangles);
+  mesh::SurfaceIndex index(input.points, input.triangles);
   fit::FittedSurface wrap;
   for (int r = 0; r < 3; ++r)
     for (int k = 0; k < 3; ++k) wrap.points.push_back({0.5 * k, 0.5 * r, 1.0});
@@ -278,7 +278,7 @@ TEST(FeatureInsertion, NeighbouringCreasesGiveTheSameWrapOnOneThreadAndTwo) {
     valley.points = {{x + rise, 0, z}, {x + rise, 1, z}};
     valleys.push_back(valley);
   }
-  fit::SurfaceIndex index(input.points, input.triangles);
+  mesh::SurfaceIndex index(input.points, input.triangles);
   // The strip: the diagonal over the steps' edges, `off` above them, nodes 0.05 apart.
   fit::FittedSurface strip;
   const uint32_t across = uint32_t(4 * steps + 1), rows = 11;
@@ -310,7 +310,7 @@ TEST(FeatureInsertion, NeighbouringCreasesGiveTheSameWrapOnOneThreadAndTwo) {
 
   EXPECT_TRUE(check::mesh_self_intersecting_faces(two.points, two.triangles).empty());
   for (const Tri& t : two.triangles) EXPECT_FALSE(index.touches(two.points[t[0]], two.points[t[1]], two.points[t[2]]));
-  fit::SurfaceIndex wrap(two.points, two.triangles);
+  mesh::SurfaceIndex wrap(two.points, two.triangles);
   for (const fit::FeatureCurve& v : valleys) {  // the middle of each valley (its ends are the strip's borders)
     const Vec3 mid = {v.points[0][0], 0.5, v.points[0][2]};
     EXPECT_LT(std::sqrt(wrap.squared_distance(mid)), 0.01) << "valley at x = " << mid[0];

@@ -11,7 +11,7 @@
 #include "common/vec.h"
 #include "extract/extract_surface.h"
 #include "fit/fit_surface.h"
-#include "fit/surface_index.h"
+#include "mesh/surface_index.h"
 #include "grid/flood_fill.h"
 #include "grid/refine.h"
 #include "prep/prepare.h"
@@ -40,7 +40,7 @@ Fitted fit_mesh(const Mesh& m, double base_percent, WrapParams params = {}) {
   int32_t label = grid::choose_volume(*f.grid, params.volume, comps, nullptr);
   extract::ExtractStats stats;
   auto lattice = extract::extract_manifold_surface(*f.grid, label, params.volume, stats, nullptr);
-  fit::SurfaceIndex index(f.input.mesh.points, f.input.mesh.triangles);
+  mesh::SurfaceIndex index(f.input.mesh.points, f.input.mesh.triangles);
   f.surface = fit::fit_to_input(lattice, *f.grid, index, {}, Vec3{0, 0, 0}, params, nullptr);
   return f;
 }
@@ -50,7 +50,7 @@ Fitted fit_mesh(const Mesh& m, double base_percent, WrapParams params = {}) {
 TEST(Projection, SphereNodesLandJustOutsideTheInput) {
   Fitted f = fit_mesh(sphere_mesh(1.0, 32, 64), 3);
   ASSERT_EQ(f.surface.held_back, 0u);
-  fit::SurfaceIndex index(f.input.mesh.points, f.input.mesh.triangles);
+  mesh::SurfaceIndex index(f.input.mesh.points, f.input.mesh.triangles);
   const double offset = WrapParams{}.surface_offset * f.grid->fine_size();
   for (const Vec3& p : f.surface.points) {
     auto hit = index.closest(p);
@@ -67,7 +67,7 @@ TEST(Projection, InsideWrapNodesStayInside) {
   WrapParams p;
   p.volume = VolumeChoice::Inside;
   Fitted f = fit_mesh(sphere_mesh(1.0, 32, 64), 3, p);
-  fit::SurfaceIndex index(f.input.mesh.points, f.input.mesh.triangles);
+  mesh::SurfaceIndex index(f.input.mesh.points, f.input.mesh.triangles);
   for (const Vec3& q : f.surface.points) {
     auto hit = index.closest(q);
     EXPECT_LT(dot(q - hit.point, hit.normal), 0.0);
@@ -159,7 +159,7 @@ struct Uniform {
 // nearest point of the whole triangle set.
 TEST(SurfaceIndex, NearestPointsAreExactOnSliversAndFans) {
   const Mesh m = sliver_mesh();
-  fit::SurfaceIndex index(m.points, m.triangles);
+  mesh::SurfaceIndex index(m.points, m.triangles);
   Uniform uniform(12345);
   for (int k = 0; k < 3000; ++k) {
     const Vec3 q{uniform(-2, 3), uniform(-2, 3), uniform(-2, 4)};
@@ -174,7 +174,7 @@ TEST(SurfaceIndex, NearestPointsAreExactOnSliversAndFans) {
     EXPECT_TRUE(index.within(q, d * 1.001 + 1e-12));
     if (d > 1e-6) EXPECT_FALSE(index.within(q, d * 0.999));
     // Bounded: the same hit within a radius beyond the nearest distance, none short of it.
-    fit::SurfaceIndex::Hit near;
+    mesh::SurfaceIndex::Hit near;
     ASSERT_TRUE(index.closest_within(q, d * 1.001 + 1e-12, near)) << "query " << k;
     EXPECT_EQ(near.triangle, hit.triangle);
     EXPECT_EQ(near.point, hit.point);
@@ -188,7 +188,7 @@ TEST(SurfaceIndex, NearestPointsAreExactOnSliversAndFans) {
 // point of the whole set, and "within" must agree with it.
 TEST(SurfaceIndex, NearestPointsAreExactInCrowdedCells) {
   const Mesh m = sliver_mesh();
-  fit::SurfaceIndex index(m.points, m.triangles);
+  mesh::SurfaceIndex index(m.points, m.triangles);
   Uniform uniform(777);
   const int n = 200;
   for (int k = 0; k < 4000; ++k) {
@@ -255,7 +255,7 @@ TEST(SurfaceIndex, NearestPointsAreExactBesideThousandsOfSliversFarFromTheOrigin
   }
   // A few slivers duplicated: exactly equal distances, so the lowest index must win.
   for (uint32_t k = 0; k < 200; k += 7) m.triangles.push_back(m.triangles[k]);
-  fit::SurfaceIndex index(m.points, m.triangles);
+  mesh::SurfaceIndex index(m.points, m.triangles);
   for (int k = 0; k < 3000; ++k) {
     // Beside a sliver of either cylinder, at distances from none to a tenth of the radius.
     const uint32_t f = uint32_t(uniform(0, 4 * n));
@@ -309,7 +309,7 @@ TEST(SurfaceIndex, TouchesAgreesWithEveryTriangleOnSortedSliversFarFromTheOrigin
     m.points.push_back(c + Vec3{0, uniform(0, 0.01), 0.01});
     m.triangles.push_back({a, a + 1, a + 2});
   }
-  fit::SurfaceIndex index(m.points, m.triangles);
+  mesh::SurfaceIndex index(m.points, m.triangles);
   size_t touching = 0;
   std::vector<Vec3> pts = m.points;
   const uint32_t a = uint32_t(pts.size());
@@ -342,8 +342,8 @@ TEST(SurfaceIndex, AnswersDoNotDependOnTheOrderOfQueries) {
       queries.push_back({1.5 + 0.01 * i, -0.4 + 0.02 * j, 0.5});   // over vertices and edges of the plate
       queries.push_back({0.05 * i - 1, 0.05 * j - 1, 4.0});        // far above the fan's side
     }
-  fit::SurfaceIndex index(m.points, m.triangles);
-  std::vector<fit::SurfaceIndex::Hit> forward, backward(queries.size());
+  mesh::SurfaceIndex index(m.points, m.triangles);
+  std::vector<mesh::SurfaceIndex::Hit> forward, backward(queries.size());
   for (const Vec3& q : queries) forward.push_back(index.closest(q));
   for (size_t k = queries.size(); k-- > 0;) backward[k] = index.closest(queries[k]);
   size_t ties = 0;
@@ -378,7 +378,7 @@ TEST(SurfaceIndex, AnswersDoNotDependOnTheOrderOfQueries) {
 // and a triangle it reports is within the radius.
 TEST(SurfaceIndex, WithinGivesTheSameAnswerWithAnyHints) {
   Mesh m = sliver_mesh();
-  fit::SurfaceIndex index(m.points, m.triangles);
+  mesh::SurfaceIndex index(m.points, m.triangles);
   std::mt19937 rng(5);
   std::uniform_real_distribution<double> u(-1.5, 3.5);
   std::uniform_int_distribution<uint32_t> tri(0, uint32_t(m.triangles.size()) - 1);
@@ -411,7 +411,7 @@ TEST(SurfaceIndex, WithinGivesTheSameAnswerWithAnyHints) {
 // through the cap must be blocked.
 TEST(SurfaceIndex, TouchesAgreesWithEveryTriangleTestedDirectly) {
   const Mesh m = sliver_mesh();
-  fit::SurfaceIndex index(m.points, m.triangles);
+  mesh::SurfaceIndex index(m.points, m.triangles);
   Uniform uniform(777);
   size_t touching = 0;
   for (int k = 0; k < 3000; ++k) {
@@ -477,7 +477,7 @@ TEST(TriangleBuckets, FindEveryTriangleWhoseBoxOverlapsNearAndFarFromTheOrigin) 
 }
 
 TEST(SurfaceIndex, EmptyInputAnswersWithoutCrashing) {
-  fit::SurfaceIndex index({}, {});
+  mesh::SurfaceIndex index({}, {});
   EXPECT_FALSE(index.within({0, 0, 0}, 1.0));
   EXPECT_EQ(index.closest({0, 0, 0}).triangle, UINT32_MAX);
   EXPECT_FALSE(index.touches({0, 0, 0}, {1, 0, 0}, {0, 1, 0}));

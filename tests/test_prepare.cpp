@@ -11,6 +11,8 @@
 #include "common/exact_weld.h"
 #include "common/sorted_point_grid.h"
 #include "common/vec.h"
+#include "mesh/orient.h"
+#include "mesh/weld.h"
 #include "prep/prepare.h"
 #include "test_meshes.h"
 #include "pipeline/stage_params.h"
@@ -21,7 +23,7 @@ using namespace vdbwrap::testing;
 TEST(Weld, MergesPointsWithinToleranceOnly) {
   std::vector<Vec3> pts = {{0, 0, 0}, {1e-9, 0, 0}, {1, 0, 0}, {1 + 2e-3, 0, 0}, {0, 0, 1e-9}};
   std::vector<Vec3> welded;
-  auto remap = prep::weld_points(pts, 1e-6, welded);
+  auto remap = mesh::weld_points(pts, 1e-6, welded);
   EXPECT_EQ(welded.size(), 3u);
   EXPECT_EQ(remap[0], remap[1]);
   EXPECT_EQ(remap[0], remap[4]);
@@ -49,7 +51,7 @@ TEST(Weld, CopiesAndClustersWeldLikeTheOrderedGreedyPass) {
   pts.push_back({-0.0, 0.5, 0.5});
   std::shuffle(pts.begin(), pts.end(), rng);
   std::vector<Vec3> welded;
-  const auto remap = prep::weld_points(pts, tol, welded);
+  const auto remap = mesh::weld_points(pts, tol, welded);
   ASSERT_EQ(remap.size(), pts.size());
   uint32_t next = 0;
   for (size_t i = 0; i < pts.size(); ++i) {
@@ -129,7 +131,7 @@ TEST(Orient, FlippedTrianglesOfAClosedBoxComeOutConsistentAndOutward) {
   std::swap(m.triangles[3][1], m.triangles[3][2]);
   std::swap(m.triangles[7][1], m.triangles[7][2]);
   ASSERT_FALSE(diagnose(m, false).oriented);
-  prep::orient_pieces(m.points, m.triangles);
+  mesh::orient_pieces(m.points, m.triangles);
   MeshDiagnostics d = diagnose(m, false);
   EXPECT_TRUE(d.oriented);
   EXPECT_TRUE(d.outward);
@@ -139,7 +141,7 @@ TEST(Orient, AnInsideOutBoxIsTurnedOver) {
   Mesh m = box_mesh({0, 0, 0}, {1, 1, 1});
   for (auto& t : m.triangles) std::swap(t[1], t[2]);
   ASSERT_LT(diagnose(m, false).volume, 0);
-  EXPECT_EQ(prep::orient_pieces(m.points, m.triangles), 12u);
+  EXPECT_EQ(mesh::orient_pieces(m.points, m.triangles), 12u);
   EXPECT_GT(diagnose(m, false).volume, 0);
 }
 

@@ -11,7 +11,7 @@
 
 #include "check/intersections.h"
 #include "common/vec.h"
-#include "fit/surface_index.h"
+#include "mesh/surface_index.h"
 #include "vdbwrap/io.h"
 #include "post/nearest_memo.h"
 #include "post/quality.h"
@@ -108,7 +108,7 @@ Mesh room_corner(int n, double size) {
 
 // The largest distance from points spread over the fill to the substrate.
 double fill_deviation(const std::vector<Vec3>& p, const std::vector<Tri>& tris, const Substrate& sub) {
-  fit::SurfaceIndex index(sub.points, sub.triangles);
+  mesh::SurfaceIndex index(sub.points, sub.triangles);
   double worst = 0;
   for (const Tri& t : tris)
     for (double u : {0.2, 0.6})
@@ -122,13 +122,13 @@ double fill_deviation(const std::vector<Vec3>& p, const std::vector<Tri>& tris, 
 // Everything the remesher needs around a surface wrapping `input` (world frame).
 struct Setup {
   prep::PreparedInput prepared;
-  std::unique_ptr<fit::SurfaceIndex> index;
+  std::unique_ptr<mesh::SurfaceIndex> index;
   QualityReference ref;
 };
 std::unique_ptr<Setup> setup_for(const Mesh& input, double finest) {
   auto s = std::make_unique<Setup>();
   s->prepared = prep::prepare(input, prep::PrepareParams{}, nullptr);
-  s->index = std::make_unique<fit::SurfaceIndex>(s->prepared.mesh.points, s->prepared.mesh.triangles);
+  s->index = std::make_unique<mesh::SurfaceIndex>(s->prepared.mesh.points, s->prepared.mesh.triangles);
   s->ref.input = s->index.get();
   s->ref.origin = s->prepared.origin;
   s->ref.finest_size = finest;
@@ -386,9 +386,9 @@ TEST(Quality, DeviationMemoAnswersKnownTrianglesAndMeasuresChangedOnes) {
 
 TEST(Quality, NearestMemoAnswersAsTheIndexDoesWhateverWasAskedBefore) {
   const Mesh sphere = icosphere_mesh(1.0, 3);
-  const fit::SurfaceIndex index(sphere.points, sphere.triangles);
+  const mesh::SurfaceIndex index(sphere.points, sphere.triangles);
   const NearestMemo memo(index);
-  auto same = [](const fit::SurfaceIndex::Hit& a, const fit::SurfaceIndex::Hit& b) {
+  auto same = [](const mesh::SurfaceIndex::Hit& a, const mesh::SurfaceIndex::Hit& b) {
     return a.triangle == b.triangle && a.squared_distance == b.squared_distance && a.point == b.point && a.normal == b.normal;
   };
   std::vector<Vec3> points;
@@ -400,7 +400,7 @@ TEST(Quality, NearestMemoAnswersAsTheIndexDoesWhateverWasAskedBefore) {
     for (const Vec3& q : points) {
       // A radius too small first (a miss is remembered), then larger ones, then all space.
       for (double radius : {1e-4, 0.05, 0.3}) {
-        fit::SurfaceIndex::Hit from_memo, from_index;
+        mesh::SurfaceIndex::Hit from_memo, from_index;
         const bool found_memo = memo.closest_within(q, radius, from_memo), found_index = index.closest_within(q, radius, from_index);
         ASSERT_EQ(found_memo, found_index) << "radius " << radius;
         if (found_index) EXPECT_TRUE(same(from_memo, from_index));
@@ -409,11 +409,11 @@ TEST(Quality, NearestMemoAnswersAsTheIndexDoesWhateverWasAskedBefore) {
     }
   // Known nearest farther than a later, smaller radius: not found, as with the index.
   const Vec3 far{0, 0, 1.5};
-  fit::SurfaceIndex::Hit hit;
+  mesh::SurfaceIndex::Hit hit;
   EXPECT_TRUE(memo.closest_within(far, 1.0, hit));
   EXPECT_FALSE(memo.closest_within(far, 0.1, hit));
   // No input at all: the index's "none" hit.
-  const fit::SurfaceIndex empty({}, {});
+  const mesh::SurfaceIndex empty({}, {});
   const NearestMemo empty_memo(empty);
   for (int pass = 0; pass < 2; ++pass) EXPECT_EQ(empty_memo.closest(far).triangle, UINT32_MAX);
 }

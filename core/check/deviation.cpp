@@ -11,7 +11,7 @@
 #include "common/edge_key.h"
 #include "common/exact_weld.h"
 #include "common/vec.h"
-#include "fit/surface_index.h"
+#include "mesh/surface_index.h"
 #include "post/quality.h"
 
 namespace vdbwrap {
@@ -57,7 +57,7 @@ class OrientedReference {
   DistanceSign sign() const { return sign_; }
 
   // +1 or -1: the side of q at its nearest point `hit` (+ where the normals point); 0 on it.
-  double side(const Vec3& q, const fit::SurfaceIndex::Hit& hit) const {
+  double side(const Vec3& q, const mesh::SurfaceIndex::Hit& hit) const {
     const Vec3 d = q - hit.point;
     if (norm2(d) == 0) return 0;
     return dot(d, pseudo_normal(hit.point, hit.triangle)) < 0 ? -1.0 : 1.0;
@@ -211,14 +211,14 @@ DeviationField measure_deviation(const Mesh& surface, const Mesh& reference, con
   const OrientedReference ref(reference);
   field.sign = ref.sign();
   if (ref.empty() || surface.points.empty()) return field;
-  const fit::SurfaceIndex index(ref.points(), ref.triangles());
+  const mesh::SurfaceIndex index(ref.points(), ref.triangles());
   const double outward = ref.orientation();
   const bool signed_field = field.sign != DistanceSign::Unsigned;
   tbb::parallel_for(tbb::blocked_range<size_t>(0, surface.points.size(), 512), [&](const tbb::blocked_range<size_t>& r) {
     uint32_t hint = UINT32_MAX;  // neighbouring vertices tend to share a nearest triangle
     for (size_t i = r.begin(); i != r.end(); ++i) {
       const Vec3& q = surface.points[i];
-      const fit::SurfaceIndex::Hit hit = index.closest(q, hint);
+      const mesh::SurfaceIndex::Hit hit = index.closest(q, hint);
       hint = hit.triangle;
       const double d = std::sqrt(hit.squared_distance);
       field.distance[i] = signed_field ? outward * ref.side(q, hit) * d : d;

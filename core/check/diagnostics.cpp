@@ -17,7 +17,6 @@
 #include "common/fill_vector.h"
 #include "common/radix_sort.h"
 #include "common/vec.h"
-#include "prep/prepare.h"
 #include "vdbwrap/check.h"
 
 namespace vdbwrap {

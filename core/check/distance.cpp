@@ -7,7 +7,7 @@
 
 #include "check/distance_stats.h"
 #include "common/vec.h"
-#include "fit/surface_index.h"
+#include "mesh/surface_index.h"
 #include "vdbwrap/check.h"
 
 namespace vdbwrap {
@@ -56,7 +56,7 @@ DistanceStats distances_to(const std::vector<Vec3>& samples, const Mesh& to, dou
   DistanceStats s;
   s.diagonal = diagonal;
   if (samples.empty() || to.triangles.empty()) return s;
-  fit::SurfaceIndex index(to.points, to.triangles);
+  mesh::SurfaceIndex index(to.points, to.triangles);
   std::vector<double> dist(samples.size());
   tbb::parallel_for(tbb::blocked_range<size_t>(0, samples.size(), 1024), [&](const tbb::blocked_range<size_t>& r) {
     for (size_t i = r.begin(); i != r.end(); ++i) dist[i] = std::sqrt(index.squared_distance(samples[i]));

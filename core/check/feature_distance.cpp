@@ -4,7 +4,9 @@
 #include "check/distance_stats.h"
 #include "common/edge_triangles.h"
 #include "common/vec.h"
-#include "prep/prepare.h"
+#include "mesh/feature_edges.h"
+#include "mesh/orient.h"
+#include "mesh/weld.h"
 #include "vdbwrap/check.h"
 
 namespace vdbwrap {
@@ -17,7 +19,7 @@ DistanceStats sharp_edge_distance(const Mesh& input, const Mesh& surface, double
   if (input.triangles.empty() || surface.triangles.empty()) return s;
   // Sharp edges as the pipeline sees them: welded, degenerate triangles ignored.
   std::vector<Vec3> welded;
-  auto remap = prep::weld_points(input.points, 1e-7 * s.diagonal, welded);
+  auto remap = mesh::weld_points(input.points, 1e-7 * s.diagonal, welded);
   std::vector<Tri> tris;
   std::vector<Vec3> normals;
   for (const Tri& t : input.triangles) {
@@ -30,13 +32,13 @@ DistanceStats sharp_edge_distance(const Mesh& input, const Mesh& surface, double
   // Orientation matters for the dihedral angle: make it consistent first. One edge listing
   // serves both (flips change no triangle's edges), as in prepare.
   const EdgeTriangles listing = edge_triangles(tris);
-  prep::orient_pieces(welded, tris, &listing);
+  mesh::orient_pieces(welded, tris, &listing);
   for (size_t t = 0; t < tris.size(); ++t) normals[t] = normalized(area_vector(welded[tris[t][0]], welded[tris[t][1]], welded[tris[t][2]]));
-  auto edges = prep::find_feature_edges(welded, tris, normals, angle_deg, &listing);
+  auto edges = mesh::find_feature_edges(welded, tris, normals, angle_deg, &listing);
   const double spacing = spacing_fraction * s.diagonal;
   std::vector<Vec3> samples;
   for (const auto& e : edges) {
-    if (e.kind != prep::FeatureKind::Sharp) continue;
+    if (e.kind != mesh::FeatureKind::Sharp) continue;
     const Vec3 &a = welded[e.a], &b = welded[e.b];
     size_t k = std::max<size_t>(1, size_t(std::ceil(norm(b - a) / spacing)));
     for (size_t i = 0; i <= k; ++i) samples.push_back(lerp(a, b, double(i) / double(k)));

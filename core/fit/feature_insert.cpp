@@ -102,7 +102,7 @@ Box3 box_of(const Corners& c) {
 // order, whatever the number of threads.
 class Inserter {
  public:
-  Inserter(FittedSurface& s, const SurfaceIndex& input, const Vec3& origin, const FeatureInsertParams& prm)
+  Inserter(FittedSurface& s, const mesh::SurfaceIndex& input, const Vec3& origin, const FeatureInsertParams& prm)
       : s_(s), p_(s.points), t_(s.triangles), input_(input), origin_(origin), prm_(prm),
         buckets_(s.points, s.triangles, std::max(prm.max_move, 1e-300)),
         inv_change_cell_(1.0 / std::max(prm.max_move, 1e-300)) {
@@ -592,7 +592,7 @@ class Inserter {
   FittedSurface& s_;
   std::vector<Vec3>& p_;
   std::vector<Tri>& t_;
-  const SurfaceIndex& input_;
+  const mesh::SurfaceIndex& input_;
   mutable ConcurrentMemo<BitwiseKey<6>, bool, BitwiseKeyHash> in_view_known_;
   mutable ConcurrentMemo<BitwiseKey<9>, bool, BitwiseKeyHash> touches_known_;
   mutable ConcurrentMemo<BitwiseKey<9>, double, BitwiseKeyHash> deviation_known_;
@@ -615,7 +615,7 @@ class Inserter {
 
 }  // namespace
 
-FeatureInsertStats insert_feature_nodes(FittedSurface& surface, const std::vector<FeatureCurve>& curves, const SurfaceIndex& input,
+FeatureInsertStats insert_feature_nodes(FittedSurface& surface, const std::vector<FeatureCurve>& curves, const mesh::SurfaceIndex& input,
                                         const Vec3& origin, const FeatureInsertParams& params) {
   FeatureInsertStats stats;
   if (curves.empty() || surface.triangles.empty() || !(params.spacing > 0)) return stats;

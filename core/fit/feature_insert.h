@@ -8,7 +8,7 @@
 
 #include "fit/features.h"
 #include "fit/fit_surface.h"
-#include "fit/surface_index.h"
+#include "mesh/surface_index.h"
 
 namespace vdbwrap::fit {
 
@@ -35,7 +35,7 @@ struct FeatureInsertStats {
 // keeps it valid: every change is checked against its neighbourhood and undone when it makes
 // a degenerate or intersecting triangle, flips one, or touches the input. New and moved nodes
 // are marked snapped, and their edges along the curve are added to the feature edges.
-FeatureInsertStats insert_feature_nodes(FittedSurface& surface, const std::vector<FeatureCurve>& curves, const SurfaceIndex& input,
+FeatureInsertStats insert_feature_nodes(FittedSurface& surface, const std::vector<FeatureCurve>& curves, const mesh::SurfaceIndex& input,
                                         const Vec3& origin, const FeatureInsertParams& params);
 
 }  // namespace vdbwrap::fit

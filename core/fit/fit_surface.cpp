@@ -70,7 +70,7 @@ class NodeProximity {
 // Diagonal (0-2 or 1-3) of a quad whose midpoint lies nearer the input: the split that
 // deviates least from it. A split that makes a degenerate triangle is never chosen.
 // `foot`: each node's nearest input triangle when it was projected (a hint: see closest()).
-bool split_along_02(const std::array<uint32_t, 4>& q, const std::vector<Vec3>& p, const SurfaceIndex& input, double min_area2,
+bool split_along_02(const std::array<uint32_t, 4>& q, const std::vector<Vec3>& p, const mesh::SurfaceIndex& input, double min_area2,
                     const std::vector<uint32_t>& foot) {
   auto area2 = [&](uint32_t a, uint32_t b, uint32_t c) { return norm(area_vector(p[a], p[b], p[c])); };
   double min02 = std::min(area2(q[0], q[1], q[2]), area2(q[0], q[2], q[3]));
@@ -81,7 +81,7 @@ bool split_along_02(const std::array<uint32_t, 4>& q, const std::vector<Vec3>& p
   // The other midpoint is only compared with it: a query bounded a little beyond d02 finds
   // its exact distance when it is that near (the two may then tie), and else 0-2 is nearer.
   // (The bounded query prunes more: choosing diagonals is a visible part of the projection.)
-  SurfaceIndex::Hit near13;
+  mesh::SurfaceIndex::Hit near13;
   if (!input.closest_within((p[q[1]] + p[q[3]]) * 0.5, std::sqrt(d02 * (1 + 1e-9)), near13, foot[q[1]])) return true;
   const double d13 = near13.squared_distance;
   if (std::fabs(d02 - d13) <= 1e-12 * (d02 + d13)) return min02 >= min13;
@@ -90,7 +90,7 @@ bool split_along_02(const std::array<uint32_t, 4>& q, const std::vector<Vec3>& p
 
 }  // namespace
 
-FittedSurface fit_to_input(const extract::LatticeSurface& surf, const grid::AdaptiveGrid& g, const SurfaceIndex& input,
+FittedSurface fit_to_input(const extract::LatticeSurface& surf, const grid::AdaptiveGrid& g, const mesh::SurfaceIndex& input,
                            const std::vector<FeatureCurve>& curves, const Vec3& origin, const WrapParams& params,
                            ProgressSink* progress) {
   const double hf = g.fine_size();

@@ -7,7 +7,7 @@
 
 #include "extract/extract_surface.h"
 #include "fit/features.h"
-#include "fit/surface_index.h"
+#include "mesh/surface_index.h"
 #include "grid/adaptive_grid.h"
 #include "vdbwrap/wrap.h"
 
@@ -37,7 +37,7 @@ std::vector<uint32_t> invalid_triangles(const std::vector<Vec3>& points, const s
 
 // `origin` turns the local frame of the grid and the index into output coordinates.
 // `curves`: feature curves to snap to (empty: no snapping).
-FittedSurface fit_to_input(const extract::LatticeSurface& surface, const grid::AdaptiveGrid& grid, const SurfaceIndex& input,
+FittedSurface fit_to_input(const extract::LatticeSurface& surface, const grid::AdaptiveGrid& grid, const mesh::SurfaceIndex& input,
                            const std::vector<FeatureCurve>& curves, const Vec3& origin, const WrapParams& params,
                            ProgressSink* progress);
 

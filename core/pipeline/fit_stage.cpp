@@ -56,7 +56,7 @@ void coarsen(WrapRun& run) {
 
 void fit_surface(WrapRun& run) {
   WrapReport& report = run.report;
-  const fit::SurfaceIndex& index = run.index();
+  const mesh::SurfaceIndex& index = run.index();
   StageTimer timer("project", report.stages);
   const std::vector<fit::FeatureCurve>& curves = run.curves_builder->get();
   for (const fit::FeatureCurve& c : curves) {  // WrapResult::feature_curves, in model coordinates

@@ -77,8 +77,8 @@ void build_volume(WrapRun& run) {
 
   // The nearest-point index: for the clearance of gap closure and leaks, then projection. Its
   // build is serial in part (CGAL's tree): it overlaps the refinement and the flood fill.
-  run.index_builder = std::make_unique<InBackground<std::unique_ptr<fit::SurfaceIndex>>>(
-      [&prepared] { return std::make_unique<fit::SurfaceIndex>(prepared.mesh.points, prepared.mesh.triangles); });
+  run.index_builder = std::make_unique<InBackground<std::unique_ptr<mesh::SurfaceIndex>>>(
+      [&prepared] { return std::make_unique<mesh::SurfaceIndex>(prepared.mesh.points, prepared.mesh.triangles); });
   {
     StageTimer timer("refine", report.stages);
     run.refined = grid::build_refined_grid(prepared, refine_criteria(run.params), run.base, run.controls, run.progress);

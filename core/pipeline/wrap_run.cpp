@@ -17,7 +17,7 @@ WrapRun::WrapRun(const Mesh& input_mesh, const WrapParams& wrap_params, Progress
   report.params = params;
 }
 
-const fit::SurfaceIndex& WrapRun::index() {
+const mesh::SurfaceIndex& WrapRun::index() {
   if (!index_ready_) {
     StageTimer timer("index", report.stages);
     index_ready_ = index_builder->get().get();

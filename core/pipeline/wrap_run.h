@@ -12,7 +12,7 @@
 #include "extract/extract_surface.h"
 #include "fit/features.h"
 #include "fit/fit_surface.h"
-#include "fit/surface_index.h"
+#include "mesh/surface_index.h"
 #include "grid/refine.h"
 #include "grid/size_controls.h"
 #include "post/nearest_memo.h"
@@ -47,7 +47,7 @@ struct WrapRun {
   std::vector<grid::Coord> anchors;
   extract::LatticeSurface lattice;
   // Started in the background when their inputs exist, waited for when first needed.
-  std::unique_ptr<InBackground<std::unique_ptr<fit::SurfaceIndex>>> index_builder;
+  std::unique_ptr<InBackground<std::unique_ptr<mesh::SurfaceIndex>>> index_builder;
   std::unique_ptr<InBackground<std::vector<fit::FeatureCurve>>> curves_builder;
   // The fit (stage 3), then the surface stage 4 works on.
   fit::FittedSurface fitted;
@@ -58,7 +58,7 @@ struct WrapRun {
 
   // The nearest-point index of the prepared input; waits for its build the first time (timed
   // as the stage "index": what is left of the build when first needed).
-  const fit::SurfaceIndex& index();
+  const mesh::SurfaceIndex& index();
   // Throws Error(Cancelled) when the caller asked to stop.
   void check_cancel() const;
   // Seconds since the run started.
@@ -69,7 +69,7 @@ struct WrapRun {
   Mesh labelled_surface() const;
 
  private:
-  const fit::SurfaceIndex* index_ready_ = nullptr;
+  const mesh::SurfaceIndex* index_ready_ = nullptr;
 };
 
 }  // namespace vdbwrap::pipeline

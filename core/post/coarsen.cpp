@@ -37,7 +37,7 @@ double min_angle_cos_max(const Vec3& a, const Vec3& b, const Vec3& c) {
 
 class Coarsener {
  public:
-  Coarsener(std::vector<Vec3>& p, std::vector<Tri>& t, const std::vector<uint8_t>& locked, const fit::SurfaceIndex& input,
+  Coarsener(std::vector<Vec3>& p, std::vector<Tri>& t, const std::vector<uint8_t>& locked, const mesh::SurfaceIndex& input,
             const Vec3& origin, const CoarsenParams& params)
       : p_(p), t_(t), locked_(locked), input_(input), origin_(origin), prm_(params),
         buckets_(p, t, std::max(params.max_edge, 1e-300)) {
@@ -711,7 +711,7 @@ class Coarsener {
   std::vector<Vec3>& p_;
   std::vector<Tri>& t_;
   const std::vector<uint8_t>& locked_;
-  const fit::SurfaceIndex& input_;
+  const mesh::SurfaceIndex& input_;
   Vec3 origin_;
   CoarsenParams prm_;
   TriangleBuckets buckets_;
@@ -749,7 +749,7 @@ class Coarsener {
 }  // namespace
 
 CoarsenStats coarsen(std::vector<Vec3>& points, std::vector<Tri>& triangles, const std::vector<uint8_t>& locked,
-                     const fit::SurfaceIndex& input, const Vec3& origin, const CoarsenParams& params, ProgressSink* progress) {
+                     const mesh::SurfaceIndex& input, const Vec3& origin, const CoarsenParams& params, ProgressSink* progress) {
   CoarsenStats stats;
   stats.triangles_before = triangles.size();
   if (progress) progress->progress("coarsen", 0.0, "merging nodes on flat parts of " + std::to_string(triangles.size()) + " triangles");

@@ -11,7 +11,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "fit/surface_index.h"
+#include "mesh/surface_index.h"
 #include "vdbwrap/progress.h"
 
 namespace vdbwrap::post {
@@ -34,6 +34,6 @@ struct CoarsenStats {
 // locked: vertices that must stay (snapped feature nodes). Compacts points and triangles
 // (stats.remap says where each point went).
 CoarsenStats coarsen(std::vector<Vec3>& points, std::vector<Tri>& triangles, const std::vector<uint8_t>& locked,
-                     const fit::SurfaceIndex& input, const Vec3& origin, const CoarsenParams& params, ProgressSink* progress);
+                     const mesh::SurfaceIndex& input, const Vec3& origin, const CoarsenParams& params, ProgressSink* progress);
 
 }  // namespace vdbwrap::post

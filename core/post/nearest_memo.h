@@ -8,15 +8,15 @@
 
 #include "common/bitwise_key.h"
 #include "common/concurrent_memo.h"
-#include "fit/surface_index.h"
+#include "mesh/surface_index.h"
 
 namespace vdbwrap::post {
 
 class NearestMemo {
  public:
-  using Hit = fit::SurfaceIndex::Hit;
-  explicit NearestMemo(const fit::SurfaceIndex& input) : input_(input) {}
-  // As fit::SurfaceIndex's calls of the same names (query points in the index's frame); safe
+  using Hit = mesh::SurfaceIndex::Hit;
+  explicit NearestMemo(const mesh::SurfaceIndex& input) : input_(input) {}
+  // As mesh::SurfaceIndex's calls of the same names (query points in the index's frame); safe
   // to call from several threads at once.
   Hit closest(const Vec3& query) const;
   bool closest_within(const Vec3& query, double radius, Hit& hit) const;
@@ -26,7 +26,7 @@ class NearestMemo {
     uint32_t triangle;   // the nearest, or UINT32_MAX: none within `none_within`
     double none_within;
   };
-  const fit::SurfaceIndex& input_;
+  const mesh::SurfaceIndex& input_;
   mutable ConcurrentMemo<BitwiseKey<3>, Known, BitwiseKeyHash> known_;
 };
 

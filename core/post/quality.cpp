@@ -24,7 +24,7 @@ double angle_deg(const Vec3& u, const Vec3& w) { return std::atan2(norm(cross(u,
 // of its normal cone that points at q (the wrap over a rim is not "perpendicular" to the wall
 // below the rim).
 double deviation_at(const Vec3& q, const Vec3& unit_normal, double reach, const QualityReference& ref) {
-  fit::SurfaceIndex::Hit hit;
+  mesh::SurfaceIndex::Hit hit;
   if (!ref.closest_within(q, reach, hit)) return -1;
   const double d = std::sqrt(hit.squared_distance);
   const Vec3 n = d > 1e-6 * reach ? (q - hit.point) * (1.0 / d) : hit.normal;
@@ -116,7 +116,7 @@ QualityCounts analyse_quality(const std::vector<Vec3>& p, const std::vector<Tri>
     if (ref.feature_samples.empty() || tris.empty()) return out;
     out.state.assign(ref.feature_samples.size(), 0);
     out.nearest.assign(ref.feature_samples.size(), 0);
-    fit::SurfaceIndex surface(p, tris);
+    mesh::SurfaceIndex surface(p, tris);
     const double tolerance = t.feature_tolerance * ref.finest_size;
     tbb::parallel_for(tbb::blocked_range<size_t>(0, ref.feature_samples.size(), 1024), [&](const tbb::blocked_range<size_t>& r) {
       for (size_t i = r.begin(); i != r.end(); ++i) {

@@ -9,7 +9,7 @@
 #include <vector>
 
 #include "common/bitwise_key.h"
-#include "fit/surface_index.h"
+#include "mesh/surface_index.h"
 #include "post/nearest_memo.h"
 #include "prep/prepare.h"
 #include "vdbwrap/params.h"
@@ -31,11 +31,11 @@ enum DefectFlag : uint8_t {
 // What a surface is measured against. Surfaces are in output coordinates; the input, its
 // index and the feature samples in the local frame (local = output - origin).
 struct QualityReference {
-  const fit::SurfaceIndex* input = nullptr;
+  const mesh::SurfaceIndex* input = nullptr;
   const NearestMemo* nearest = nullptr;  // optional: answers input's nearest-point queries from a memo
   // The input's nearest point (local frame), from the memo when there is one.
-  fit::SurfaceIndex::Hit closest(const Vec3& q) const { return nearest ? nearest->closest(q) : input->closest(q); }
-  bool closest_within(const Vec3& q, double radius, fit::SurfaceIndex::Hit& hit) const {
+  mesh::SurfaceIndex::Hit closest(const Vec3& q) const { return nearest ? nearest->closest(q) : input->closest(q); }
+  bool closest_within(const Vec3& q, double radius, mesh::SurfaceIndex::Hit& hit) const {
     return nearest ? nearest->closest_within(q, radius, hit) : input->closest_within(q, radius, hit);
   }
   Vec3 origin{0, 0, 0};

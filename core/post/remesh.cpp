@@ -468,7 +468,7 @@ class Remesher {
     if (reg.old_far < 0) {  // the same for both fills: the first one to get here measures it
       reg.old_far = 0;
       for (const Vec3& q : samples_of(s_.points, old_tris)) {
-        const fit::SurfaceIndex::Hit hit = ref_.closest(q - ref_.origin);
+        const mesh::SurfaceIndex::Hit hit = ref_.closest(q - ref_.origin);
         reg.old_far = std::max(reg.old_far, std::sqrt(hit.squared_distance));
         reg.old_feet.push_back(hit.point + ref_.origin);
       }
@@ -484,7 +484,7 @@ class Remesher {
       const Tri& t = s_.triangles[f];
       after.push_back({local(t[0]), local(t[1]), local(t[2])});
     }
-    fit::SurfaceIndex old_index(s_.points, before), new_index(points, after);
+    mesh::SurfaceIndex old_index(s_.points, before), new_index(points, after);
     Box3 box;
     for (const Tri& t : old_tris)
       for (uint32_t v : t) box.add(s_.points[v]);

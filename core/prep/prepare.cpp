@@ -16,168 +16,11 @@
 #include "common/grid_key.h"
 #include "common/sorted_point_grid.h"
 #include "common/vec.h"
+#include "mesh/orient.h"
+#include "mesh/weld.h"
 #include "vdbwrap/errors.h"
 
 namespace vdbwrap::prep {
-namespace {
-
-// Per point: is another point within the tolerance? In parallel, on a grid of cells much
-// wider than the tolerance, so that most points look in their own cell only. A point that
-// has none is its own weld whatever the order (and no other point's), so only the crowded
-// ones need the ordered pass below: on most inputs none.
-std::vector<uint8_t> crowded_points(const std::vector<Vec3>& points, double tolerance) {
-  const size_t n = points.size();
-  const double tol2 = tolerance * tolerance;
-  const SortedPointGrid grid(points, 1024 * tolerance);
-  std::vector<uint8_t> crowded(n, 0);
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 4096), [&](const tbb::blocked_range<size_t>& r) {
-    for (size_t i = r.begin(); i != r.end(); ++i) {
-      const Vec3& p = points[i];
-      crowded[i] = grid.any_near(p, tolerance, [&](uint32_t j) { return j != i && norm2(points[j] - p) <= tol2; }) ? 1 : 0;
-    }
-  });
-  return crowded;
-}
-
-}  // namespace
-
-std::vector<uint32_t> weld_points(const std::vector<Vec3>& points, double tolerance, std::vector<Vec3>& welded) {
-  // Bit-identical copies first, in parallel (an STL file repeats every point about six
-  // times); then the tolerance, among the distinct points only.
-  std::vector<Vec3> distinct;
-  const std::vector<uint32_t> copy_of = exact_weld(points, distinct);
-  std::vector<uint32_t> distinct_to_welded(distinct.size());
-  welded.clear();
-  if (tolerance > 0) {
-    // In order, each crowded point goes to the first weld within the tolerance (hash grid with
-    // cells of the tolerance: a match can only be in the 27 cells around), or starts one.
-    const std::vector<uint8_t> crowded = crowded_points(distinct, tolerance);
-    const double inv = 1.0 / tolerance, tol2 = tolerance * tolerance;
-    std::unordered_map<GridKey, std::vector<uint32_t>, GridKeyHash> buckets;
-    for (size_t i = 0; i < distinct.size(); ++i) {
-      const Vec3& p = distinct[i];
-      uint32_t found = UINT32_MAX;
-      if (crowded[i]) {
-        const GridKey key = grid_key(p, inv);
-        for (int dx = -1; dx <= 1 && found == UINT32_MAX; ++dx)
-          for (int dy = -1; dy <= 1 && found == UINT32_MAX; ++dy)
-            for (int dz = -1; dz <= 1 && found == UINT32_MAX; ++dz) {
-              auto it = buckets.find({key.x + dx, key.y + dy, key.z + dz});
-              if (it == buckets.end()) continue;
-              for (uint32_t w : it->second)
-                if (norm2(welded[w] - p) <= tol2) {
-                  found = w;
-                  break;
-                }
-            }
-        if (found == UINT32_MAX) buckets[key].push_back(uint32_t(welded.size()));
-      }
-      if (found == UINT32_MAX) {
-        found = uint32_t(welded.size());
-        welded.push_back(p);
-      }
-      distinct_to_welded[i] = found;
-    }
-  } else {
-    welded = distinct;
-    for (size_t i = 0; i < distinct.size(); ++i) distinct_to_welded[i] = uint32_t(i);
-  }
-  std::vector<uint32_t> remap(points.size());
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, points.size(), 8192), [&](const tbb::blocked_range<size_t>& r) {
-    for (size_t i = r.begin(); i != r.end(); ++i) remap[i] = distinct_to_welded[copy_of[i]];
-  });
-  return remap;
-}
-
-size_t orient_pieces(const std::vector<Vec3>& points, std::vector<Tri>& triangles, const EdgeTriangles* edges) {
-  // Triangles meeting at an edge used by exactly two of them must traverse it in opposite
-  // directions; a breadth-first walk flips neighbours that disagree.
-  EdgeTriangles made;
-  const EdgeTriangles& edge_tris = edges ? *edges : (made = edge_triangles(triangles));
-
-  // Per triangle side, in parallel (the edge lookups were most of the walk): the triangle
-  // across it when the edge has exactly two, and whether that one runs the edge the same way.
-  constexpr uint32_t none = UINT32_MAX;
-  std::vector<uint32_t> across(3 * triangles.size(), none);
-  std::vector<uint8_t> same_way(3 * triangles.size(), 0);
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, triangles.size(), 4096), [&](const tbb::blocked_range<size_t>& r) {
-    for (size_t t = r.begin(); t != r.end(); ++t)
-      for (int e = 0; e < 3; ++e) {
-        const uint32_t a = triangles[t][e], b = triangles[t][(e + 1) % 3];
-        const size_t edge = edge_tris.find(edge_key(a, b));
-        if (edge_tris.size(edge) != 2) continue;
-        const uint32_t* nb = edge_tris.begin(edge);
-        const uint32_t n = nb[0] == t ? nb[1] : nb[0];
-        across[3 * t + e] = n;
-        same_way[3 * t + e] = directed_side(triangles[n], a, b) >= 0 ? 1 : 0;
-      }
-  });
-
-  std::vector<int32_t> piece(triangles.size(), -1);
-  std::vector<uint8_t> flip(triangles.size(), 0);
-  std::vector<uint32_t> queue;
-  int32_t pieces = 0;
-  for (uint32_t seed = 0; seed < triangles.size(); ++seed) {
-    if (piece[seed] >= 0) continue;
-    piece[seed] = pieces;
-    queue.assign(1, seed);
-    for (size_t q = 0; q < queue.size(); ++q) {
-      const uint32_t t = queue[q];
-      // A flipped triangle runs its sides backwards, last first.
-      static constexpr int forward[3] = {0, 1, 2}, backward[3] = {2, 1, 0};
-      for (int e : flip[t] ? backward : forward) {
-        const uint32_t n = across[3 * t + e];
-        if (n == none || piece[n] >= 0) continue;
-        piece[n] = pieces;
-        // The neighbour must run the edge the other way from t as t now stands; if it runs
-        // it the same way it disagrees and is flipped.
-        flip[n] = same_way[3 * t + e] ^ flip[t];
-        queue.push_back(n);
-      }
-    }
-    ++pieces;
-  }
-  // Outward: a piece whose signed volume is negative is turned over as a whole.
-  std::vector<double> volume(pieces, 0.0);
-  for (uint32_t t = 0; t < triangles.size(); ++t) {
-    Tri cur = triangles[t];
-    if (flip[t]) std::swap(cur[1], cur[2]);
-    volume[piece[t]] += dot(points[cur[0]], cross(points[cur[1]], points[cur[2]]));
-  }
-  size_t flipped = 0;
-  for (uint32_t t = 0; t < triangles.size(); ++t) {
-    bool f = flip[t] != (volume[piece[t]] < 0 ? 1 : 0);
-    if (f) {
-      std::swap(triangles[t][1], triangles[t][2]);
-      ++flipped;
-    }
-  }
-  return flipped;
-}
-
-std::vector<FeatureEdge> find_feature_edges(const std::vector<Vec3>& points, const std::vector<Tri>& triangles,
-                                            const std::vector<Vec3>& normals, double feature_angle_deg,
-                                            const EdgeTriangles* edges) {
-  (void)points;
-  EdgeTriangles made;
-  const EdgeTriangles& edge_tris = edges ? *edges : (made = edge_triangles(triangles));
-  const double cos_limit = std::cos(feature_angle_deg * M_PI / 180.0);
-  std::vector<FeatureEdge> out;
-  // Keys in increasing order: the edges come out sorted by (a, b).
-  for (size_t i = 0; i < edge_tris.edges(); ++i) {
-    const uint64_t key = edge_tris.keys[i];
-    const uint32_t a = uint32_t(key >> 32), b = uint32_t(key & 0xffffffffu);
-    const uint32_t* tris = edge_tris.begin(i);
-    if (edge_tris.size(i) == 1) {
-      out.push_back({a, b, FeatureKind::Boundary});
-    } else if (edge_tris.size(i) > 2) {
-      out.push_back({a, b, FeatureKind::NonManifold});
-    } else if (dot(normals[tris[0]], normals[tris[1]]) < cos_limit) {
-      out.push_back({a, b, FeatureKind::Sharp});
-    }
-  }
-  return out;
-}
 
 InputIntersections input_intersections(const std::vector<check::TrianglePair>& mesh_pairs,
                                        const std::vector<uint32_t>& input_to_mesh, size_t mesh_triangles) {
@@ -225,7 +68,7 @@ PreparedInput prepare(const Mesh& input, const PrepareParams& params, ProgressSi
     for (size_t i = r.begin(); i != r.end(); ++i) local[i] = from[i] - out.origin;
   });
   std::vector<Vec3> welded;
-  std::vector<uint32_t> remap = weld_points(local, params.weld_tolerance * out.diagonal, welded);
+  std::vector<uint32_t> remap = mesh::weld_points(local, params.weld_tolerance * out.diagonal, welded);
   if (input_weld) {
     std::vector<uint32_t> composed(input.points.size());
     tbb::parallel_for(tbb::blocked_range<size_t>(0, composed.size(), 8192), [&](const tbb::blocked_range<size_t>& r) {
@@ -299,7 +142,7 @@ PreparedInput prepare(const Mesh& input, const PrepareParams& params, ProgressSi
   if (progress) progress->progress("prepare", 0.3, "orienting connected pieces");
   // One edge listing for orienting and for the feature edges: flips change no triangle's edges.
   const EdgeTriangles edges = edge_triangles(m.triangles);
-  out.flipped_triangles = orient_pieces(m.points, m.triangles, &edges);
+  out.flipped_triangles = mesh::orient_pieces(m.points, m.triangles, &edges);
 
   out.normals.resize(m.triangles.size());
   tbb::parallel_for(tbb::blocked_range<size_t>(0, m.triangles.size(), 4096), [&](const tbb::blocked_range<size_t>& r) {
@@ -309,7 +152,7 @@ PreparedInput prepare(const Mesh& input, const PrepareParams& params, ProgressSi
     }
   });
   if (progress) progress->progress("prepare", 0.5, "finding feature edges");
-  out.feature_edges = find_feature_edges(m.points, m.triangles, out.normals, params.feature_angle_deg, &edges);
+  out.feature_edges = mesh::find_feature_edges(m.points, m.triangles, out.normals, params.feature_angle_deg, &edges);
 
   if (progress) progress->progress("prepare", 0.7, "finding self-intersection lines");
   out.intersecting_pairs = check::find_intersecting_pairs(m.points, m.triangles, check::SoupKind::kInput, &edges);

@@ -8,18 +8,16 @@
 #include "check/intersections.h"
 #include "common/edge_triangles.h"
 #include "common/exact_weld.h"
+#include "mesh/feature_edges.h"
 #include "vdbwrap/mesh.h"
 #include "vdbwrap/progress.h"
 #include "vdbwrap/report.h"
 
 namespace vdbwrap::prep {
 
-enum class FeatureKind : uint8_t { Sharp = 1, Boundary = 2, NonManifold = 3 };
-
-struct FeatureEdge {
-  uint32_t a, b;  // vertex indices into PreparedInput::mesh.points
-  FeatureKind kind;
-};
+// The prepared input's feature edges (vertex indices into PreparedInput::mesh.points).
+using mesh::FeatureEdge;
+using mesh::FeatureKind;
 
 // A segment where two input triangles pierce each other (an assembly's junction line).
 struct IntersectionSegment {
@@ -43,19 +41,6 @@ struct PreparedInput {
   std::vector<uint32_t> input_to_mesh;
   size_t dropped_degenerate = 0, dropped_duplicate = 0, welded_vertices = 0, flipped_triangles = 0;
 };
-
-// Merges vertices closer than `tolerance` (model units). Returns the new index of each old point.
-std::vector<uint32_t> weld_points(const std::vector<Vec3>& points, double tolerance, std::vector<Vec3>& welded);
-
-// Makes the orientation consistent across every manifold edge of each connected piece and
-// turns closed-looking pieces outward (positive signed volume). Returns triangles flipped.
-// `edges`: the triangles' edges when known (flipping triangles changes none of them).
-size_t orient_pieces(const std::vector<Vec3>& points, std::vector<Tri>& triangles, const EdgeTriangles* edges = nullptr);
-
-// Sharp (dihedral angle over feature_angle_deg), boundary and non-manifold edges.
-std::vector<FeatureEdge> find_feature_edges(const std::vector<Vec3>& points, const std::vector<Tri>& triangles,
-                                            const std::vector<Vec3>& normals, double feature_angle_deg,
-                                            const EdgeTriangles* edges = nullptr);
 
 // Intersection counts of the input mesh (MeshDiagnostics::intersecting_pairs / _triangles)
 // from the pairs found on the prepared mesh, so the input need not be searched a second

@@ -17,7 +17,7 @@
 #include "common/edge_key.h"
 #include "common/float_round.h"
 #include "common/vec.h"
-#include "fit/surface_index.h"
+#include "mesh/surface_index.h"
 
 namespace vdbwrap::local_repair {
 namespace {
@@ -218,7 +218,7 @@ std::vector<std::vector<uint32_t>> contour_loops(const std::vector<std::pair<uin
 }
 
 Refill refill_region(const std::vector<Vec3>& points, const std::vector<Tri>& triangles, const VertexFaces& faces,
-                     const std::vector<uint32_t>& region, const RefillParams& params, const fit::SurfaceIndex* original) {
+                     const std::vector<uint32_t>& region, const RefillParams& params, const mesh::SurfaceIndex* original) {
   if (region.empty()) return fail("empty region");
   auto in_region = [&](uint32_t t) { return std::binary_search(region.begin(), region.end(), t); };
 
@@ -381,12 +381,12 @@ Refill refill_region(const std::vector<Vec3>& points, const std::vector<Tri>& tr
         for (const Vec3& s : from_patch)
           if (original->squared_distance(s) > bound2) return fail("refill too far from the input");
       } else {
-        fit::SurfaceIndex removed_index(points, removed);
+        mesh::SurfaceIndex removed_index(points, removed);
         for (const Vec3& s : from_patch)
           if (removed_index.squared_distance(s) > bound2) return fail("refill too far from the removed surface");
       }
       // Removed surface -> refill.
-      fit::SurfaceIndex patch_index(patch_points, patch);
+      mesh::SurfaceIndex patch_index(patch_points, patch);
       for (const Vec3& s : samples_on(points, removed))
         if (patch_index.squared_distance(s) > bound2) return fail("removed surface too far from the refill");
     }
@@ -507,7 +507,7 @@ Refill refill_region(const std::vector<Vec3>& points, const std::vector<Tri>& tr
       if (!out.triangles.empty()) {
         std::vector<Vec3> pts = points;
         pts.insert(pts.end(), out.new_points.begin(), out.new_points.end());
-        fit::SurfaceIndex so_far(pts, out.triangles);
+        mesh::SurfaceIndex so_far(pts, out.triangles);
         std::vector<Tri> piece;
         for (uint32_t t : pieces[p].triangles) piece.push_back(triangles[t]);
         near = true;

@@ -12,7 +12,7 @@
 #include "repair/regions.h"
 #include "vdbwrap/mesh.h"
 
-namespace vdbwrap::fit {
+namespace vdbwrap::mesh {
 class SurfaceIndex;
 }
 
@@ -47,6 +47,6 @@ std::vector<std::vector<uint32_t>> contour_loops(const std::vector<std::pair<uin
 
 Refill refill_region(const std::vector<Vec3>& points, const std::vector<Tri>& triangles, const VertexFaces& faces,
                      const std::vector<uint32_t>& region, const RefillParams& params,
-                     const fit::SurfaceIndex* original = nullptr);
+                     const mesh::SurfaceIndex* original = nullptr);
 
 }  // namespace vdbwrap::local_repair

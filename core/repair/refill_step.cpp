@@ -9,14 +9,14 @@
 #include <unordered_map>
 #include <unordered_set>
 
-#include "fit/surface_index.h"
+#include "mesh/surface_index.h"
 #include "repair/judge.h"
 #include "repair/refill.h"
 #include "repair/steps.h"
 
 namespace vdbwrap::local_repair {
 
-void run_refill(Work& w, const RepairParams& params, double max_dev, const fit::SurfaceIndex& original,
+void run_refill(Work& w, const RepairParams& params, double max_dev, const mesh::SurfaceIndex& original,
                 RepairReport& report, ProgressSink* progress, int32_t only, bool fair) {
   std::vector<uint32_t> T = triangles_of(pairs_of_region(w, only));
   RefillParams rp;

@@ -11,7 +11,7 @@
 
 #include "common/float_round.h"
 #include "common/vec.h"
-#include "fit/surface_index.h"
+#include "mesh/surface_index.h"
 #include "repair/steps.h"
 
 namespace vdbwrap::local_repair {
@@ -90,7 +90,7 @@ bool refine_around(Work& w, int32_t r, double h, size_t budget, bool float_coord
 // Part 2 again, region by region, for the regions the plain refill left: refine around the
 // region, refill it (smooth fill first, then flat); kept only when the region comes out free
 // of intersections, else the mesh goes back as it was (no refinement left behind).
-void run_refine_and_refill(Work& w, const RepairParams& params, double max_dev, const fit::SurfaceIndex& original,
+void run_refine_and_refill(Work& w, const RepairParams& params, double max_dev, const mesh::SurfaceIndex& original,
                            size_t regions_found, RepairReport& report, ProgressSink* progress) {
   auto has_pairs = [&](int32_t r) { return !pairs_of_region(w, r).empty(); };
   const size_t budget = std::max<size_t>(20000, 2 * w.tris.size());

@@ -17,7 +17,7 @@
 
 #include "check/intersections.h"
 #include "common/stage_timer.h"
-#include "fit/surface_index.h"
+#include "mesh/surface_index.h"
 #include "prep/check_input.h"
 #include "repair/regions.h"
 #include "repair/report_figures.h"
@@ -94,7 +94,7 @@ struct Pass {
 
 // Step 4, the union of crossing closed bodies (of input regions `regions` only, when given),
 // noting the regions it fixed. `input`: the input surface as it came.
-void unite_bodies(Work& w, const RepairParams& params, const fit::SurfaceIndex& input, const std::set<int32_t>* regions,
+void unite_bodies(Work& w, const RepairParams& params, const mesh::SurfaceIndex& input, const std::set<int32_t>* regions,
                   Pass& pass, RepairReport& report, ProgressSink* progress) {
   StageTimer timer("unite crossing bodies", report.stages);
   check_cancel(progress);
@@ -111,7 +111,7 @@ Pass run_pass(Work& w, const RepairParams& params, const LocalParams& lp, const 
   Pass pass;
   pass.by_union.assign(report.regions_found, 0);
   if (!first.empty()) {
-    fit::SurfaceIndex input(w.origin, local_repair::live_triangles(w));
+    mesh::SurfaceIndex input(w.origin, local_repair::live_triangles(w));
     unite_bodies(w, params, input, &first, pass, report, progress);
   }
   {
@@ -121,7 +121,7 @@ Pass run_pass(Work& w, const RepairParams& params, const LocalParams& lp, const 
   pass.clean_after_local = clean_regions(w, report.regions_found);
   if (!w.pairs.empty() && params.refill_iterations > 0) {
     // The input surface as it came (vertices at their starting places).
-    fit::SurfaceIndex input(w.origin, local_repair::live_triangles(w));
+    mesh::SurfaceIndex input(w.origin, local_repair::live_triangles(w));
     {
       StageTimer timer("remove and refill", report.stages);
       local_repair::run_refill(w, params, report.max_deviation, input, report, progress);

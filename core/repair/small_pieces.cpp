@@ -7,7 +7,7 @@
 #include <vector>
 
 #include "common/vec.h"
-#include "fit/surface_index.h"
+#include "mesh/surface_index.h"
 #include "repair/steps.h"
 
 namespace vdbwrap::local_repair {
@@ -55,7 +55,7 @@ void remove_small_pieces(Work& w, const RepairParams& params, double max_dev, Re
   // A piece goes only when all of it lies within the deviation bound of what stays.
   std::vector<Tri> kept_tris;
   for (uint32_t t : kept) kept_tris.push_back(w.tris[t]);
-  fit::SurfaceIndex rest(w.points, kept_tris);
+  mesh::SurfaceIndex rest(w.points, kept_tris);
   for (const auto& [root, p] : pieces) {
     bool small = p.tris.size() <= size_t(params.small_piece_triangles) && p.area <= params.small_piece_area * total_area;
     if (!(small && p.touched)) continue;

@@ -16,7 +16,7 @@
 #include "vdbwrap/progress.h"
 #include "vdbwrap/repair.h"
 
-namespace vdbwrap::fit {
+namespace vdbwrap::mesh {
 class SurfaceIndex;
 }
 
@@ -36,18 +36,18 @@ void run_local(Work& w, const RepairParams& params, const LocalParams& lp, doubl
 // Part 2: the regions still intersecting (of input region `only`; all when negative) are
 // removed with a ring around them and refilled, within `max_dev` of `original` (the input
 // surface); `fair` false: refined fills only.
-void run_refill(Work& w, const RepairParams& params, double max_dev, const fit::SurfaceIndex& original,
+void run_refill(Work& w, const RepairParams& params, double max_dev, const mesh::SurfaceIndex& original,
                 RepairReport& report, ProgressSink* progress, int32_t only = -1, bool fair = true);
 
 // Part 2 again, region by region, for the regions the plain refill left: refine around the
 // region, refill it; kept only when the region comes out free of intersections.
-void run_refine_and_refill(Work& w, const RepairParams& params, double max_dev, const fit::SurfaceIndex& original,
+void run_refine_and_refill(Work& w, const RepairParams& params, double max_dev, const mesh::SurfaceIndex& original,
                            size_t regions_found, RepairReport& report, ProgressSink* progress);
 
 // Closed bodies still crossing each other are united (of input regions `regions` only, when
 // given); the united solids are added to `solids`. Returns how many groups of closed bodies
 // it tried to unite.
-size_t run_unite(Work& w, const RepairParams& params, double max_dev, const fit::SurfaceIndex& original,
+size_t run_unite(Work& w, const RepairParams& params, double max_dev, const mesh::SurfaceIndex& original,
                  std::vector<std::unique_ptr<SolidTest>>& solids, RepairReport& report,
                  const std::set<int32_t>* regions = nullptr);
 

@@ -19,13 +19,13 @@
 
 #include "common/edge_key.h"
 #include "common/vec.h"
-#include "fit/surface_index.h"
+#include "mesh/surface_index.h"
 #include "repair/steps.h"
 #include "repair/unite.h"
 
 namespace vdbwrap::local_repair {
 
-size_t run_unite(Work& w, const RepairParams& params, double max_dev, const fit::SurfaceIndex& original,
+size_t run_unite(Work& w, const RepairParams& params, double max_dev, const mesh::SurfaceIndex& original,
                  std::vector<std::unique_ptr<SolidTest>>& solids, RepairReport& report,
                  const std::set<int32_t>* regions) {
   size_t tried = 0;
@@ -114,7 +114,7 @@ size_t run_unite(Work& w, const RepairParams& params, double max_dev, const fit:
       continue;
     }
     auto solid = std::make_unique<SolidTest>(u.points, u.triangles);
-    fit::SurfaceIndex united(u.points, u.triangles);
+    mesh::SurfaceIndex united(u.points, u.triangles);
     // Every body keeps some of its surface: a triangle outside every other body (not on one).
     // A body inside the others, even one resting on their faces, is a part the union would lose.
     std::vector<std::unique_ptr<SolidTest>> each;
@@ -165,7 +165,7 @@ size_t run_unite(Work& w, const RepairParams& params, double max_dev, const fit:
     std::vector<Tri> old_tris;
     std::vector<uint32_t> old_of;
     for (uint32_t t : gone) old_tris.push_back(w.tris[t]), old_of.push_back(t);
-    fit::SurfaceIndex old_index(w.points, old_tris);
+    mesh::SurfaceIndex old_index(w.points, old_tris);
     const Work saved = w;
     const uint32_t base = uint32_t(w.points.size());
     w.points.insert(w.points.end(), u.points.begin(), u.points.end());

@@ -1,5 +1,5 @@
 // CGAL AABB tree behind a small interface, so its headers stay in this file.
-#include "fit/surface_index.h"
+#include "mesh/surface_index.h"
 
 #include <CGAL/AABB_traits.h>
 #include <CGAL/AABB_tree.h>
@@ -22,7 +22,7 @@
 #include "common/radix_sort.h"
 #include "common/vec.h"
 
-namespace vdbwrap::fit {
+namespace vdbwrap::mesh {
 namespace {
 // Closest-point constructions need no exactness; Simple_cartesian<double> is the fast choice.
 using K = CGAL::Simple_cartesian<double>;
@@ -735,4 +735,4 @@ bool SurfaceIndex::in_view(const Vec3& from, const Vec3& on, double near) const 
   return !traits.found;
 }
 
-}  // namespace vdbwrap::fit
+}  // namespace vdbwrap::mesh

@@ -1,0 +1,23 @@
+// The feature edges of a triangle mesh: sharp, boundary and non-manifold edges.
+#pragma once
+#include <cstdint>
+#include <vector>
+
+#include "common/edge_triangles.h"
+#include "vdbwrap/mesh.h"
+
+namespace vdbwrap::mesh {
+
+enum class FeatureKind : uint8_t { Sharp = 1, Boundary = 2, NonManifold = 3 };
+
+struct FeatureEdge {
+  uint32_t a, b;  // vertex indices
+  FeatureKind kind;
+};
+
+// Sharp (dihedral angle over feature_angle_deg), boundary and non-manifold edges, sorted by (a, b).
+std::vector<FeatureEdge> find_feature_edges(const std::vector<Vec3>& points, const std::vector<Tri>& triangles,
+                                            const std::vector<Vec3>& normals, double feature_angle_deg,
+                                            const EdgeTriangles* edges = nullptr);
+
+}  // namespace vdbwrap::mesh

@@ -1,0 +1,78 @@
+#include "mesh/orient.h"
+
+#include <tbb/parallel_for.h>
+
+#include <utility>
+
+#include "common/edge_key.h"
+#include "common/vec.h"
+
+namespace vdbwrap::mesh {
+
+size_t orient_pieces(const std::vector<Vec3>& points, std::vector<Tri>& triangles, const EdgeTriangles* edges) {
+  // Triangles meeting at an edge used by exactly two of them must traverse it in opposite
+  // directions; a breadth-first walk flips neighbours that disagree.
+  EdgeTriangles made;
+  const EdgeTriangles& edge_tris = edges ? *edges : (made = edge_triangles(triangles));
+
+  // Per triangle side, in parallel (the edge lookups were most of the walk): the triangle
+  // across it when the edge has exactly two, and whether that one runs the edge the same way.
+  constexpr uint32_t none = UINT32_MAX;
+  std::vector<uint32_t> across(3 * triangles.size(), none);
+  std::vector<uint8_t> same_way(3 * triangles.size(), 0);
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, triangles.size(), 4096), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t t = r.begin(); t != r.end(); ++t)
+      for (int e = 0; e < 3; ++e) {
+        const uint32_t a = triangles[t][e], b = triangles[t][(e + 1) % 3];
+        const size_t edge = edge_tris.find(edge_key(a, b));
+        if (edge_tris.size(edge) != 2) continue;
+        const uint32_t* nb = edge_tris.begin(edge);
+        const uint32_t n = nb[0] == t ? nb[1] : nb[0];
+        across[3 * t + e] = n;
+        same_way[3 * t + e] = directed_side(triangles[n], a, b) >= 0 ? 1 : 0;
+      }
+  });
+
+  std::vector<int32_t> piece(triangles.size(), -1);
+  std::vector<uint8_t> flip(triangles.size(), 0);
+  std::vector<uint32_t> queue;
+  int32_t pieces = 0;
+  for (uint32_t seed = 0; seed < triangles.size(); ++seed) {
+    if (piece[seed] >= 0) continue;
+    piece[seed] = pieces;
+    queue.assign(1, seed);
+    for (size_t q = 0; q < queue.size(); ++q) {
+      const uint32_t t = queue[q];
+      // A flipped triangle runs its sides backwards, last first.
+      static constexpr int forward[3] = {0, 1, 2}, backward[3] = {2, 1, 0};
+      for (int e : flip[t] ? backward : forward) {
+        const uint32_t n = across[3 * t + e];
+        if (n == none || piece[n] >= 0) continue;
+        piece[n] = pieces;
+        // The neighbour must run the edge the other way from t as t now stands; if it runs
+        // it the same way it disagrees and is flipped.
+        flip[n] = same_way[3 * t + e] ^ flip[t];
+        queue.push_back(n);
+      }
+    }
+    ++pieces;
+  }
+  // Outward: a piece whose signed volume is negative is turned over as a whole.
+  std::vector<double> volume(pieces, 0.0);
+  for (uint32_t t = 0; t < triangles.size(); ++t) {
+    Tri cur = triangles[t];
+    if (flip[t]) std::swap(cur[1], cur[2]);
+    volume[piece[t]] += dot(points[cur[0]], cross(points[cur[1]], points[cur[2]]));
+  }
+  size_t flipped = 0;
+  for (uint32_t t = 0; t < triangles.size(); ++t) {
+    bool f = flip[t] != (volume[piece[t]] < 0 ? 1 : 0);
+    if (f) {
+      std::swap(triangles[t][1], triangles[t][2]);
+      ++flipped;
+    }
+  }
+  return flipped;
+}
+
+}  // namespace vdbwrap::mesh
