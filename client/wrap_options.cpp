@@ -116,6 +116,11 @@ void WrapOptions::add_to(CLI::App* cmd, const std::string& threads_help) {
                                   "the report's quality section still counts them")
                          ->group("Surface fit");
   bindings_.push_back({nr, [this](WrapParams& p) { p.remesh = !no_remesh_; }});
+  CLI::Option* sr = cmd->add_flag("--sliver-removal,!--no-sliver-removal", sliver_removal_,
+                                  "Remove the triangles with an angle under 10 degrees left after the rebuilds (edge flips, "
+                                  "collapses and tangential moves, held near the input)")
+                         ->group("Surface fit");
+  bindings_.push_back({sr, [this](WrapParams& p) { p.remove_slivers = sliver_removal_; }});
   bind(cmd, "--threads", cli_.threads, threads_help, [this](WrapParams& p) { p.threads = cli_.threads; })
       ->capture_default_str()
       ->check(CLI::NonNegativeNumber)

@@ -37,6 +37,7 @@ class WrapOptions {
   std::string base_size_ = "1%", volume_ = "outside", gap_closure_, contact_floor_, params_file_;
   std::vector<std::string> control_volumes_, part_sizes_, contact_rules_;
   bool no_features_ = false, no_distances_ = false, no_remesh_ = false;
+  bool sliver_removal_ = false;
 };
 
 }  // namespace vdbwrap::cli

@@ -88,6 +88,7 @@ json params_json(const WrapParams& p) {
               {"coarsen_tolerance", p.coarsen_tolerance},
               {"validity_rounds", p.validity_rounds},
               {"remesh", p.remesh},
+              {"remove_slivers", p.remove_slivers},
               {"float_coordinates", p.float_coordinates}};
 }
 json counts_json(const QualityCounts& q) {

@@ -3,6 +3,7 @@
 #include "common/stage_timer.h"
 #include "pipeline/stage_params.h"
 #include "pipeline/stages.h"
+#include "post/sliver_removal.h"
 
 namespace vdbwrap::pipeline {
 namespace {
@@ -51,6 +52,11 @@ void post_process(WrapRun& run) {
   set_quality_reference(run);
   remesh(run);
   run.check_cancel();
+  if (run.params.remove_slivers) {  // flips, collapses and tangential moves, held to the rebuilds' tolerance
+    StageTimer timer("slivers", run.report.stages);
+    const post::RemeshParams rp = remesh_params(run.params, run.base, run.refined.grid->fine_size());
+    post::remove_slivers(run.surface, run.quality_ref, post::sliver_removal_params(rp.max_deviation, rp.offset, rp.float_coordinates));
+  }
 
   run.result.surface = run.labelled_surface();
   run.quality_ref.nearest = nullptr;  // its memory goes; the final analysis has its own memo

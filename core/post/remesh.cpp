@@ -598,6 +598,13 @@ class Remesher {
       }
       out.triangles.push_back(t);
     }
+    // The traced feature edges whose nodes stay (the rebuilds keep them as constraints).
+    std::vector<uint64_t> kept(feature_edges_.begin(), feature_edges_.end());
+    std::sort(kept.begin(), kept.end());
+    for (uint64_t e : kept) {
+      const uint32_t a = remap[uint32_t(e >> 32)], b = remap[uint32_t(e)];
+      if (a != UINT32_MAX && b != UINT32_MAX) out.feature_edges.push_back({a, b});
+    }
     s_ = std::move(out);
   }
 

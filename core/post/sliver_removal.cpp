@@ -1,0 +1,520 @@
+#include "post/sliver_removal.h"
+
+#include <algorithm>
+#include <cmath>
+#include <unordered_map>
+#include <unordered_set>
+
+#include "check/intersections.h"
+#include "common/closest_point.h"
+#include "common/edge_key.h"
+#include "common/grid_key.h"
+#include "common/float_round.h"
+#include "common/triangle_buckets.h"
+#include "common/vec.h"
+
+namespace vdbwrap::post {
+namespace {
+
+constexpr uint32_t kNone = UINT32_MAX;
+constexpr double kDeg = M_PI / 180.0;
+
+// A change weighed before it is made: triangle slots get new corners (or die), and at most
+// one point moves.
+struct Change {
+  std::vector<uint32_t> slots;
+  std::vector<Tri> tris;     // tris[i] replaces slots[i]
+  std::vector<uint8_t> dies;  // slot i is removed
+  uint32_t moved = kNone;
+  Vec3 to{0, 0, 0};
+  void clear() { slots.clear(), tris.clear(), dies.clear(), moved = kNone; }
+  void add(uint32_t slot, const Tri& t, bool die = false) { slots.push_back(slot), tris.push_back(t), dies.push_back(die); }
+};
+
+class SliverRemover {
+ public:
+  SliverRemover(PostSurface& s, const QualityReference& ref, const SliverRemovalParams& prm)
+      : s_(s), ref_(ref), prm_(prm), buckets_(s.points, s.triangles, bucket_cell(s)) {
+    s_.locked.resize(s_.points.size(), 0);
+    s_.cell_size.resize(s_.points.size(), 0);
+    alive_.assign(s_.triangles.size(), 1);
+    vt_.resize(s_.points.size());
+    for (uint32_t f = 0; f < s_.triangles.size(); ++f)
+      for (uint32_t v : s_.triangles[f]) vt_[v].push_back(f);
+    feature_.resize(s_.points.size());
+    for (const auto& [a, b] : s_.feature_edges) {
+      if (a == b || a >= feature_.size() || b >= feature_.size() || !is_edge(a, b)) continue;
+      if (std::find(feature_[a].begin(), feature_[a].end(), b) == feature_[a].end()) feature_[a].push_back(b), feature_[b].push_back(a);
+    }
+    sample_cell_ = bucket_cell(s_);
+    for (uint32_t i = 0; i < ref_.feature_samples.size(); ++i)
+      samples_[cell_of(ref_.feature_samples[i] + ref_.origin)].push_back(i);
+    cos_flat_ = std::cos(prm_.flat_angle_deg * kDeg);
+    cos_turn_ = std::cos(prm_.max_normal_turn_deg * kDeg);
+  }
+
+  SliverRemovalStats run() {
+    stats_.slivers_before = slivers().size();
+    for (int round = 0; round < prm_.rounds; ++round) {
+      const size_t changes = stats_.flips + stats_.collapses + stats_.moves;
+      for (uint32_t f : slivers()) {
+        if (!alive_[f] || min_angle(f) >= prm_.target_angle_deg) continue;  // changed by an earlier fix
+        fix(f);
+      }
+      // Nodes of the slivers left: a tangential move often opens their angles.
+      std::vector<uint32_t> nodes;
+      for (uint32_t f : slivers())
+        for (uint32_t v : s_.triangles[f]) nodes.push_back(v);
+      std::sort(nodes.begin(), nodes.end());
+      nodes.erase(std::unique(nodes.begin(), nodes.end()), nodes.end());
+      for (uint32_t v : nodes) try_move(v);
+      if (stats_.flips + stats_.collapses + stats_.moves == changes) break;
+    }
+    stats_.slivers_after = slivers().size();
+    if (stats_.flips + stats_.collapses + stats_.moves > 0) compact();
+    return stats_;
+  }
+
+ private:
+  static double bucket_cell(const PostSurface& s) {
+    // Three mean edges: most triangles fall in one or two buckets.
+    double sum = 0;
+    size_t n = 0;
+    for (size_t f = 0; f < s.triangles.size(); f += 7, ++n) sum += norm(s.points[s.triangles[f][1]] - s.points[s.triangles[f][0]]);
+    return n && sum > 0 ? 3 * sum / double(n) : 1.0;
+  }
+
+  bool refuse(const char* why) {
+    ++stats_.refusals[why];
+    return false;
+  }
+
+  GridKey cell_of(const Vec3& p) const {
+    return {int64_t(std::floor(p[0] / sample_cell_)), int64_t(std::floor(p[1] / sample_cell_)), int64_t(std::floor(p[2] / sample_cell_))};
+  }
+
+  // The input's sharp edges near the change stay as near the surface as they were (or within
+  // the feature tolerance): each sample within reach of the old triangles is as near the new ones.
+  bool keeps_sharp_edges(const Change& c, const std::vector<check::Corners>& made_at) const {
+    if (samples_.empty()) return true;
+    Box3 box;
+    for (uint32_t f : c.slots)
+      for (uint32_t v : s_.triangles[f]) box.add(s_.points[v]);
+    const double reach = 4 * prm_.feature_tolerance;
+    const GridKey lo = cell_of(box.lo - Vec3{reach, reach, reach}), hi = cell_of(box.hi + Vec3{reach, reach, reach});
+    for (int64_t x = lo.x; x <= hi.x; ++x)
+      for (int64_t y = lo.y; y <= hi.y; ++y)
+        for (int64_t z = lo.z; z <= hi.z; ++z) {
+          const auto it = samples_.find(GridKey{x, y, z});
+          if (it == samples_.end()) continue;
+          for (uint32_t i : it->second) {
+            const Vec3 q = ref_.feature_samples[i] + ref_.origin;
+            if (box.squared_distance(q) > reach * reach) continue;
+            double before = INFINITY, after = INFINITY;
+            for (uint32_t f : c.slots) {
+              const Tri& o = s_.triangles[f];
+              before = std::min(before, norm2(q - closest_on_triangle(q, s_.points[o[0]], s_.points[o[1]], s_.points[o[2]])));
+            }
+            before = std::sqrt(before);
+            if (before > reach) continue;  // held by other triangles, or out of reach
+            for (const auto& at : made_at) after = std::min(after, norm2(q - closest_on_triangle(q, at[0], at[1], at[2])));
+            if (std::sqrt(after) > std::max(before, prm_.feature_tolerance)) return false;
+          }
+        }
+    return true;
+  }
+
+  Vec3 at(uint32_t v, const Change& c) const { return v == c.moved ? c.to : s_.points[v]; }
+
+  double min_angle(uint32_t f) const {
+    const Tri& t = s_.triangles[f];
+    return min_angle_deg(s_.points[t[0]], s_.points[t[1]], s_.points[t[2]]);
+  }
+
+  // Live triangles under the target angle, the worst first.
+  std::vector<uint32_t> slivers() const {
+    std::vector<std::pair<double, uint32_t>> bad;
+    for (uint32_t f = 0; f < s_.triangles.size(); ++f) {
+      if (!alive_[f]) continue;
+      const double a = min_angle(f);
+      if (a < prm_.target_angle_deg) bad.push_back({a, f});
+    }
+    std::sort(bad.begin(), bad.end());
+    std::vector<uint32_t> out;
+    for (const auto& b : bad) out.push_back(b.second);
+    return out;
+  }
+
+  // A node that must not move or vanish: snapped onto a feature curve, or on a traced feature edge.
+  bool fixed(uint32_t v) const { return s_.locked[v] || !feature_[v].empty(); }
+  bool feature_edge(uint32_t a, uint32_t b) const {
+    return std::find(feature_[a].begin(), feature_[a].end(), b) != feature_[a].end();
+  }
+  bool is_edge(uint32_t a, uint32_t b) const {
+    for (uint32_t f : vt_[a]) {
+      const Tri& t = s_.triangles[f];
+      if (t[0] == b || t[1] == b || t[2] == b) return true;
+    }
+    return false;
+  }
+
+  void neighbours(uint32_t v, std::vector<uint32_t>& out) const {
+    out.clear();
+    for (uint32_t f : vt_[v])
+      for (uint32_t w : s_.triangles[f])
+        if (w != v) out.push_back(w);
+    std::sort(out.begin(), out.end());
+    out.erase(std::unique(out.begin(), out.end()), out.end());
+  }
+
+  // The two triangles on edge (a, b): the one with a -> b first. False unless there are exactly two.
+  bool edge_triangles(uint32_t a, uint32_t b, uint32_t& ab, uint32_t& ba) const {
+    ab = ba = kNone;
+    int count = 0;
+    for (uint32_t f : vt_[a]) {
+      const Tri& t = s_.triangles[f];
+      for (int i = 0; i < 3; ++i) {
+        if (t[i] == a && t[(i + 1) % 3] == b) ab = f, ++count;
+        if (t[i] == b && t[(i + 1) % 3] == a) ba = f, ++count;
+      }
+    }
+    return count == 2 && ab != kNone && ba != kNone;
+  }
+
+  static uint32_t third(const Tri& t, uint32_t a, uint32_t b) {
+    for (uint32_t v : t)
+      if (v != a && v != b) return v;
+    return kNone;
+  }
+
+  // The input's nearest point to q (output frame), the node placed the wrap's offset off it on
+  // q's side; q itself when the input is not near (a bridge over a gap stays a bridge).
+  Vec3 onto_input(const Vec3& q, double cell) const {
+    decltype(ref_.closest(q)) hit;  // the index's Hit
+    if (!ref_.closest_within(q - ref_.origin, 0.5 * cell, hit)) return q;
+    const Vec3 foot = hit.point + ref_.origin;
+    const double d = norm(q - foot);
+    Vec3 p = d > 1e-9 * cell ? foot + (q - foot) * (std::min(prm_.offset, d) / d) : foot;
+    return prm_.float_coordinates ? round_to_float(p) : p;
+  }
+
+  double distance_to_input(const Vec3& q) const { return std::sqrt(ref_.closest(q - ref_.origin).squared_distance); }
+
+  struct Spread {
+    double worst = 0, sum = 0;
+    size_t n = 0;
+  };
+  // Distances to the input of a triangle's centroid and edge midpoints.
+  void sample(const Vec3& a, const Vec3& b, const Vec3& c, Spread& s) const {
+    for (const Vec3& q : {(a + b + c) * (1.0 / 3.0), (a + b) * 0.5, (b + c) * 0.5, (c + a) * 0.5}) {
+      const double d = distance_to_input(q);
+      s.worst = std::max(s.worst, d), s.sum += d, ++s.n;
+    }
+  }
+
+  // Is the change an improvement that keeps the surface valid and near the input?
+  bool acceptable(const Change& c) {
+    double old_min = 180, new_min = 180;
+    Spread old_d, new_d;
+    std::vector<Tri> made;
+    std::vector<check::Corners> made_at;
+    // The patch's normal (area-weighted: slivers hardly count), and how far its well-shaped
+    // triangles are from it. A sliver's own normal says little: a new triangle in its slot is
+    // held to the patch's.
+    Vec3 patch{0, 0, 0};
+    for (uint32_t f : c.slots) {
+      const Tri& o = s_.triangles[f];
+      patch = patch + area_vector(s_.points[o[0]], s_.points[o[1]], s_.points[o[2]]);
+    }
+    patch = normalized(patch);
+    double patch_cos = cos_turn_;
+    for (uint32_t f : c.slots)
+      if (min_angle(f) >= prm_.target_angle_deg) {
+        const Tri& o = s_.triangles[f];
+        patch_cos = std::min(patch_cos, dot(patch, normalized(area_vector(s_.points[o[0]], s_.points[o[1]], s_.points[o[2]]))));
+      }
+    for (size_t i = 0; i < c.slots.size(); ++i) {
+      const Tri& o = s_.triangles[c.slots[i]];
+      const Vec3 &oa = s_.points[o[0]], &ob = s_.points[o[1]], &oc = s_.points[o[2]];
+      const double old_angle = min_angle_deg(oa, ob, oc);
+      old_min = std::min(old_min, old_angle);
+      sample(oa, ob, oc, old_d);
+      if (c.dies[i]) continue;
+      const Tri& t = c.tris[i];
+      const check::Corners at = {this->at(t[0], c), this->at(t[1], c), this->at(t[2], c)};
+      if (check::triangle_is_degenerate(at, t)) return refuse("degenerate");
+      const Vec3 n_new = normalized(area_vector(at[0], at[1], at[2]));
+      if (old_angle >= prm_.target_angle_deg ? dot(normalized(area_vector(oa, ob, oc)), n_new) < cos_turn_
+                                             : dot(patch, n_new) < std::min(cos_turn_, patch_cos))
+        return refuse("turns");
+      new_min = std::min(new_min, min_angle_deg(at[0], at[1], at[2]));
+      made.push_back(t), made_at.push_back(at);
+    }
+    if (new_min < old_min + prm_.min_gain_deg) return refuse("no gain");
+    for (size_t i = 0; i < made.size(); ++i) sample(made_at[i][0], made_at[i][1], made_at[i][2], new_d);
+    if (new_d.worst > std::max(prm_.max_deviation, old_d.worst)) return refuse("far");
+    // On average no farther from the input than before (a tenth of the bound for rounding).
+    if (new_d.n && new_d.sum / double(new_d.n) > old_d.sum / double(std::max<size_t>(1, old_d.n)) + 0.1 * prm_.max_deviation)
+      return refuse("farther on average");
+    if (!keeps_sharp_edges(c, made_at)) return refuse("sharp edge farther");
+    // No new triangle meets another: among themselves, then the rest of the surface.
+    for (size_t i = 0; i < made.size(); ++i)
+      for (size_t j = i + 1; j < made.size(); ++j)
+        if (check::triangle_pair_intersects(made_at[i], made[i], made_at[j], made[j])) return refuse("folds");
+    std::unordered_set<uint32_t> replaced(c.slots.begin(), c.slots.end());
+    for (size_t i = 0; i < made.size(); ++i) {
+      Box3 box;
+      for (const Vec3& p : made_at[i]) box.add(p);
+      bool hit = false;
+      buckets_.for_each_in_box(box, [&](uint32_t g) {
+        if (hit || !alive_[g] || replaced.count(g)) return;
+        const Tri& o = s_.triangles[g];
+        const check::Corners og = {s_.points[o[0]], s_.points[o[1]], s_.points[o[2]]};
+        hit = check::triangle_pair_intersects(made_at[i], made[i], og, o);
+      });
+      if (hit) return refuse("intersects");
+    }
+    return true;
+  }
+
+  void apply(const Change& c) {
+    if (c.moved != kNone) s_.points[c.moved] = c.to;
+    for (size_t i = 0; i < c.slots.size(); ++i) {
+      const uint32_t f = c.slots[i];
+      for (uint32_t v : s_.triangles[f]) {
+        auto& list = vt_[v];
+        list.erase(std::remove(list.begin(), list.end(), f), list.end());
+      }
+      if (c.dies[i]) {
+        alive_[f] = 0;
+        continue;
+      }
+      s_.triangles[f] = c.tris[i];
+      for (uint32_t v : c.tris[i]) vt_[v].push_back(f);
+      buckets_.move(f, true);
+    }
+  }
+
+  // A sliver is fixed by the first operation that passes: a cap (an angle over 100 degrees)
+  // by flipping its longest edge first, a needle by collapsing its shortest edge first.
+  void fix(uint32_t f) {
+    const Tri t = s_.triangles[f];
+    std::array<std::pair<double, int>, 3> edges;  // length of edge (t[i], t[i+1]), i
+    for (int i = 0; i < 3; ++i) edges[i] = {norm2(s_.points[t[(i + 1) % 3]] - s_.points[t[i]]), i};
+    std::sort(edges.begin(), edges.end());
+    const bool cap = edges[2].first > edges[0].first + edges[1].first - 2 * std::cos(100 * kDeg) * std::sqrt(edges[0].first * edges[1].first);
+    auto flip_at = [&](int k) { return try_flip(t[edges[k].second], t[(edges[k].second + 1) % 3]); };
+    auto collapse_at = [&](int k) { return try_collapse(t[edges[k].second], t[(edges[k].second + 1) % 3]); };
+    if (cap) {
+      if (flip_at(2) || collapse_at(0) || collapse_at(1)) return;
+    } else {
+      if (collapse_at(0) || flip_at(2) || flip_at(1) || collapse_at(1)) return;
+    }
+  }
+
+  // Distance from p to the segment ab.
+  static double to_segment(const Vec3& p, const Vec3& a, const Vec3& b) {
+    double t;
+    return norm(p - closest_on_segment(a, b, p, t));
+  }
+
+  // Edge (a, b) flipped. Where its triangles are nearly flat; or where one of them is a cap
+  // whose apex lies almost on the edge (the flip then moves the surface by that little, even on
+  // a sharp edge, and a traced edge a b runs on through the apex).
+  bool try_flip(uint32_t a, uint32_t b) {
+    uint32_t f1, f2;
+    if (!edge_triangles(a, b, f1, f2)) return false;
+    const uint32_t c = third(s_.triangles[f1], a, b), d = third(s_.triangles[f2], a, b);
+    if (c == d) return false;
+    for (uint32_t g : vt_[c]) {
+      const Tri& t = s_.triangles[g];
+      if (t[0] == d || t[1] == d || t[2] == d) return false;  // the new edge exists already
+    }
+    const Vec3 &pa = s_.points[a], &pb = s_.points[b];
+    const bool c_on = to_segment(s_.points[c], pa, pb) <= prm_.max_deviation;
+    const bool d_on = to_segment(s_.points[d], pa, pb) <= prm_.max_deviation;
+    const bool traced = feature_edge(a, b);
+    if (traced && !c_on && !d_on) return refuse("flip: feature edge");
+    if (!c_on && !d_on) {
+      const Vec3 n1 = normalized(area_vector(pa, pb, s_.points[c]));
+      const Vec3 n2 = normalized(area_vector(pb, pa, s_.points[d]));
+      if (dot(n1, n2) < cos_flat_) return refuse("flip: not flat");
+    }
+    change_.clear();
+    change_.add(f1, Tri{c, a, d});
+    change_.add(f2, Tri{d, b, c});
+    if (!acceptable(change_)) return false;
+    apply(change_);
+    if (traced) {  // the chain a b now runs a - apex - b
+      const uint32_t apex = c_on ? c : d;
+      auto unlink = [&](uint32_t x, uint32_t y) {
+        auto& list = feature_[x];
+        list.erase(std::remove(list.begin(), list.end(), y), list.end());
+      };
+      unlink(a, b), unlink(b, a);
+      for (uint32_t end : {a, b})
+        if (!feature_edge(apex, end)) feature_[apex].push_back(end), feature_[end].push_back(apex);
+      s_.locked[apex] = 1;
+    }
+    ++stats_.flips;
+    return true;
+  }
+
+  // Edge (a, b) collapsed into one node. A fixed node keeps its place; of two fixed nodes one
+  // goes into the other where the input's sharp edges stay as near (checked with the rest), and
+  // the traced chains through it then run through the other.
+  bool try_collapse(uint32_t a, uint32_t b) {
+    if (fixed(a) && fixed(b)) return collapse_into(a, b) || collapse_into(b, a);
+    return fixed(b) ? collapse_into(b, a) : collapse_into(a, b);
+  }
+
+  // v goes into u (u's index stays).
+  bool collapse_into(uint32_t u, uint32_t v) {
+    uint32_t f1, f2;
+    if (!edge_triangles(u, v, f1, f2)) return false;
+    const uint32_t c = third(s_.triangles[f1], u, v), d = third(s_.triangles[f2], u, v);
+    // Link condition: u and v share exactly the two neighbours across the edge.
+    std::vector<uint32_t> nu, nv, common;
+    neighbours(u, nu), neighbours(v, nv);
+    std::set_intersection(nu.begin(), nu.end(), nv.begin(), nv.end(), std::back_inserter(common));
+    if (common.size() != 2 || c == d) return refuse("collapse: link");
+    // c and d each lose an edge: keep them at three or more.
+    std::vector<uint32_t> nc, nd;
+    neighbours(c, nc), neighbours(d, nd);
+    if (nc.size() < 4 || nd.size() < 4) return refuse("collapse: valence");
+    std::vector<Vec3> places;
+    if (fixed(u)) {
+      places.push_back(s_.points[u]);
+    } else {
+      const double cell = std::min(s_.cell_size[u], s_.cell_size[v]);
+      places.push_back(onto_input((s_.points[u] + s_.points[v]) * 0.5, cell > 0 ? cell : norm(s_.points[u] - s_.points[v])));
+      places.push_back(s_.points[u]);
+      places.push_back(s_.points[v]);
+    }
+    for (const Vec3& x : places) {
+      change_.clear();
+      change_.moved = u;
+      change_.to = x;
+      for (uint32_t g : vt_[u]) change_.add(g, s_.triangles[g], g == f1 || g == f2);
+      for (uint32_t g : vt_[v]) {
+        if (g == f1 || g == f2) continue;
+        Tri t = s_.triangles[g];
+        for (uint32_t& w : t)
+          if (w == v) w = u;
+        change_.add(g, t);
+      }
+      if (!acceptable(change_)) continue;
+      apply(change_);
+      vt_[v].clear();
+      // v's traced edges go to u.
+      for (uint32_t w : feature_[v]) {
+        auto& list = feature_[w];
+        list.erase(std::remove(list.begin(), list.end(), v), list.end());
+        if (w != u && !feature_edge(u, w)) feature_[u].push_back(w), list.push_back(u);
+      }
+      feature_[v].clear();
+      ++stats_.collapses;
+      return true;
+    }
+    return false;
+  }
+
+  // Node v moved toward the centroid of its neighbours, in its tangent plane, then onto the input.
+  bool try_move(uint32_t v) {
+    if (vt_[v].empty()) return false;
+    if (fixed(v)) return slide_along_chain(v);
+    std::vector<uint32_t> nv;
+    neighbours(v, nv);
+    Vec3 centroid{0, 0, 0}, normal{0, 0, 0};
+    for (uint32_t w : nv) centroid = centroid + s_.points[w];
+    centroid = centroid * (1.0 / double(nv.size()));
+    for (uint32_t g : vt_[v]) {
+      const Tri& t = s_.triangles[g];
+      normal = normal + area_vector(s_.points[t[0]], s_.points[t[1]], s_.points[t[2]]);
+    }
+    normal = normalized(normal);
+    const Vec3 p = s_.points[v];
+    const Vec3 step = centroid - p;
+    const Vec3 tangential = p + step - normal * dot(step, normal);
+    const double cell = s_.cell_size[v] > 0 ? s_.cell_size[v] : norm(step);
+    for (const Vec3& x : {onto_input(tangential, cell), onto_input(p + (tangential - p) * 0.5, cell)}) {
+      change_.clear();
+      change_.moved = v;
+      change_.to = x;
+      for (uint32_t g : vt_[v]) change_.add(g, s_.triangles[g]);
+      if (!acceptable(change_)) continue;
+      apply(change_);
+      ++stats_.moves;
+      return true;
+    }
+    return false;
+  }
+
+  // A snapped node on a straight run of its traced chain u - v - w slides along it toward the
+  // middle of u w: the feature line stays where it is, and the triangles between two close
+  // feature curves get their nodes staggered (needles between them open up).
+  bool slide_along_chain(uint32_t v) {
+    if (feature_[v].size() != 2) return false;
+    const Vec3 &a = s_.points[feature_[v][0]], &b = s_.points[feature_[v][1]], p = s_.points[v];
+    if (to_segment(p, a, b) > prm_.feature_tolerance) return false;
+    const Vec3 middle = (a + b) * 0.5;
+    for (const Vec3& x : {middle, (p + middle) * 0.5}) {
+      change_.clear();
+      change_.moved = v;
+      change_.to = prm_.float_coordinates ? round_to_float(x) : x;
+      for (uint32_t g : vt_[v]) change_.add(g, s_.triangles[g]);
+      if (!acceptable(change_)) continue;
+      apply(change_);
+      ++stats_.moves;
+      return true;
+    }
+    return false;
+  }
+
+  // Live triangles and the points they use, with their data.
+  void compact() {
+    std::vector<uint32_t> remap(s_.points.size(), kNone);
+    PostSurface out;
+    for (uint32_t f = 0; f < s_.triangles.size(); ++f) {
+      if (!alive_[f]) continue;
+      Tri t = s_.triangles[f];
+      for (uint32_t& v : t) {
+        if (remap[v] == kNone) {
+          remap[v] = uint32_t(out.points.size());
+          out.points.push_back(s_.points[v]);
+          out.cell_size.push_back(s_.cell_size[v]);
+          out.locked.push_back(s_.locked[v]);
+        }
+        v = remap[v];
+      }
+      out.triangles.push_back(t);
+    }
+    for (uint32_t a = 0; a < feature_.size(); ++a)
+      for (uint32_t b : feature_[a])
+        if (a < b && remap[a] != kNone && remap[b] != kNone) out.feature_edges.push_back({remap[a], remap[b]});
+    s_ = std::move(out);
+  }
+
+  PostSurface& s_;
+  const QualityReference& ref_;
+  SliverRemovalParams prm_;
+  TriangleBuckets buckets_;
+  std::vector<uint8_t> alive_;
+  std::vector<std::vector<uint32_t>> vt_;       // live triangles at each node
+  std::vector<std::vector<uint32_t>> feature_;  // traced feature edges at each node
+  double cos_flat_ = 1, cos_turn_ = 1;
+  double sample_cell_ = 1;
+  std::unordered_map<GridKey, std::vector<uint32_t>, GridKeyHash> samples_;  // sharp-edge samples by cell
+  Change change_;
+  SliverRemovalStats stats_;
+};
+
+}  // namespace
+
+SliverRemovalStats remove_slivers(PostSurface& surface, const QualityReference& ref, const SliverRemovalParams& params) {
+  if (surface.triangles.empty() || !ref.input) return {};
+  SliverRemover r(surface, ref, params);
+  return r.run();
+}
+
+}  // namespace vdbwrap::post
