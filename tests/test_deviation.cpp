@@ -317,3 +317,29 @@ TEST(Deviation, CliRefusesABadDeviationPathBeforeTheWork) {
                         dir.file("missing/field.ply"), dir, &err),
             2);
 }
+
+// Around a box every nearest point is inside a face, on an edge or at a corner: the sign is
+// exactly "outside the box" and |distance| the box's own distance, everywhere off the surface.
+TEST(Deviation, SignIsExactAtFacesEdgesAndCorners) {
+  const Mesh box = box_mesh({0, 0, 0}, {1, 1, 1});
+  Mesh probes;
+  for (int i = 0; i <= 10; ++i)
+    for (int j = 0; j <= 10; ++j)
+      for (int k = 0; k <= 10; ++k) {
+        const Vec3 q{-0.55 + 0.21 * i, -0.55 + 0.21 * j, -0.55 + 0.21 * k};
+        probes.points.push_back(q);
+      }
+  const DeviationField field = measure_deviation(probes, box);
+  ASSERT_EQ(field.sign, DistanceSign::Outside);
+  for (size_t i = 0; i < probes.points.size(); ++i) {
+    const Vec3& q = probes.points[i];
+    double outside = 0, inside = 1;
+    for (int a = 0; a < 3; ++a) {
+      const double off = std::max({0.0, -q[a], q[a] - 1});
+      outside += off * off;
+      inside = std::min({inside, q[a], 1 - q[a]});
+    }
+    const double expected = outside > 0 ? std::sqrt(outside) : -inside;
+    EXPECT_NEAR(field.distance[i], expected, 1e-12) << "at " << q[0] << ", " << q[1] << ", " << q[2];
+  }
+}
