@@ -50,8 +50,11 @@
                        'self-intersecting'];
   var WRAP_DEFECTS = ['self-intersecting', 'small area', 'sliver', 'short edge', 'long edge', 'normal off the input',
                       'sharp edge lost', 'held back off the input'];
-  var DEFECT_COLOURS = [[0.85, 0.10, 0.10], [0.95, 0.55, 0.05], [0.55, 0.20, 0.75], [0.10, 0.55, 0.85],
-                        [0.15, 0.65, 0.30], [0.90, 0.80, 0.10], [0.85, 0.30, 0.60], [0.40, 0.40, 0.40]];
+  // One colour per kind across both meshes: self-intersecting is red on either.
+  var INPUT_DEFECT_COLOURS = [[0.95, 0.55, 0.05], [0.55, 0.20, 0.75], [0.10, 0.45, 0.90], [0.25, 0.25, 0.25],
+                              [0.85, 0.10, 0.10]];
+  var WRAP_DEFECT_COLOURS = [[0.85, 0.10, 0.10], [0.95, 0.80, 0.10], [0.90, 0.35, 0.65], [0.10, 0.65, 0.65],
+                             [0.15, 0.65, 0.30], [0.45, 0.35, 0.90], [0.60, 0.35, 0.15], [0.55, 0.55, 0.55]];
   function partColour(i) {
     var c = new THREE.Color();
     c.setHSL(((i * 0.618033988749895) % 1 + 1) % 1, 0.55, 0.58);
@@ -142,7 +145,7 @@
         } else if (mode === 'defect' && d.flags) {
           var f = d.flags[t];
           c = NEUTRAL;
-          for (var b = 0; b < 8; ++b) if (f & (1 << b)) { c = DEFECT_COLOURS[b]; break; }
+          for (var b = 0; b < d.defectColours.length; ++b) if (f & (1 << b)) { c = d.defectColours[b]; break; }
         } else if (mode === 'defect' || (mode === 'part' && d.data.part_names.length > 1)) {
           c = NEUTRAL;
         } else {
@@ -157,7 +160,9 @@
   }
 
   var input = buildMesh(scene.input);
+  input.defectColours = INPUT_DEFECT_COLOURS;
   var wrap = scene.wrap ? buildMesh(scene.wrap) : null;
+  if (wrap) wrap.defectColours = WRAP_DEFECT_COLOURS;
   var origin = scene.origin;
   function local(p) { return new THREE.Vector3(p[0] - origin[0], p[1] - origin[1], p[2] - origin[2]); }
   var size = Math.max(scene.diagonal, 1e-12);
@@ -394,7 +399,7 @@
         for (var b = 0; b < s[2].length; ++b) {
           if (!counts[b]) continue;
           any = true;
-          entry(DEFECT_COLOURS[b], s[2][b] + ': ' + count(counts[b]));
+          entry(d.defectColours[b], s[2][b] + ': ' + count(counts[b]));
         }
         if (d === input && !d.data.intersections_searched) L.appendChild(el('div', '', 'self-intersections not searched (input too big)'));
         if (!any) entry(NEUTRAL, 'none');
