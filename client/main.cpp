@@ -22,7 +22,6 @@
 #ifdef VDBWRAP_WITH_REMOTE
 #include "remote.h"  // submit, wait, jobs, cancel (gRPC job service)
 #endif
-#include "io/feature_curves.h"
 #include "vdbwrap/io.h"
 #include "vdbwrap/deviation.h"
 #include "vdbwrap/repair.h"

@@ -5,7 +5,7 @@
 
 #include <string>
 
-#include "io/mesh_io.h"
+#include "vdbwrap/io.h"
 
 namespace vdbwrap::cli {
 

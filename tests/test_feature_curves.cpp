@@ -18,7 +18,7 @@
 #include <vector>
 
 #include "common/vec.h"
-#include "io/feature_curves.h"
+#include "vdbwrap/io.h"
 #include "vdbwrap/io.h"
 #include "vdbwrap/wrap.h"
 

@@ -1,4 +1,4 @@
-#include "io/feature_curves.h"
+#include "vdbwrap/io.h"
 
 #include <algorithm>
 #include <array>

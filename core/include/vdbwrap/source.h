@@ -5,7 +5,7 @@
 #include <string>
 
 #include "vdbwrap/mesh.h"
-#include "vdbwrap/wrap.h"  // WrapReport::Source
+#include "vdbwrap/report.h"  // WrapReport::Source
 
 namespace vdbwrap {
 
