@@ -121,6 +121,11 @@ void WrapOptions::add_to(CLI::App* cmd, const std::string& threads_help) {
                                   "collapses and tangential moves, held near the input)")
                          ->group("Surface fit");
   bindings_.push_back({sr, [this](WrapParams& p) { p.remove_slivers = sliver_removal_; }});
+  CLI::Option* ts = cmd->add_flag("--two-sided-sheets,!--no-two-sided-sheets", two_sided_sheets_,
+                                  "Where the volume lies on both sides of an input surface (open sheets, scans with holes), "
+                                  "move offending nodes farther off the input on their own side before pulling them back")
+                         ->group("Surface fit");
+  bindings_.push_back({ts, [this](WrapParams& p) { p.two_sided_sheets = two_sided_sheets_; }});
   bind(cmd, "--threads", cli_.threads, threads_help, [this](WrapParams& p) { p.threads = cli_.threads; })
       ->capture_default_str()
       ->check(CLI::NonNegativeNumber)

@@ -89,6 +89,7 @@ json params_json(const WrapParams& p) {
               {"validity_rounds", p.validity_rounds},
               {"remesh", p.remesh},
               {"remove_slivers", p.remove_slivers},
+              {"two_sided_sheets", p.two_sided_sheets},
               {"float_coordinates", p.float_coordinates}};
 }
 json counts_json(const QualityCounts& q) {
@@ -252,7 +253,16 @@ std::string to_json(const WrapReport& r, int indent) {
            {"unresolved_locations", r.contact.unresolved_locations},
            {"separate_bodies", r.contact.separate_bodies}}},
          {"control_sizes", sizes},
-         {"projection", {{"nodes_held_back", r.nodes_held_back}, {"triangles_before_coarsening", r.triangles_before_coarsening}}},
+         {"projection", {{"nodes_held_back", r.nodes_held_back}, {"nodes", r.nodes_projected},
+                         {"triangles_before_coarsening", r.triangles_before_coarsening}}},
+         {"two_sided",
+          {{"area_percent", 100 * r.two_sided.area_fraction},
+           {"nodes", r.two_sided.nodes},
+           {"nodes_raised", r.two_sided.nodes_raised},
+           {"openings", r.two_sided.openings},
+           {"largest_opening_centre", r.two_sided.largest_opening_centre},
+           {"largest_opening_width", r.two_sided.largest_opening_width},
+           {"suggested_gap_closure", r.two_sided.suggested_gap_closure}}},
          {"quality", quality_json(r.quality, r.params)},
          {"output", diag_json(r.output)},
          {"distance_output_to_input", dist_json(r.output_to_input)},

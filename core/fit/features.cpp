@@ -202,6 +202,7 @@ std::vector<FeatureCurve> build_feature_curves(const prep::PreparedInput& in, do
   auto walk = [&](uint32_t start, uint32_t first_seg) {
     FeatureCurve c;
     c.start_corner = is_corner(start);
+    c.boundary = first_seg < in.feature_edges.size() && in.feature_edges[first_seg].kind == prep::FeatureKind::Boundary;
     c.points.push_back(node_pos[start]);
     uint32_t v = start, s = first_seg;
     while (true) {

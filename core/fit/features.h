@@ -18,6 +18,7 @@ struct FeatureCurve {
   std::vector<Vec3> points;
   bool closed = false;
   bool start_corner = false, end_corner = false;
+  bool boundary = false;  // along boundary edges (a hole's rim, a sheet's border)
 };
 
 // Builds the curves from the prepared input's feature edges and intersection segments.

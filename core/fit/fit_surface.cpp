@@ -14,6 +14,7 @@
 #include "common/sorted_point_grid.h"
 #include "common/triangle_buckets.h"
 #include "common/vec.h"
+#include "fit/two_sided.h"
 #include "vdbwrap/errors.h"
 
 namespace vdbwrap::fit {
@@ -158,6 +159,10 @@ FittedSurface fit_to_input(const extract::LatticeSurface& surf, const grid::Adap
   // Each node's nearest triangle from its last projection: the next query for the node
   // (relaxing moves it a little) and the quads' diagonal choice start from it.
   std::vector<uint32_t> foot(n, UINT32_MAX);
+  TwoSidedParams two_sided_params;
+  two_sided_params.cell = hf;
+  two_sided_params.offset = offset;
+  TwoSidedSheets sheets(n, two_sided_params);
   auto project_on_side = [&](size_t i, const Vec3& from) {
     auto hit = input.closest(from, foot[i]);
     foot[i] = hit.triangle;
@@ -172,7 +177,8 @@ FittedSurface fit_to_input(const extract::LatticeSurface& surf, const grid::Adap
       dir = (lattice[i] - foot.point) * (1.0 / std::sqrt(foot.squared_distance));
     }
     Vec3 t = hit.point + dir * offset;
-    if (norm(t - lattice[i]) > 3.0 * g.base_size()) t = lattice[i];  // a wild move: keep it off
+    sheets.record(i, hit.point, hit.triangle, hit.normal, dir);
+    if (norm(t - lattice[i]) > 3.0 * g.base_size()) t = lattice[i], sheets.forget(i);  // a wild move: keep it off
     return t;
   };
   // A lattice node within the offset of the input stays where it is. (Asked as "is the input
@@ -194,7 +200,16 @@ FittedSurface fit_to_input(const extract::LatticeSurface& surf, const grid::Adap
   FittedSurface out;
   std::vector<uint8_t> snapped(n, 0);
   std::set<std::pair<uint32_t, uint32_t>> traced;
-  if (!curves.empty()) {
+  sheets.classify();
+  // The wrap passes around the rim of a two-sided sheet (a scan's jagged hole rims): chains
+  // traced there on either sheet hold the other sheet's nodes back. Those rims are left to the
+  // projection.
+  std::vector<FeatureCurve> one_sided_curves;
+  if (params.two_sided_sheets)
+    for (const FeatureCurve& c : curves)
+      if (!c.boundary || !sheets.two_sided_along(c.points)) one_sided_curves.push_back(c);
+  const std::vector<FeatureCurve>& traced_curves = params.two_sided_sheets ? one_sided_curves : curves;
+  if (!traced_curves.empty()) {
     if (progress) progress->progress("project", 0.05, "snapping to " + std::to_string(curves.size()) + " feature curves");
     // The chosen volume next to a concave crease is often coarse (only cells the input
     // passes through are refined), so nodes along it can be a base cell apart: the trace
@@ -207,7 +222,7 @@ FittedSurface fit_to_input(const extract::LatticeSurface& surf, const grid::Adap
       for (const auto& q : quads) emit(q[0], q[2]), emit(q[2], q[0]), emit(q[1], q[3]), emit(q[3], q[1]);
     });
     auto reachable = [&](const Vec3& from, const Vec3& to) { return input.in_view(from, to, offset); };
-    for (const auto& [a, b] : snap_to_curves(curves, graph, lattice, target, snapped, trace_radius, std::max(8.0 * hf, 2.0 * trace_radius), offset, out.snap, reachable))
+    for (const auto& [a, b] : snap_to_curves(traced_curves, graph, lattice, target, snapped, trace_radius, std::max(8.0 * hf, 2.0 * trace_radius), offset, out.snap, reachable))
       traced.insert({std::min(a, b), std::max(a, b)});
     // Relax the unsnapped nodes within three rings of a snapped one.
     std::vector<uint8_t> relax(n, 0);
@@ -361,6 +376,12 @@ FittedSurface fit_to_input(const extract::LatticeSurface& surf, const grid::Adap
       if (!flag[i]) continue;
       flag[i] = 0;
       if (t[i] == 0.0) continue;
+      // Two-sided: farther off the input on its own side first (not back to the staircase).
+      if (params.two_sided_sheets && !snapped[i] && sheets.raise(i, target[i])) {
+        p[i] = world(lerp(lattice[i], target[i], t[i]));
+        moved.push_back(i);
+        continue;
+      }
       ++strikes[i];
       t[i] = (t[i] < 1.0 / 64 || round >= give_up_halving || strikes[i] >= strikes_to_lattice) ? 0.0 : t[i] * 0.5;
       p[i] = world(lerp(lattice[i], target[i], t[i]));
@@ -392,6 +413,7 @@ FittedSurface fit_to_input(const extract::LatticeSurface& surf, const grid::Adap
   for (size_t i = 0; i < n; ++i)
     if (t[i] < 1.0 && norm2(target[i] - lattice[i]) > 0) ++out.held_back, out.held_back_points.push_back(p[i]);
   if (progress) progress->progress("project", 1.0, std::to_string(out.held_back) + " nodes held back to stay valid");
+  out.two_sided = sheets.take_stats();
   out.snapped = std::move(snapped);
   out.cell_size = std::move(cell_size);
   out.feature_edges.assign(traced.begin(), traced.end());

@@ -8,6 +8,7 @@
 #include "extract/extract_surface.h"
 #include "fit/features.h"
 #include "mesh/surface_index.h"
+#include "fit/two_sided.h"
 #include "grid/adaptive_grid.h"
 #include "vdbwrap/wrap.h"
 
@@ -22,6 +23,7 @@ struct FittedSurface {
   size_t held_back = 0;       // nodes that could not go all the way to the input
   std::vector<Vec3> held_back_points;  // where they are (output frame): flagged on the wrap's triangles
   size_t validity_rounds = 0;
+  TwoSidedStats two_sided;    // where the wrap's sheets project onto the input from both sides
   // False when the validity loop ran out of rounds: intersecting or degenerate triangles are
   // left for the post-processing (remeshing, then intersection repair) to fix.
   bool valid = true;

@@ -2,6 +2,7 @@
 // inserted where the traced chains missed a curve, and flat parts coarsened.
 #include "common/stage_timer.h"
 #include "fit/feature_insert.h"
+#include "fit/two_sided_report.h"
 #include "pipeline/stage_params.h"
 #include "pipeline/stages.h"
 #include "post/coarsen.h"
@@ -65,6 +66,8 @@ void fit_surface(WrapRun& run) {
   }
   run.fitted = fit::fit_to_input(run.lattice, *run.refined.grid, index, curves, run.prepared.origin, run.params, run.progress);
   report_snapping(report, run.fitted);
+  const std::string two_sided = fit::describe_two_sided(run.fitted.two_sided, run.prepared, report.two_sided);
+  if (run.progress && !two_sided.empty()) run.progress->progress("project", 1.0, two_sided);
   if (!curves.empty() && run.fitted.valid) insert_feature_nodes(run, curves);
 
   report.triangles_before_coarsening = run.fitted.triangles.size();

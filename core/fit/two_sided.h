@@ -1,0 +1,135 @@
+// Two-sided sheets: where the chosen volume lies on both sides of an input surface (an open
+// sheet, a scan whose holes let the outside in), the wrap has two sheets that project onto the
+// same input, each to its own side, a small offset off it. Wrap triangles are chords of the
+// input, so on a curved or creased sheet one sheet's chords dip through the other sheet when
+// the offset is small; pulling those nodes back toward the lattice (the validity loop's way)
+// leaves a voxel staircase. Raising their offset instead, a few times, keeps them on the input.
+#pragma once
+#include <cmath>
+#include <cstdint>
+#include <unordered_map>
+#include <vector>
+
+#include "common/grid_key.h"
+#include "common/vec.h"
+#include "vdbwrap/mesh.h"
+
+namespace vdbwrap::fit {
+
+struct TwoSidedParams {
+  double cell = 1;          // the finest cell: feet of both sides this near make a place two-sided
+  double offset = 0;        // the projection's offset off the input
+  double raise_factor = 2;  // each raise multiplies the offset by this
+  int max_raises = 6;       // then the node is pulled back toward the lattice as before
+  // A node's side is clear when its way off the input is at least this cosine off the plane of
+  // the input triangle it projects to (around convex edges and sheet borders it may not be).
+  double clear_side_cos = 0.5;
+};
+
+struct TwoSidedStats {
+  size_t nodes = 0;         // wrap nodes on a two-sided place
+  size_t nodes_raised = 0;  // of those, nodes whose offset was raised to keep the wrap valid
+  // Per input triangle: bit 1, a node projects to it from the side its normal points to; bit 2,
+  // from the other side. Grown to the largest triangle hit.
+  std::vector<uint8_t> triangle_sides;
+  std::unordered_map<GridKey, uint8_t, GridKeyHash> cell_sides;  // the same bits per cell of the foot
+  double inv_cell = 1;
+};
+
+class TwoSidedSheets {
+ public:
+  TwoSidedSheets(size_t nodes, const TwoSidedParams& p)
+      : p_(p), foot_(nodes), away_(nodes), triangle_(nodes, UINT32_MAX), side_(nodes, 0), raises_(nodes, 0), two_(nodes, 0) {}
+
+  // Node i projects to `foot` on input triangle `triangle` (unit normal `normal`), its target
+  // `away` (unit, on the side of its lattice position) times the offset off it. Per node: thread safe.
+  void record(size_t i, const Vec3& foot, uint32_t triangle, const Vec3& normal, const Vec3& away) {
+    foot_[i] = foot;
+    away_[i] = away;
+    triangle_[i] = triangle;
+    // Off a triangle's inside the way off is its normal; from an edge or corner it may lean.
+    const double s = dot(away, normal);
+    side_[i] = s > p_.clear_side_cos ? 1 : s < -p_.clear_side_cos ? 2 : 0;
+  }
+  // The node keeps no projected target (it stays at its lattice position, or was snapped).
+  void forget(size_t i) { triangle_[i] = UINT32_MAX, side_[i] = 0; }
+
+  // Marks the nodes whose foot has a foot of the other side within a cell. Call once, after
+  // every record().
+  void classify() {
+    stats_.inv_cell = 1.0 / p_.cell;
+    auto& cells = stats_.cell_sides;
+    for (size_t i = 0; i < foot_.size(); ++i) {
+      if (!side_[i]) continue;
+      cells[grid_key(foot_[i], stats_.inv_cell)] |= side_[i];
+      if (triangle_[i] >= stats_.triangle_sides.size()) stats_.triangle_sides.resize(triangle_[i] + 1, 0);
+      stats_.triangle_sides[triangle_[i]] |= side_[i];
+    }
+    for (size_t i = 0; i < foot_.size(); ++i) {
+      if (!side_[i]) continue;
+      two_[i] = (sides_near(foot_[i]) & (3 - side_[i])) != 0;
+      stats_.nodes += two_[i];
+    }
+  }
+  bool two_sided(size_t i) const { return two_[i] != 0; }
+  // Do feet of both sides lie within a cell of most of these points? (After classify().)
+  bool two_sided_along(const std::vector<Vec3>& points) const {
+    size_t both = 0;
+    for (const Vec3& q : points) both += sides_near(q) == 3;
+    return 2 * both > points.size();
+  }
+
+  // A two-sided node that offends: its next target, farther off its foot, when it has raises
+  // left (false: pull it back toward the lattice as usual).
+  bool raise(size_t i, Vec3& target) {
+    if (!two_[i] || triangle_[i] == UINT32_MAX || raises_[i] >= p_.max_raises) return false;
+    if (raises_[i]++ == 0) ++stats_.nodes_raised;
+    target = foot_[i] + away_[i] * (p_.offset * std::pow(p_.raise_factor, raises_[i]));
+    return true;
+  }
+
+  TwoSidedStats take_stats() { return std::move(stats_); }
+
+ private:
+  // The sides of the feet in the cells around p.
+  uint8_t sides_near(const Vec3& p) const {
+    const GridKey k = grid_key(p, stats_.inv_cell);
+    uint8_t bits = 0;
+    for (int dx = -1; dx <= 1; ++dx)
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dz = -1; dz <= 1; ++dz) {
+          auto it = stats_.cell_sides.find({k.x + dx, k.y + dy, k.z + dz});
+          if (it != stats_.cell_sides.end()) bits |= it->second;
+        }
+    return bits;
+  }
+
+  TwoSidedParams p_;
+  std::vector<Vec3> foot_, away_;
+  std::vector<uint32_t> triangle_;
+  std::vector<uint8_t> side_, raises_, two_;
+  TwoSidedStats stats_;
+};
+
+// The share of the input's area wrapped from both sides: triangles that nodes of both sides
+// project to, or whose centroid has feet of both sides within a cell.
+inline double two_sided_area_fraction(const TwoSidedStats& s, const std::vector<Vec3>& points, const std::vector<Tri>& triangles) {
+  double both = 0, all = 0;
+  for (size_t t = 0; t < triangles.size(); ++t) {
+    const Vec3 &a = points[triangles[t][0]], &b = points[triangles[t][1]], &c = points[triangles[t][2]];
+    const double area = 0.5 * norm(cross(b - a, c - a));
+    all += area;
+    uint8_t bits = t < s.triangle_sides.size() ? s.triangle_sides[t] : 0;
+    const GridKey k = grid_key((a + b + c) * (1.0 / 3.0), s.inv_cell);
+    for (int dx = -1; dx <= 1 && bits != 3; ++dx)
+      for (int dy = -1; dy <= 1 && bits != 3; ++dy)
+        for (int dz = -1; dz <= 1 && bits != 3; ++dz) {
+          auto it = s.cell_sides.find({k.x + dx, k.y + dy, k.z + dz});
+          if (it != s.cell_sides.end()) bits |= it->second;
+        }
+    if (bits == 3) both += area;
+  }
+  return all > 0 ? both / all : 0.0;
+}
+
+}  // namespace vdbwrap::fit
