@@ -38,6 +38,7 @@ class SliverRemover {
     s_.locked.resize(s_.points.size(), 0);
     s_.cell_size.resize(s_.points.size(), 0);
     alive_.assign(s_.triangles.size(), 1);
+    touched_.assign(s_.points.size(), -2);
     vt_.resize(s_.points.size());
     for (uint32_t f = 0; f < s_.triangles.size(); ++f)
       for (uint32_t v : s_.triangles[f]) vt_[v].push_back(f);
@@ -55,11 +56,15 @@ class SliverRemover {
 
   SliverRemovalStats run() {
     stats_.slivers_before = slivers().size();
-    for (int round = 0; round < prm_.rounds; ++round) {
+    for (round_ = 0; round_ < prm_.rounds; ++round_) {
       const size_t changes = stats_.flips + stats_.collapses + stats_.moves;
       for (uint32_t f : slivers()) {
         if (!alive_[f] || min_angle(f) >= prm_.target_angle_deg) continue;  // changed by an earlier fix
-        fix(f);
+        // A later round retries a sliver only where the surface near it changed since the
+        // round before: elsewhere every check would read what refused it then.
+        bool near_change = round_ == 0;
+        for (uint32_t v : s_.triangles[f]) near_change = near_change || changed_near(v);
+        if (near_change) fix(f);
       }
       // Nodes of the slivers left: a tangential move often opens their angles.
       std::vector<uint32_t> nodes;
@@ -67,7 +72,8 @@ class SliverRemover {
         for (uint32_t v : s_.triangles[f]) nodes.push_back(v);
       std::sort(nodes.begin(), nodes.end());
       nodes.erase(std::unique(nodes.begin(), nodes.end()), nodes.end());
-      for (uint32_t v : nodes) try_move(v);
+      for (uint32_t v : nodes)
+        if (round_ == 0 || changed_near(v)) try_move(v);
       if (stats_.flips + stats_.collapses + stats_.moves == changes) break;
     }
     stats_.slivers_after = slivers().size();
@@ -277,8 +283,19 @@ class SliverRemover {
     return true;
   }
 
+  // Did node v or a neighbour change in this round or the one before?
+  bool changed_near(uint32_t v) const {
+    if (touched_[v] + 1 >= round_) return true;
+    for (uint32_t f : vt_[v])
+      for (uint32_t w : s_.triangles[f])
+        if (touched_[w] + 1 >= round_) return true;
+    return false;
+  }
+
   void apply(const Change& c) {
     if (c.moved != kNone) s_.points[c.moved] = c.to;
+    for (size_t i = 0; i < c.slots.size(); ++i)
+      for (uint32_t v : s_.triangles[c.slots[i]]) touched_[v] = round_;
     for (size_t i = 0; i < c.slots.size(); ++i) {
       const uint32_t f = c.slots[i];
       for (uint32_t v : s_.triangles[f]) {
@@ -503,6 +520,8 @@ class SliverRemover {
   std::vector<std::vector<uint32_t>> vt_;       // live triangles at each node
   std::vector<std::vector<uint32_t>> feature_;  // traced feature edges at each node
   double cos_flat_ = 1, cos_turn_ = 1;
+  int round_ = 0;
+  std::vector<int> touched_;  // per node: the last round that changed a triangle at it
   double sample_cell_ = 1;
   std::unordered_map<GridKey, std::vector<uint32_t>, GridKeyHash> samples_;  // sharp-edge samples by cell
   Change change_;
