@@ -125,7 +125,7 @@ TEST(HtmlReport, BigMeshesAreClusteredForDisplayAndThePageSaysHowMany) {
 
 TEST(HtmlReport, InputMarksFindHolesFlipsAndSharpEdges) {
   Mesh box = vdbwrap::testing::box_mesh({0, 0, 0}, {2, 1, 1});
-  report::InputMarks clean = report::mark_input(box, 30, true);
+  report::InputMarks clean = report::mark_input(box, exact_weld(box.points), 30, true);
   EXPECT_EQ(std::count(clean.flags.begin(), clean.flags.end(), 0), 12);
   EXPECT_EQ(clean.sharp_edges.size(), 12u) << "a box's edges, not its faces' diagonals";
   EXPECT_TRUE(clean.intersections_searched);
@@ -133,7 +133,7 @@ TEST(HtmlReport, InputMarksFindHolesFlipsAndSharpEdges) {
   // One triangle turned over: it and its three neighbours face against each other, and the
   // box's edges stay its sharp edges (the angle is the surface's, not the flip's).
   std::swap(box.triangles[0][1], box.triangles[0][2]);
-  report::InputMarks flipped = report::mark_input(box, 30, false);
+  report::InputMarks flipped = report::mark_input(box, exact_weld(box.points), 30, false);
   EXPECT_EQ(std::count_if(flipped.flags.begin(), flipped.flags.end(), [](uint8_t f) { return f & report::kInputMisoriented; }), 4);
   EXPECT_EQ(flipped.sharp_edges.size(), 12u);
   EXPECT_FALSE(flipped.intersections_searched);
@@ -142,14 +142,14 @@ TEST(HtmlReport, InputMarksFindHolesFlipsAndSharpEdges) {
   box = vdbwrap::testing::box_mesh({0, 0, 0}, {2, 1, 1});
   box.triangles.erase(box.triangles.begin());
   box.triangle_part.erase(box.triangle_part.begin());
-  report::InputMarks holed = report::mark_input(box, 30, true);
+  report::InputMarks holed = report::mark_input(box, exact_weld(box.points), 30, true);
   const auto rim = std::count_if(holed.flags.begin(), holed.flags.end(), [](uint8_t f) { return f & report::kInputBorder; });
   EXPECT_EQ(rim, 3) << "the three triangles across the missing one's edges";
 
   // Two boxes pushed into each other cross.
   Mesh two = vdbwrap::testing::box_mesh({0, 0, 0}, {1, 1, 1});
   vdbwrap::testing::add_box(two, {0.5, 0.5, 0.5}, {1.5, 1.5, 1.5});
-  report::InputMarks crossing = report::mark_input(two, 30, true);
+  report::InputMarks crossing = report::mark_input(two, exact_weld(two.points), 30, true);
   EXPECT_GT(std::count_if(crossing.flags.begin(), crossing.flags.end(), [](uint8_t f) { return f & report::kInputIntersecting; }), 0);
 }
 

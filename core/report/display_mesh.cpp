@@ -82,7 +82,7 @@ bool cluster(const Mesh& mesh, const Box3& box, const Vec3& origin, double h, Di
 
 }  // namespace
 
-DisplayMesh display_mesh(const Mesh& mesh, const Vec3& origin, size_t max_triangles) {
+DisplayMesh display_mesh(const Mesh& mesh, const Vec3& origin, size_t max_triangles, const ExactWeld* known_weld) {
   DisplayMesh d;
   d.mesh_triangles = mesh.triangles.size();
   if (mesh.triangles.size() <= max_triangles || max_triangles == 0) {
@@ -102,9 +102,11 @@ DisplayMesh display_mesh(const Mesh& mesh, const Vec3& origin, size_t max_triang
     area += 0.5 * norm(area_vector(mesh.points[t[0]], mesh.points[t[1]], mesh.points[t[2]]));
   }
   // An STL repeats every point about six times: clustering sorts the distinct ones.
-  ExactWeld weld = exact_weld(mesh.points);
+  ExactWeld made;
+  if (!known_weld) made = exact_weld(mesh.points);
+  const ExactWeld& weld = known_weld ? *known_weld : made;
   Mesh distinct;
-  distinct.points = std::move(weld.unique);
+  distinct.points = weld.unique;
   distinct.triangles.resize(mesh.triangles.size());
   for (size_t t = 0; t < mesh.triangles.size(); ++t)
     for (int k = 0; k < 3; ++k) distinct.triangles[t][k] = weld.remap[mesh.triangles[t][k]];
@@ -118,8 +120,9 @@ DisplayMesh display_mesh(const Mesh& mesh, const Vec3& origin, size_t max_triang
     d.cluster_size = h;
     if (d.source_triangle.size() <= max_triangles) break;
   }
-  for (uint32_t& v : weld.remap) v = d.vertex_of[v];
-  d.vertex_of = std::move(weld.remap);
+  std::vector<uint32_t> vertex_of(weld.remap.size());
+  for (size_t i = 0; i < vertex_of.size(); ++i) vertex_of[i] = d.vertex_of[weld.remap[i]];
+  d.vertex_of = std::move(vertex_of);
   return d;
 }
 

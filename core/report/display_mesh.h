@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "common/exact_weld.h"
 #include "vdbwrap/mesh.h"
 
 namespace vdbwrap::report {
@@ -22,8 +23,9 @@ struct DisplayMesh {
 
 // The mesh as is when it has at most max_triangles triangles; else its points merged by cells
 // of a uniform grid (vertex clustering: the shape survives, small detail goes), the cell grown
-// until at most max_triangles are left.
-DisplayMesh display_mesh(const Mesh& mesh, const Vec3& origin, size_t max_triangles);
+// until at most max_triangles are left. weld: the exact weld of mesh.points when the caller has
+// it (clustering works on the distinct points), else it is made here.
+DisplayMesh display_mesh(const Mesh& mesh, const Vec3& origin, size_t max_triangles, const ExactWeld* weld = nullptr);
 
 // Per-point values on the display vertices; a cluster shows its value of largest magnitude
 // (the worst deviation stays visible).

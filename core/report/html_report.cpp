@@ -291,11 +291,13 @@ std::string html_report(const HtmlReportData& data, const std::string& three_js)
   // The report's count says when there is nothing to find: the search is most of the marking.
   const json* crossing = at_path(r, "input.intersecting_triangles");
   const bool none_crossing = crossing && crossing->is_number() && crossing->get<double>() == 0;
+  // One exact weld of the input serves its marks and its display.
+  const ExactWeld input_weld = exact_weld(input.points);
   const report::InputMarks marks = report::mark_input(
-      input, feature_angle, !none_crossing && input.triangles.size() <= data.intersection_search_limit);
+      input, input_weld, feature_angle, !none_crossing && input.triangles.size() <= data.intersection_search_limit);
 
   json scene{{"origin", origin}, {"diagonal", box.diagonal()}, {"display_limit", data.display_triangles}};
-  const report::DisplayMesh input_display = report::display_mesh(input, origin, data.display_triangles);
+  const report::DisplayMesh input_display = report::display_mesh(input, origin, data.display_triangles, &input_weld);
   scene["input"] = mesh_data(input, input_display);
   scene["input"]["flags"] = report::base64(report::display_per_triangle(input_display, marks.flags));
   scene["input"]["flag_counts"] = bit_counts(marks.flags);

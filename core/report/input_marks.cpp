@@ -19,10 +19,9 @@ int direction(const Tri& t, uint32_t a, uint32_t b) {
 
 }  // namespace
 
-InputMarks mark_input(const Mesh& input, double feature_angle_deg, bool find_intersections) {
+InputMarks mark_input(const Mesh& input, const ExactWeld& weld, double feature_angle_deg, bool find_intersections) {
   InputMarks marks;
   marks.flags.assign(input.triangles.size(), 0);
-  const ExactWeld weld = exact_weld(input.points);
   std::vector<Tri> tris(input.triangles.size());
   std::vector<uint8_t> usable(tris.size(), 1);
   std::vector<Vec3> normals(tris.size(), Vec3{0, 0, 0});

@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "common/exact_weld.h"
 #include "vdbwrap/mesh.h"
 
 namespace vdbwrap::report {
@@ -24,6 +25,7 @@ struct InputMarks {
   std::vector<std::array<Vec3, 2>> sharp_edges;   // normals more than the feature angle apart
 };
 
-InputMarks mark_input(const Mesh& input, double feature_angle_deg, bool find_intersections);
+// weld: the exact weld of input.points.
+InputMarks mark_input(const Mesh& input, const ExactWeld& weld, double feature_angle_deg, bool find_intersections);
 
 }  // namespace vdbwrap::report
