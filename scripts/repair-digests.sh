@@ -1,8 +1,11 @@
 #!/usr/bin/env bash
 # Repairs every mesh of the given folders with the default settings and prints a SHA-256 per output:
 # two runs of this script before and after a refactor of the repair must print the same lines.
-# One worker thread by default: with more, the union of crossing bodies is not yet the same
-# on every run (box.STL of the corpus), which would hide a real difference among false ones.
+# The union of crossing bodies (CGAL corefinement) depends on where its data lie in memory:
+# box.STL of the corpus comes out as one of two surfaces, by thread count, by allocations
+# elsewhere, even by the length of the output's name. One worker thread by default keeps the
+# runs of one binary alike; a box.STL line that flips between two binaries needs a look with
+# other output names before it counts as a difference.
 # Usage: scripts/repair-digests.sh [--threads 1] [--build build] DIR... > digests.txt
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"

@@ -19,8 +19,7 @@ struct TrianglePair {
 // What a triangle set is, for the pair search's shortcuts (the answers are the same). An
 // input: closed star-shaped parts (convex solids, CAD parts with fan caps) are looked for and
 // their triangles' pairs skipped. A wrap: evenly sized triangles of surfaces that are hardly
-// ever such parts, so the look is skipped; on the 2.85M-triangle wrap of the 2.37M-triangle
-// assembly it took 1.4 s and found none.
+// ever such parts, so the look, a walk over the whole set, is skipped.
 enum class SoupKind { kInput, kWrap };
 
 // Pairs of triangles of an indexed soup that share points other than their common
