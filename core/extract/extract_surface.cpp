@@ -1,45 +1,23 @@
+// Stage 2c, the lattice extraction: the cell faces between the chosen volume and the rest,
+// their corners numbered as nodes, and the polygons with the nodes on their edges inserted.
 #include "extract/extract_surface.h"
 
 #include <algorithm>
 #include <limits>
-#include <map>
-#include <optional>
-#include <queue>
-#include <set>
-#include <unordered_map>
+#include <utility>
 
 #include <tbb/parallel_for.h>
-#include <tbb/parallel_sort.h>
 
 #include "common/dense_numbers.h"
 #include "common/fill_vector.h"
-#include "common/grid_key.h"
 #include "common/radix_sort.h"
-#include "grid/flood_fill.h"
-#include "vdbwrap/errors.h"
+#include "extract/lattice_faces.h"
 
 namespace vdbwrap::extract {
 namespace {
 
 using grid::AdaptiveGrid;
 using grid::LeafRef;
-
-// The finest lattice's points, from 0 to the box's far side, numbered densely.
-DenseNumbers lattice_numbers(const AdaptiveGrid& g) {
-  const uint64_t fu = uint64_t(g.fine_units(0));
-  const Coord& d = g.dims0();
-  return DenseNumbers({0, 0, 0}, {uint64_t(d.x()) * fu + 1, uint64_t(d.y()) * fu + 1, uint64_t(d.z()) * fu + 1});
-}
-
-bool in_volume(const LeafRef& r, int32_t label, VolumeChoice choice) {
-  if (r.outside_box) return choice == VolumeChoice::Outside;
-  return r.value == label;
-}
-
-struct Quad {
-  Coord corner[4];
-  int32_t size;
-};
 
 // Quad on the plane `axis` = plane, spanning [u0,u0+s] x [v0,v0+s] in the two other axes,
 // ordered so its normal points along `normal_dir` * axis.
@@ -101,7 +79,7 @@ void level0_cells_with_faces(const AdaptiveGrid& g, int32_t label, int plane, st
 // level-0 block of the volume only cells on its sides can, and only on sides where the next
 // block is not all volume too: the cells deep inside an outside volume (most of a fine box)
 // are never listed. Level 0 is listed in parallel, a plane of cells to a part, joined in
-// order (listing it was 0.19 s of each extraction round on the 2.37M assembly at 0.25 %).
+// order: on a fine grid the listing is a large share of each extraction round.
 std::vector<std::pair<int, Coord>> cells_with_faces(const AdaptiveGrid& g, int32_t label) {
   std::vector<std::vector<std::pair<int, Coord>>> planes(size_t(std::max(0, g.dims0().z())));
   tbb::parallel_for(size_t(0), planes.size(), [&](size_t z) { level0_cells_with_faces(g, label, int(z), planes[z]); });
@@ -116,16 +94,7 @@ std::vector<std::pair<int, Coord>> cells_with_faces(const AdaptiveGrid& g, int32
   return cells;
 }
 
-// A surface's faces and nodes, and what its polygons are made from: extraction's rounds
-// before the last need the nodes alone (the polygons were 0.17 s of each round on the 2.37M
-// assembly at 0.25 %).
-struct FacesAndNodes {
-  LatticeSurface surf;  // nodes only
-  std::vector<Quad> quads;
-  std::vector<uint64_t> group_point;  // lattice point of each group of corners, ascending
-  std::vector<uint32_t> group_of_corner, node_of_group;
-  DenseNumbers lattice;
-};
+}  // namespace
 
 FacesAndNodes faces_and_nodes(const AdaptiveGrid& g, int32_t label, VolumeChoice choice) {
   // The wrap's outward normal points into the outside volume, or out of an inside volume.
@@ -163,8 +132,8 @@ FacesAndNodes faces_and_nodes(const AdaptiveGrid& g, int32_t label, VolumeChoice
   for (auto& part : chunks) quads.insert(quads.end(), part.begin(), part.end()), std::vector<Quad>().swap(part);
 
   // Nodes: the quads' corners, numbered in order of first appearance (quad by quad, corner
-  // by corner), each with the smallest quad at it. A serial hash map filled corner by corner
-  // had been 0.3 s of each round on the 2.37M assembly at 0.25 %: here a stable radix sort of
+  // by corner), each with the smallest quad at it. Not a serial hash map filled corner by
+  // corner, which would cost a large share of each round: here a stable radix sort of
   // (lattice point, corner) groups the corners of each point, in parallel, the first of each
   // group is its first appearance, and one pass over the corners in order numbers them.
   LatticeSurface& surf = out.surf;
@@ -216,7 +185,6 @@ FacesAndNodes faces_and_nodes(const AdaptiveGrid& g, int32_t label, VolumeChoice
   return out;
 }
 
-// The surface with its polygons.
 LatticeSurface with_polygons(FacesAndNodes&& fn) {
   LatticeSurface surf = std::move(fn.surf);
   const std::vector<Quad>& quads = fn.quads;
@@ -249,526 +217,8 @@ LatticeSurface with_polygons(FacesAndNodes&& fn) {
   return surf;
 }
 
-}  // namespace
-
 LatticeSurface extract_faces(const AdaptiveGrid& g, int32_t label, VolumeChoice choice) {
   return with_polygons(faces_and_nodes(g, label, choice));
-}
-
-namespace {
-
-// Face-connected groups among the 8 octants around a node that share a membership
-// (octants one bit apart share a face). Returns the number of groups on each side.
-void octant_groups(const bool in[8], int group[8], int& groups_in, int& groups_out) {
-  std::fill(group, group + 8, -1);
-  groups_in = groups_out = 0;
-  for (int o = 0; o < 8; ++o) {
-    if (group[o] >= 0) continue;
-    int id = in[o] ? groups_in++ : 8 + groups_out++;
-    int stack[8], top = 0;
-    stack[top++] = o;
-    group[o] = id;
-    while (top) {
-      int cur = stack[--top];
-      for (int k = 0; k < 3; ++k) {
-        int nb = cur ^ (1 << k);
-        if (group[nb] < 0 && in[nb] == in[o]) {
-          group[nb] = id;
-          stack[top++] = nb;
-        }
-      }
-    }
-  }
-}
-
-}  // namespace
-
-namespace {
-
-Coord lattice_point(const DenseNumbers& lattice, uint64_t number) {
-  const auto q = lattice.point(number);
-  return Coord(int32_t(q[0]), int32_t(q[1]), int32_t(q[2]));
-}
-
-Coord octant_cell(const Coord& p, int o) { return Coord(p.x() - 1 + (o & 1), p.y() - 1 + ((o >> 1) & 1), p.z() - 1 + ((o >> 2) & 1)); }
-
-// Are the chosen finest cells around lattice point p, or the others, not face-connected?
-bool nonmanifold_at(AdaptiveGrid::Reader& reader, int L, const Coord& p, int32_t label, VolumeChoice choice) {
-  bool in[8];
-  for (int o = 0; o < 8; ++o) in[o] = in_volume(reader.leaf_at(L, octant_cell(p, o)), label, choice);
-  int group[8], groups_in, groups_out;
-  octant_groups(in, group, groups_in, groups_out);
-  return groups_in > 1 || groups_out > 1;
-}
-
-// Is lattice point p a corner of one of the quads faces_and_nodes makes (a surface node)?
-// The quads with a corner at p lie on the faces of the volume's leaves around p.
-bool is_surface_node(AdaptiveGrid::Reader& reader, const AdaptiveGrid& g, const Coord& p, int32_t label, VolumeChoice choice) {
-  const int L = g.max_level();
-  LeafRef around[8];
-  int count = 0;
-  for (int o = 0; o < 8; ++o) {
-    const LeafRef r = reader.leaf_at(L, octant_cell(p, o));
-    if (r.outside_box || r.value != label) continue;
-    bool seen = false;
-    for (int k = 0; k < count && !seen; ++k) seen = around[k].level == r.level && around[k].ijk == r.ijk;
-    if (!seen) around[count++] = r;
-  }
-  for (int k = 0; k < count; ++k) {
-    const int level = around[k].level;
-    const Coord& c = around[k].ijk;
-    const int32_t s = g.fine_units(level);
-    const Coord C(c.x() * s, c.y() * s, c.z() * s);
-    for (int axis = 0; axis < 3; ++axis)
-      for (int dir = -1; dir <= 1; dir += 2) {
-        if (p[axis] != C[axis] + (dir > 0 ? s : 0)) continue;
-        const int b = (axis + 1) % 3, cc = (axis + 2) % 3;
-        bool corner = false;
-        reader.for_each_face_neighbour(level, c, axis, dir, [&](const LeafRef& n) {
-          if (corner || in_volume(n, label, choice)) return;
-          int32_t u0 = C[b], v0 = C[cc], size = s;
-          if (!n.outside_box && n.level > level) size = g.fine_units(n.level), u0 = n.ijk[b] * size, v0 = n.ijk[cc] * size;
-          corner = (p[b] == u0 || p[b] == u0 + size) && (p[cc] == v0 || p[cc] == v0 + size);
-        });
-        if (corner) return true;
-      }
-  }
-  return false;
-}
-
-// The finest lattice points on the closed boundary of cell (level, c), by number.
-void boundary_points(const AdaptiveGrid& g, const DenseNumbers& lattice, int level, const Coord& c, std::vector<uint64_t>& out) {
-  const int64_t s = g.fine_units(level);
-  const int64_t x0 = int64_t(c.x()) * s, y0 = int64_t(c.y()) * s, z0 = int64_t(c.z()) * s;
-  for (int64_t x = x0; x <= x0 + s; ++x)
-    for (int64_t y = y0; y <= y0 + s; ++y)
-      for (int64_t z = z0; z <= z0 + s; ++z) {
-        const bool face = x == x0 || x == x0 + s || y == y0 || y == y0 + s || z == z0 || z == z0 + s;
-        if (face && x >= 0 && y >= 0 && z >= 0) out.push_back(lattice.number(x, y, z));
-      }
-}
-
-// What one round changed.
-struct RoundRepairs {
-  std::vector<std::pair<int, Coord>> taken_out, split;  // cells; `split` lists no cell taken out
-  size_t changed = 0;                                   // cells taken out plus cells chosen for splitting
-  std::vector<uint64_t> visited;                        // lattice numbers of the nodes the round looked at
-};
-
-// One round of repairs at the surface nodes where the chosen cells around the node, or the
-// others, are not face-connected (edge or corner contacts: non-manifold). Takes chosen cells
-// finer than min_exclude_level out of the volume there, and splits coarser chosen cells into
-// chosen children, so that the next round can take those out. Visits the nodes `flagged`
-// (keys, ascending: the nodes not manifold as the grid stands) in order, with the later
-// nodes on each cell taken out.
-// A key orders the nodes: `point_of(key)` is its lattice point, and `key_of(point, number)`
-// the key of a lattice point and its number (UINT64_MAX: not a surface node).
-template <typename PointOf, typename KeyOf>
-RoundRepairs repair_nodes(AdaptiveGrid& g, int32_t label, VolumeChoice choice, int min_exclude_level, const DenseNumbers& lattice,
-                          const std::vector<uint64_t>& flagged, PointOf&& point_of, KeyOf&& key_of) {
-  const int L = g.max_level();
-  const int exclude_from = min_exclude_level < 0 ? L : std::min(min_exclude_level, L);
-  struct LeafKey {
-    int level;
-    Coord c;
-    bool operator<(const LeafKey& o) const { return level != o.level ? level < o.level : c < o.c; }
-  };
-  std::set<LeafKey> to_exclude, to_split;
-  auto excludable = [&](const LeafRef& r) {
-    if (r.outside_box) return false;
-    if (r.level > 0) return true;
-    // The outermost layer of the padded box stays in the outside volume, so the wrap never reaches it.
-    const Coord& d = g.dims0();
-    return r.ijk.x() > 0 && r.ijk.y() > 0 && r.ijk.z() > 0 && r.ijk.x() < d.x() - 1 && r.ijk.y() < d.y() - 1 &&
-           r.ijk.z() < d.z() - 1;
-  };
-  RoundRepairs out;
-  std::priority_queue<uint64_t, std::vector<uint64_t>, std::greater<uint64_t>> pending;  // later nodes at taken cells
-  uint64_t current = 0;  // the key of the node visited
-  std::vector<uint64_t> around;
-  auto queue_nodes_at = [&](const LeafKey& key) {  // the surface nodes on the cell's boundary after `current`
-    around.clear();
-    boundary_points(g, lattice, key.level, key.c, around);
-    for (uint64_t number : around) {
-      const uint64_t key = key_of(lattice_point(lattice, number), number);
-      if (key != UINT64_MAX && key > current) pending.push(key);
-    }
-  };
-  AdaptiveGrid::Reader reader(g);  // nodes come in order: cached reads (the grid changes only after)
-  for (size_t next_flagged = 0;;) {
-    uint64_t visit = next_flagged < flagged.size() ? flagged[next_flagged] : UINT64_MAX;
-    if (!pending.empty() && pending.top() < visit) visit = pending.top();
-    if (visit == UINT64_MAX) break;
-    while (!pending.empty() && pending.top() == visit) pending.pop();
-    if (next_flagged < flagged.size() && visit == flagged[next_flagged]) ++next_flagged;
-    current = visit;
-    const Coord p = point_of(visit);
-    out.visited.push_back(lattice.number(p.x(), p.y(), p.z()));
-    // The 8 finest cells around node p; octant bit k set means the +side along axis k.
-    LeafRef leaf[8];
-    bool in[8];
-    for (int o = 0; o < 8; ++o) {
-      leaf[o] = reader.leaf_at(L, octant_cell(p, o));
-      LeafKey key{leaf[o].level, leaf[o].ijk};
-      in[o] = in_volume(leaf[o], label, choice) && !to_exclude.count(key);
-    }
-    // Take chosen cells out one at a time, finest first, until both the chosen octants and
-    // the others are each face-connected around the node: a manifold disc there.
-    for (int step = 0; step < 8; ++step) {
-      int group[8], groups_in, groups_out;
-      octant_groups(in, group, groups_in, groups_out);
-      if (groups_in <= 1 && groups_out <= 1) break;
-      int victim = -1;
-      auto consider = [&](int o) {
-        if (!in[o] || !excludable(leaf[o])) return;
-        if (victim < 0 || leaf[o].level > leaf[victim].level) victim = o;
-      };
-      if (groups_in > 1) {
-        // Chosen cells meeting along an edge or at a corner: drop those outside the largest group.
-        int count[8] = {0};
-        for (int o = 0; o < 8; ++o)
-          if (in[o]) ++count[group[o]];
-        int keep = 0;
-        for (int k = 1; k < groups_in; ++k)
-          if (count[k] > count[keep]) keep = k;
-        for (int o = 0; o < 8; ++o)
-          if (in[o] && group[o] != keep) consider(o);
-      } else {
-        // Other cells meeting along an edge or at a corner: join them through a chosen octant,
-        // best one that touches two of their groups.
-        for (int o = 0; o < 8 && victim < 0; ++o) {
-          if (!in[o]) continue;
-          int touching = 0, first = -1;
-          for (int k = 0; k < 3; ++k) {
-            int nb = o ^ (1 << k);
-            if (!in[nb] && group[nb] != first) ++touching, first = first < 0 ? group[nb] : first;
-          }
-          if (touching >= 2) consider(o);
-        }
-        if (victim < 0)
-          for (int o = 0; o < 8; ++o) {
-            bool next_to_other = false;
-            for (int k = 0; k < 3; ++k) next_to_other |= !in[o ^ (1 << k)];
-            if (next_to_other) consider(o);
-          }
-      }
-      if (victim < 0) break;  // nothing may be taken out here; the caller gives up after its rounds
-      LeafKey key{leaf[victim].level, leaf[victim].ijk};
-      if (key.level < exclude_from) {
-        // Taking out a coarse cell would push the surface far off the input: split it into
-        // chosen children instead and decide again, one level finer, next round.
-        to_split.insert(key);
-        break;
-      }
-      to_exclude.insert(key);
-      queue_nodes_at(key);
-      for (int o = 0; o < 8; ++o)
-        if (leaf[o].level == key.level && leaf[o].ijk == key.c) in[o] = false;
-    }
-  }
-  for (const LeafKey& k : to_exclude) {
-    g.set(k.level, k.c, grid::kExcluded);
-    out.taken_out.emplace_back(k.level, k.c);
-  }
-  for (const LeafKey& k : to_split) {
-    if (to_exclude.count(k)) continue;
-    g.set(k.level, k.c, grid::kRefined);
-    for (int j = 0; j < 8; ++j)
-      g.set(k.level + 1, Coord(2 * k.c.x() + (j & 1), 2 * k.c.y() + ((j >> 1) & 1), 2 * k.c.z() + ((j >> 2) & 1)), label);
-    out.split.emplace_back(k.level, k.c);
-  }
-  out.changed = to_exclude.size() + to_split.size();
-  return out;
-}
-
-// A round over the whole surface: every node that is not manifold as the grid stands, in the
-// order of `surf.nodes` (their first appearance among the faces), or by lattice point.
-RoundRepairs repair_surface(AdaptiveGrid& g, int32_t label, VolumeChoice choice, const LatticeSurface& surf, int min_exclude_level,
-                            bool in_lattice_order) {
-  const int L = g.max_level();
-  const DenseNumbers lattice = lattice_numbers(g);
-  const size_t n = surf.nodes.size();
-  // The nodes that are not manifold, in parallel (the grid is only read). The repairs visit
-  // those, and the later nodes at a cell they take out (their octants change); at every other
-  // node they would find a manifold disc and change nothing. (Visiting all was 0.3-0.4 s of
-  // each round on the 2.37M assembly at 0.25 %.)
-  std::vector<uint8_t> flag(n, 0);
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 4096), [&](const tbb::blocked_range<size_t>& r) {
-    AdaptiveGrid::Reader local(g);
-    for (size_t i = r.begin(); i != r.end(); ++i) flag[i] = nonmanifold_at(local, L, surf.nodes[i], label, choice);
-  });
-  // Nodes by lattice point, to find those at a cell taken out.
-  std::vector<std::pair<uint64_t, uint32_t>> by_point(n);
-  tbb::parallel_for(size_t(0), n, [&](size_t i) {
-    const Coord& p = surf.nodes[i];
-    by_point[i] = {lattice.number(p.x(), p.y(), p.z()), uint32_t(i)};
-  });
-  tbb::parallel_sort(by_point.begin(), by_point.end());
-  auto index_of = [&](uint64_t number) {
-    auto it = std::lower_bound(by_point.begin(), by_point.end(), std::make_pair(number, uint32_t(0)));
-    return it != by_point.end() && it->first == number ? uint64_t(it->second) : UINT64_MAX;
-  };
-  std::vector<uint64_t> flagged;
-  if (in_lattice_order) {
-    for (const auto& [number, i] : by_point)
-      if (flag[i]) flagged.push_back(number);
-    return repair_nodes(
-        g, label, choice, min_exclude_level, lattice, flagged, [&](uint64_t number) { return lattice_point(lattice, number); },
-        [&](const Coord&, uint64_t number) { return index_of(number) == UINT64_MAX ? UINT64_MAX : number; });
-  }
-  for (size_t i = 0; i < n; ++i)
-    if (flag[i]) flagged.push_back(i);
-  return repair_nodes(
-      g, label, choice, min_exclude_level, lattice, flagged, [&](uint64_t i) { return surf.nodes[i]; },
-      [&](const Coord&, uint64_t number) { return index_of(number); });
-}
-
-// A round near the last round's changes: only the nodes it looked at, and the lattice points
-// on the cells it changed, can be surface nodes that are not manifold now (a node's octants
-// change only with the cells holding them, and a new node is the corner of a new quad, on a
-// changed cell). It visits what a round over the whole surface would, by lattice point.
-RoundRepairs repair_near(AdaptiveGrid& g, int32_t label, VolumeChoice choice, std::vector<uint64_t>&& candidates, int min_exclude_level) {
-  const int L = g.max_level();
-  const DenseNumbers lattice = lattice_numbers(g);
-  tbb::parallel_sort(candidates.begin(), candidates.end());
-  candidates.erase(std::unique(candidates.begin(), candidates.end()), candidates.end());
-  std::vector<uint8_t> flag(candidates.size(), 0);
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, candidates.size(), 1024), [&](const tbb::blocked_range<size_t>& r) {
-    AdaptiveGrid::Reader local(g);
-    for (size_t i = r.begin(); i != r.end(); ++i) {
-      const Coord p = lattice_point(lattice, candidates[i]);
-      flag[i] = nonmanifold_at(local, L, p, label, choice) && is_surface_node(local, g, p, label, choice);
-    }
-  });
-  std::vector<uint64_t> flagged;
-  for (size_t i = 0; i < candidates.size(); ++i)
-    if (flag[i]) flagged.push_back(candidates[i]);
-  AdaptiveGrid::Reader reader(g);
-  return repair_nodes(
-      g, label, choice, min_exclude_level, lattice, flagged, [&](uint64_t number) { return lattice_point(lattice, number); },
-      [&](const Coord& p, uint64_t number) { return is_surface_node(reader, g, p, label, choice) ? number : UINT64_MAX; });
-}
-
-}  // namespace
-
-bool drop_cut_off_pockets(AdaptiveGrid& g, int32_t label, const std::vector<std::pair<int, Coord>>& taken_out, double pocket_share,
-                          size_t& dropped, std::vector<std::pair<int, Coord>>* dropped_cells) {
-  // Why looking near the taken-out cells is enough: the volume was one piece before. A path
-  // through it that crossed taken-out cells entered and left a cluster of them through
-  // volume cells next to it; when those are joined without the taken-out cells, the path
-  // can go round. A search from each of them that ends without meeting the others has found
-  // all of a piece that was cut off. Clusters: taken-out cells within a cell's size of each
-  // other (adjacent ones always share one: their corners differ by at most the larger one's
-  // size, half the span).
-  int32_t span = 1;
-  for (const auto& cell : taken_out) span = std::max(span, 2 * g.fine_units(cell.first));
-  auto fine_corner = [&](const std::pair<int, Coord>& cell) {
-    const int32_t s = g.fine_units(cell.first);
-    return Coord(cell.second.x() * s, cell.second.y() * s, cell.second.z() * s);
-  };
-  std::vector<uint32_t> parent(taken_out.size());
-  for (uint32_t i = 0; i < parent.size(); ++i) parent[i] = i;
-  auto find = [](std::vector<uint32_t>& up, uint32_t x) {
-    while (up[x] != x) x = up[x] = up[up[x]];
-    return x;
-  };
-  {
-    std::unordered_map<GridKey, std::vector<uint32_t>, GridKeyHash> near;
-    auto key_of = [&](const Coord& c) { return GridKey{c.x() / span, c.y() / span, c.z() / span}; };
-    for (uint32_t i = 0; i < taken_out.size(); ++i) near[key_of(fine_corner(taken_out[i]))].push_back(i);
-    for (uint32_t i = 0; i < taken_out.size(); ++i) {
-      const GridKey k = key_of(fine_corner(taken_out[i]));
-      for (int dx = -1; dx <= 1; ++dx)
-        for (int dy = -1; dy <= 1; ++dy)
-          for (int dz = -1; dz <= 1; ++dz) {
-            auto it = near.find({k.x + dx, k.y + dy, k.z + dz});
-            if (it != near.end())
-              for (uint32_t j : it->second) parent[find(parent, i)] = find(parent, j);
-          }
-    }
-  }
-  std::map<uint32_t, std::vector<uint32_t>> clusters;  // ordered: the same drops on every run
-  for (uint32_t i = 0; i < taken_out.size(); ++i) clusters[find(parent, i)].push_back(i);
-
-  auto cell_key = [](int level, const Coord& c) { return GridKey{int64_t(c.x()) + (int64_t(level) << 32), c.y(), c.z()}; };
-  constexpr size_t budget_base = 50000, budget_per_seed = 200;  // per cluster, before leaving it to a full labelling
-  std::vector<std::vector<std::pair<int, Coord>>> pockets;
-  double pocket_limit = -1;  // pocket_share of the volume, measured when a first pocket is found
-  auto limit = [&] {
-    if (pocket_limit < 0) {
-      double volume = 0;
-      const double side0 = g.fine_units(0), cell0 = side0 * side0 * side0;
-      g.for_each_level0_block([&](const AdaptiveGrid::Block& b, int32_t v) { volume += v == label ? double(b.cells()) * cell0 : 0.0; },
-                              [&](const Coord&, int32_t v) { volume += v == label ? cell0 : 0.0; });
-      g.for_each_fine_leaf([&](int level, const Coord&, int32_t v) {
-        const double side = g.fine_units(level);
-        if (v == label) volume += side * side * side;
-      });
-      pocket_limit = pocket_share * volume;
-    }
-    return pocket_limit;
-  };
-  for (const auto& [root, members] : clusters) {
-    // One search per volume cell next to the cluster, run together (breadth first); searches
-    // that meet are joined. pending[g]: cells queued and not yet expanded by joined search g.
-    std::vector<std::pair<int, Coord>> queue;
-    std::vector<uint32_t> from;  // the search that queued each cell
-    std::unordered_map<GridKey, uint32_t, GridKeyHash> owner;
-    for (uint32_t i : members)
-      for (int axis = 0; axis < 3; ++axis)
-        for (int dir = -1; dir <= 1; dir += 2)
-          g.for_each_face_neighbour(taken_out[i].first, taken_out[i].second, axis, dir, [&](const grid::LeafRef& n) {
-            if (n.outside_box || n.value != label) return;
-            if (owner.emplace(cell_key(n.level, n.ijk), uint32_t(queue.size())).second)
-              from.push_back(uint32_t(queue.size())), queue.emplace_back(n.level, n.ijk);
-          });
-    if (queue.size() <= 1) continue;
-    const size_t budget = budget_base + budget_per_seed * queue.size();
-    std::vector<uint32_t> up(queue.size()), pending(queue.size(), 1);
-    for (uint32_t i = 0; i < up.size(); ++i) up[i] = i;
-    size_t open = queue.size();  // searches not yet joined to another nor finished
-    std::vector<uint32_t> finished;
-    for (size_t q = 0; q < queue.size() && open > 1; ++q) {
-      if (queue.size() > budget) return false;
-      const auto [level, c] = queue[q];
-      const uint32_t mine = find(up, from[q]);
-      for (int axis = 0; axis < 3; ++axis)
-        for (int dir = -1; dir <= 1; dir += 2)
-          g.for_each_face_neighbour(level, c, axis, dir, [&](const grid::LeafRef& n) {
-            if (n.outside_box || n.value != label) return;
-            const uint32_t me = find(up, mine);
-            auto [it, added] = owner.emplace(cell_key(n.level, n.ijk), me);
-            if (added) {
-              from.push_back(me), queue.emplace_back(n.level, n.ijk);
-              ++pending[me];
-              return;
-            }
-            const uint32_t other = find(up, it->second);
-            if (other != me) up[other] = me, pending[me] += pending[other], --open;
-          });
-      const uint32_t me = find(up, mine);
-      if (--pending[me] == 0) finished.push_back(me), --open;  // all of a cut-off piece
-    }
-    // Undecided within the budget, or every search ended (no piece reached beyond: a tiny
-    // volume): a full labelling decides.
-    if (open != 1) return false;
-    for (uint32_t f : finished) {
-      std::vector<std::pair<int, Coord>> cells;
-      double volume = 0;
-      for (size_t k = 0; k < queue.size(); ++k)
-        if (find(up, from[k]) == f) {
-          cells.push_back(queue[k]);
-          const double side = g.fine_units(queue[k].first);
-          volume += side * side * side;
-        }
-      if (volume >= limit()) return false;  // not clearly smaller than the rest: a full labelling decides
-      pockets.push_back(std::move(cells));
-    }
-  }
-  for (const auto& cells : pockets)
-    for (const auto& [level, c] : cells) {
-      g.set(level, c, grid::kExcluded);
-      if (dropped_cells) dropped_cells->emplace_back(level, c);
-    }
-  dropped = pockets.size();
-  return true;
-}
-
-LatticeSurface extract_manifold_surface(AdaptiveGrid& g, int32_t& label, VolumeChoice choice, ExtractStats& stats,
-                                        ProgressSink* progress, const std::vector<Coord>& anchors, int min_exclude_level,
-                                        bool whole_rounds) {
-  for (int k = 0; k < 3; ++k)
-    if (int64_t(g.dims0()[k]) * g.fine_units(0) >= (1 << 21) - 2)
-      throw Error(ErrorKind::InvalidArgument, "too many cells across the model at this base size and number of levels");
-  // New labels must not collide with the labels of other free components.
-  int32_t next_label = label + 1;
-  auto higher = [&](int32_t v) { next_label = std::max(next_label, v + 1); };
-  g.for_each_level0_block([&](const AdaptiveGrid::Block&, int32_t v) { higher(v); }, [&](const Coord&, int32_t v) { higher(v); });
-  g.for_each_fine_leaf([&](int, const Coord&, int32_t v) { higher(v); });
-  const int max_rounds = 64;
-  // A round over the whole surface first; later rounds look only near the cells the last one
-  // changed (the whole surface's cell faces had been 1 s of each of 4 rounds on the 2.37M
-  // assembly at 0.25 %), until a full labelling changes cells anywhere.
-  bool whole = true;
-  std::vector<uint64_t> candidates;  // for a round near the changes: lattice points to look at
-  for (int round = 0; round < max_rounds; ++round) {
-    if (progress) {
-      if (progress->cancelled()) throw Error(ErrorKind::Cancelled, "cancelled");
-      progress->progress("extract", std::min(0.9, round * 0.1),
-                         whole ? "extracting cell faces, round " + std::to_string(round + 1)
-                               : "repairing " + std::to_string(candidates.size()) + " lattice points, round " + std::to_string(round + 1));
-    }
-    std::optional<FacesAndNodes> faces;
-    RoundRepairs rep;
-    if (whole || whole_rounds) {
-      faces = faces_and_nodes(g, label, choice);
-      if (faces->quads.empty()) throw Error(ErrorKind::WrapFailed, "the chosen volume has no boundary: nothing to wrap");
-      rep = repair_surface(g, label, choice, faces->surf, min_exclude_level, !whole);
-    } else {
-      rep = repair_near(g, label, choice, std::move(candidates), min_exclude_level);
-    }
-    candidates.clear();
-    stats.rounds = round + 1;
-    if (rep.changed == 0) {
-      LatticeSurface surf = faces ? with_polygons(std::move(*faces)) : extract_faces(g, label, choice);
-      if (surf.polygons.empty()) throw Error(ErrorKind::WrapFailed, "the chosen volume has no boundary: nothing to wrap");
-      if (progress)
-        progress->progress("extract", 1.0, std::to_string(surf.polygons.size()) + " faces, " + std::to_string(surf.nodes.size()) + " nodes");
-      return surf;
-    }
-    stats.excluded_cells += rep.changed;
-    // Still one piece: nothing to drop, and labelling the whole volume again (most of a round
-    // on fine grids) is not needed. With seed points the volume may hold several chambers,
-    // and the full labelling below decides which stay.
-    if (choice != VolumeChoice::SeedPoints) {
-      size_t pockets = 0;
-      std::vector<std::pair<int, Coord>> dropped;
-      if (drop_cut_off_pockets(g, label, rep.taken_out, 0.25, pockets, &dropped)) {
-        stats.dropped_pieces += pockets;
-        const DenseNumbers lattice = lattice_numbers(g);
-        candidates = std::move(rep.visited);
-        for (const auto* cells : {&rep.taken_out, &rep.split, &dropped})
-          for (const auto& [level, c] : *cells) boundary_points(g, lattice, level, c, candidates);
-        whole = false;
-        continue;
-      }
-    }
-    whole = true;
-    // Taking cells out may cut small pockets off the volume: keep its main piece only.
-    const int32_t old = label;
-    grid::Components comps = grid::label_components(g, [old](int32_t v) { return v == old; }, next_label, progress);
-    next_label += int32_t(comps.count());
-    int32_t keep = -1;
-    double best = -1;
-    for (size_t i = 0; i < comps.count(); ++i) {
-      bool better = choice == VolumeChoice::Outside ? comps.touches_outside[i] != 0 && comps.volume[i] > best
-                                                    : comps.volume[i] > best;
-      if (better) {
-        best = comps.volume[i];
-        keep = comps.first_label + int32_t(i);
-      }
-    }
-    if (keep < 0) throw Error(ErrorKind::WrapFailed, "the chosen volume vanished while making the surface manifold");
-    // With seed points, every piece holding one stays (one chamber per seed point).
-    std::vector<int32_t> kept{keep};
-    if (choice == VolumeChoice::SeedPoints && !anchors.empty()) {
-      kept.clear();
-      for (const Coord& a : anchors) {
-        int32_t v = g.leaf_at(g.max_level(), a).value;
-        if (v >= comps.first_label && std::find(kept.begin(), kept.end(), v) == kept.end()) kept.push_back(v);
-      }
-      if (kept.empty()) kept.push_back(keep);
-    }
-    stats.dropped_pieces += comps.count() - kept.size();
-    if (comps.count() > 1) {
-      g.relabel([&](int32_t v) {
-        if (v < comps.first_label) return v;
-        return std::find(kept.begin(), kept.end(), v) == kept.end() ? int32_t(grid::kExcluded) : kept.front();
-      });
-    }
-    label = kept.front();
-  }
-  throw Error(ErrorKind::WrapFailed, "could not make the voxel surface manifold after " + std::to_string(max_rounds) + " rounds");
 }
 
 }  // namespace vdbwrap::extract
