@@ -35,7 +35,7 @@ void run_local(Work& w, const RepairParams& params, const LocalParams& lp, doubl
 
 // Part 2: the regions still intersecting (of input region `only`; all when negative) are
 // removed with a ring around them and refilled, within `max_dev` of `original` (the input
-// surface); `fair` false: refined fills only.
+// surface); `fair` false: fills refined but not faired.
 void run_refill(Work& w, const RepairParams& params, double max_dev, const mesh::SurfaceIndex& original,
                 RepairReport& report, ProgressSink* progress, int32_t only = -1, bool fair = true);
 
