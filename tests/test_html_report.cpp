@@ -36,6 +36,15 @@ TEST(HtmlReport, RejectsMissingInputAndReportsThatAreNotJsonObjects) {
   } catch (const Error& e) {
     EXPECT_EQ(e.kind(), ErrorKind::InvalidArgument);
   }
+  Mesh broken = box;
+  broken.triangles[3][1] = 8;
+  data.input = &broken;
+  try {
+    html_report(data, "var THREE = {};");
+    FAIL() << "a triangle corner past the points accepted";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.kind(), ErrorKind::InvalidArgument);
+  }
   data.input = &box;
   for (const char* bad : {"", "{\"input\": ", "[1, 2]", "42"}) {
     data.report_json = bad;

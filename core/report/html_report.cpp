@@ -257,6 +257,16 @@ json bit_counts(const std::vector<uint8_t>& flags) {
   return counts;
 }
 
+void check_indices(const Mesh& m, const char* which) {
+  for (const Tri& t : m.triangles)
+    for (uint32_t v : t)
+      if (v >= m.points.size())
+        throw Error(ErrorKind::InvalidArgument, std::string("html report: the ") + which + " has a triangle corner " +
+                                                    std::to_string(v) + " past its " + std::to_string(m.points.size()) + " points");
+  if (!m.triangle_part.empty() && m.triangle_part.size() != m.triangles.size())
+    throw Error(ErrorKind::InvalidArgument, std::string("html report: the ") + which + "'s part list does not match its triangles");
+}
+
 const char* sign_name(DistanceSign s) {
   switch (s) {
     case DistanceSign::Outside: return "outside";
@@ -278,6 +288,8 @@ std::string html_report(const HtmlReportData& data, const std::string& three_js)
   if (!r.is_object()) throw Error(ErrorKind::InvalidArgument, "html report: the report is not a JSON object");
   const Mesh& input = *data.input;
   const Mesh* wrap = data.wrap && !data.wrap->triangles.empty() ? data.wrap : nullptr;
+  check_indices(input, "input");
+  if (wrap) check_indices(*wrap, "wrap");
 
   Box3 box;
   for (const Tri& t : input.triangles)

@@ -36,7 +36,7 @@ InputMarks mark_input(const Mesh& input, const ExactWeld& weld, double feature_a
     normals[t] = normalized(area_vector(weld.unique[w[0]], weld.unique[w[1]], weld.unique[w[2]]));
   }
   const EdgeTriangles edges = edge_triangles(tris, &usable);
-  const double cos_sharp = std::cos(feature_angle_deg * M_PI / 180.0);
+  const double cos_sharp = std::cos(feature_angle_deg * 3.14159265358979323846 / 180.0);
   for (size_t e = 0; e < edges.edges(); ++e) {
     const uint32_t a = uint32_t(edges.keys[e] >> 32), b = uint32_t(edges.keys[e] & 0xffffffffu);
     const uint32_t* around = edges.begin(e);
