@@ -65,6 +65,12 @@ void pad_arrays(std::vector<DataArray>& arrays, size_t size) {
     if (a.values.size() < size) a.values.resize(size, NAN);
 }
 
+void pad_mesh_data(MeshData* data, const Mesh& mesh) {
+  if (!data) return;
+  pad_arrays(data->point_data, mesh.points.size());
+  pad_arrays(data->cell_data, mesh.triangles.size());
+}
+
 void check_point_count(const std::string& name, uint64_t count) {
   if (count > uint64_t(UINT32_MAX))
     fail(name, "has " + std::to_string(count) + " vertices, more than 32-bit indices can address");

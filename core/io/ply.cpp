@@ -8,11 +8,12 @@
 #include <unordered_map>
 
 #include "io/readers.h"
+#include "io/scalar_type.h"
 
 namespace vdbwrap::io::detail {
 namespace {
 
-enum class Type { I8, U8, I16, U16, I32, U32, I64, U64, F32, F64 };
+using Type = ScalarType;
 
 struct Property {
   std::string name;
@@ -51,26 +52,6 @@ bool parse_type(std::string_view s, Type& t) {
       return true;
     }
   return false;
-}
-
-size_t type_size(Type t) {
-  switch (t) {
-    case Type::I8:
-    case Type::U8: return 1;
-    case Type::I16:
-    case Type::U16: return 2;
-    case Type::I32:
-    case Type::U32:
-    case Type::F32: return 4;
-    default: return 8;
-  }
-}
-
-bool is_integer(Type t) { return t != Type::F32 && t != Type::F64; }
-
-DataArray::Type data_type(Type t) {
-  if (t == Type::U8) return DataArray::Type::UInt8;
-  return is_integer(t) ? DataArray::Type::Int32 : DataArray::Type::Float64;
 }
 
 // ---- header -------------------------------------------------------------------------------
@@ -179,48 +160,27 @@ class BinarySource {
       : p_(body.data()), end_(body.data() + body.size()), little_(little), name_(name) {}
 
   double real(Type t) {
-    need(type_size(t));
-    double v = 0;
-    switch (t) {
-      case Type::I8: v = int8_t(*p_); break;
-      case Type::U8: v = uint8_t(*p_); break;
-      case Type::I16: v = load<int16_t>(p_, little_); break;
-      case Type::U16: v = load<uint16_t>(p_, little_); break;
-      case Type::I32: v = load<int32_t>(p_, little_); break;
-      case Type::U32: v = load<uint32_t>(p_, little_); break;
-      case Type::I64: v = double(load<int64_t>(p_, little_)); break;
-      case Type::U64: v = double(load<uint64_t>(p_, little_)); break;
-      case Type::F32: v = load<float>(p_, little_); break;
-      case Type::F64: v = load<double>(p_, little_); break;
-    }
-    p_ += type_size(t);
+    need(scalar_size(t));
+    const double v = load_scalar<double>(p_, t, little_);
+    p_ += scalar_size(t);
     return v;
   }
 
   // Only called for integer types (checked on the header).
   int64_t integer(Type t) {
-    if (t == Type::U64) {  // values above INT64_MAX become INT64_MAX: out of any range anyway
-      need(8);
-      uint64_t v = load<uint64_t>(p_, little_);
-      p_ += 8;
-      return int64_t(std::min<uint64_t>(v, uint64_t(INT64_MAX)));
-    }
-    if (t == Type::I64) {
-      need(8);
-      int64_t v = load<int64_t>(p_, little_);
-      p_ += 8;
-      return v;
-    }
-    return int64_t(real(t));  // exact: every smaller integer type fits a double
+    need(scalar_size(t));
+    const int64_t v = load_scalar<int64_t>(p_, t, little_);
+    p_ += scalar_size(t);
+    return v;
   }
 
   void skip(Type t) {
-    need(type_size(t));
-    p_ += type_size(t);
+    need(scalar_size(t));
+    p_ += scalar_size(t);
   }
 
   // True when n values of type t could still be in the data (guards list allocations).
-  bool can_hold(uint64_t n, Type t) const { return n <= uint64_t(end_ - p_) / type_size(t); }
+  bool can_hold(uint64_t n, Type t) const { return n <= uint64_t(end_ - p_) / scalar_size(t); }
 
   std::string where() const { return ""; }
   uint64_t remaining() const { return uint64_t(end_ - p_); }
@@ -319,7 +279,7 @@ int find_property(const Element& e, std::string_view name, bool list) {
 // ASCII: each value is at least one character plus a separator.
 uint64_t min_element_bytes(const Element& e, bool binary) {
   uint64_t n = 0;
-  for (const Property& p : e.props) n += binary ? type_size(p.is_list ? p.count_type : p.type) : 2;
+  for (const Property& p : e.props) n += binary ? scalar_size(p.is_list ? p.count_type : p.type) : 2;
   return n;
 }
 
@@ -346,10 +306,7 @@ class BodyReader {
     }
     src_.check_end();
     name_parts();
-    if (data_) {
-      pad_arrays(data_->point_data, mesh_.points.size());
-      pad_arrays(data_->cell_data, mesh_.triangles.size());
-    }
+    pad_mesh_data(data_, mesh_);
     return std::move(mesh_);
   }
 

@@ -222,6 +222,8 @@ inline double storable(DataArray::Type t, double v) {
 DataArray& data_array(std::vector<DataArray>& arrays, const std::string& name, DataArray::Type type, size_t size);
 // Pads every array with NaN up to `size` (values a piece or an element did not give).
 void pad_arrays(std::vector<DataArray>& arrays, size_t size);
+// The same for a whole read: point arrays to the mesh's points, cell arrays to its triangles.
+void pad_mesh_data(MeshData* data, const Mesh& mesh);
 // Grid and element IDs are 8-character fields: the caller checks the counts against this.
 constexpr uint64_t kNastranMaxId = 99999999;
 void write_nastran(const Mesh& mesh, Sink& out);

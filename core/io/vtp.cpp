@@ -11,6 +11,7 @@
 #include <unordered_map>
 
 #include "io/readers.h"
+#include "io/scalar_type.h"
 
 namespace vdbwrap::io::detail {
 namespace {
@@ -236,7 +237,7 @@ size_t decode_base64(std::string_view text, size_t wanted, std::string& out) {
 
 // ---- arrays -------------------------------------------------------------------------------
 
-enum class Type { I8, U8, I16, U16, I32, U32, I64, U64, F32, F64, String };
+using Type = ScalarType;
 
 struct File {
   explicit File(const std::string& file_name) : name(file_name) {}
@@ -263,21 +264,6 @@ bool parse_type(std::string_view s, Type& t) {
   return false;
 }
 
-size_t type_size(Type t) {
-  switch (t) {
-    case Type::I8:
-    case Type::U8:
-    case Type::String: return 1;
-    case Type::I16:
-    case Type::U16: return 2;
-    case Type::I32:
-    case Type::U32:
-    case Type::F32: return 4;
-    default: return 8;
-  }
-}
-
-bool is_integer(Type t) { return t != Type::F32 && t != Type::F64 && t != Type::String; }
 
 std::string array_label(const XmlElement& a) {
   const std::string* n = a.attribute("Name");
@@ -331,24 +317,7 @@ std::string_view binary_payload(const File& f, const XmlElement& a, const std::s
 
 template <class T>
 T load_as(const File& f, const char* p, Type t) {
-  switch (t) {
-    case Type::I8: return T(int8_t(*p));
-    case Type::U8: return T(uint8_t(*p));
-    case Type::I16: return T(load<int16_t>(p, f.little_endian));
-    case Type::U16: return T(load<uint16_t>(p, f.little_endian));
-    case Type::I32: return T(load<int32_t>(p, f.little_endian));
-    case Type::U32: return T(load<uint32_t>(p, f.little_endian));
-    case Type::I64: return T(load<int64_t>(p, f.little_endian));
-    case Type::U64: {
-      uint64_t v = load<uint64_t>(p, f.little_endian);
-      if constexpr (std::is_integral_v<T>) v = std::min<uint64_t>(v, uint64_t(INT64_MAX));  // out of range anyway
-      return T(v);
-    }
-    case Type::F32: return T(load<float>(p, f.little_endian));
-    case Type::F64: return T(load<double>(p, f.little_endian));
-    case Type::String: break;
-  }
-  return T(0);
+  return load_scalar<T>(p, t, f.little_endian);
 }
 
 // The values of a numeric DataArray as T (int64_t for indices and ids, double for
@@ -389,7 +358,7 @@ std::vector<T> read_array(const File& f, const XmlElement& a) {
   if (format != "binary" && format != "appended") bad("unknown format " + quoted(format));
   std::string storage;
   std::string_view payload = binary_payload(f, a, format, storage);
-  const size_t size = type_size(type);
+  const size_t size = scalar_size(type);
   if (payload.size() % size != 0)
     bad(std::to_string(payload.size()) + " bytes is not a whole number of " + *type_text + " values");
   values.resize(payload.size() / size);
@@ -453,10 +422,7 @@ class VtpReader {
     for (size_t c : poly->children)
       if (element(c).name == "Piece") read_piece(element(c), pieces++);
     name_parts();
-    if (data_) {
-      pad_arrays(data_->point_data, mesh_.points.size());
-      pad_arrays(data_->cell_data, mesh_.triangles.size());
-    }
+    pad_mesh_data(data_, mesh_);
     return std::move(mesh_);
   }
 
@@ -615,9 +581,7 @@ class VtpReader {
       if (values.size() != count)
         fail(name(), where + ": array " + quoted(*array_name) + " has " + std::to_string(values.size()) + " values for " +
                          std::to_string(count));
-      const DataArray::Type kind = type == Type::U8 ? DataArray::Type::UInt8
-                                   : is_integer(type) ? DataArray::Type::Int32
-                                                      : DataArray::Type::Float64;
+      const DataArray::Type kind = data_type(type);
       DataArray& out = data_array(arrays, *array_name, kind, first);
       out.values.resize(first, NAN);
       if (!cells) {
@@ -718,7 +682,7 @@ const char* data_type_name(DataArray::Type t) {
   return "Float64";
 }
 
-size_t data_type_size(DataArray::Type t) {
+size_t data_scalar_size(DataArray::Type t) {
   return t == DataArray::Type::Int32 ? 4 : t == DataArray::Type::UInt8 ? 1 : 8;
 }
 
@@ -756,7 +720,7 @@ void write_vtp(const Mesh& mesh, Sink& out, const MeshData* data) {
   for (const auto* arrays : {&point_data, &cell_data})
     for (const DataArray& a : *arrays) {
       data_offsets.push_back(next_offset);
-      next_offset += 8 + a.values.size() * data_type_size(a.type);
+      next_offset += 8 + a.values.size() * data_scalar_size(a.type);
     }
   size_t next_array = 0;
   auto declare = [&](const DataArray& a) {
