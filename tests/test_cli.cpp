@@ -16,7 +16,7 @@
 #include <regex>
 
 #include "../client/suggest.h"
-#include "io/mesh_io.h"
+#include "vdbwrap/io.h"
 #include "test_meshes.h"
 
 #ifndef VDBWRAP_CLI

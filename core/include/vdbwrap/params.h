@@ -126,9 +126,6 @@ struct WrapParams {
   // Stage 4: triangles with an angle under 10 degrees left after the rebuilds are removed by edge
   // flips, collapses and tangential moves checked against the input (off by default for now).
   bool remove_slivers = false;
-  // Stage 4: triangles with an angle under 10 degrees left after the rebuilds are removed by edge
-  // flips, collapses and tangential moves checked against the input (off by default for now).
-  bool remove_slivers = false;
   QualityThresholds quality;       // what counts as a defect (fixed; listed in the report)
 
   // The output will be stored in single precision (binary STL): coordinates are rounded to
