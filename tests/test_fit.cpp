@@ -41,7 +41,7 @@ Fitted fit_mesh(const Mesh& m, double base_percent, WrapParams params = {}) {
   extract::ExtractStats stats;
   auto lattice = extract::extract_manifold_surface(*f.grid, label, params.volume, stats, nullptr);
   mesh::SurfaceIndex index(f.input.mesh.points, f.input.mesh.triangles);
-  f.surface = fit::fit_to_input(lattice, *f.grid, index, {}, Vec3{0, 0, 0}, params, nullptr);
+  f.surface = fit::fit_to_input(lattice, *f.grid, index, {}, Vec3{0, 0, 0}, pipeline::fit_params(params), nullptr);
   return f;
 }
 

@@ -92,7 +92,7 @@ bool split_along_02(const std::array<uint32_t, 4>& q, const std::vector<Vec3>& p
 }  // namespace
 
 FittedSurface fit_to_input(const extract::LatticeSurface& surf, const grid::AdaptiveGrid& g, const mesh::SurfaceIndex& input,
-                           const std::vector<FeatureCurve>& curves, const Vec3& origin, const WrapParams& params,
+                           const std::vector<FeatureCurve>& curves, const Vec3& origin, const FitParams& params,
                            ProgressSink* progress) {
   const double hf = g.fine_size();
   // Nodes: lattice nodes, then one centre node per polygon with more than four nodes.

@@ -10,7 +10,7 @@
 #include "mesh/surface_index.h"
 #include "fit/two_sided.h"
 #include "grid/adaptive_grid.h"
-#include "vdbwrap/wrap.h"
+#include "vdbwrap/progress.h"
 
 namespace vdbwrap::fit {
 
@@ -37,10 +37,19 @@ struct FittedSurface {
 std::vector<uint32_t> invalid_triangles(const std::vector<Vec3>& points, const std::vector<Tri>& triangles, double min_area2,
                                         bool* complete = nullptr);
 
+// What the projection needs of the wrap's parameters (WrapParams has the same fields).
+struct FitParams {
+  int presmooth_iterations = 16;   // smoothing of the voxel surface before projection (untangling)
+  double surface_offset = 0.005;   // nodes stop this fraction of the finest cell off the input
+  int validity_rounds = 400;       // rounds of the validity loop
+  bool float_coordinates = false;  // validity as it will be stored: coordinates rounded to float
+  bool two_sided_sheets = false;   // each side of an input wrapped from both sides projects to its own side
+};
+
 // `origin` turns the local frame of the grid and the index into output coordinates.
 // `curves`: feature curves to snap to (empty: no snapping).
 FittedSurface fit_to_input(const extract::LatticeSurface& surface, const grid::AdaptiveGrid& grid, const mesh::SurfaceIndex& input,
-                           const std::vector<FeatureCurve>& curves, const Vec3& origin, const WrapParams& params,
+                           const std::vector<FeatureCurve>& curves, const Vec3& origin, const FitParams& params,
                            ProgressSink* progress);
 
 }  // namespace vdbwrap::fit

@@ -64,7 +64,7 @@ void fit_surface(WrapRun& run) {
     std::vector<Vec3>& out = run.result.feature_curves.emplace_back();
     for (const Vec3& p : c.points) out.push_back(p + run.prepared.origin);
   }
-  run.fitted = fit::fit_to_input(run.lattice, *run.refined.grid, index, curves, run.prepared.origin, run.params, run.progress);
+  run.fitted = fit::fit_to_input(run.lattice, *run.refined.grid, index, curves, run.prepared.origin, fit_params(run.params), run.progress);
   report_snapping(report, run.fitted);
   const std::string two_sided = fit::describe_two_sided(run.fitted.two_sided, run.prepared, report.two_sided);
   if (run.progress && !two_sided.empty()) run.progress->progress("project", 1.0, two_sided);

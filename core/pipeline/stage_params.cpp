@@ -12,6 +12,11 @@ grid::RefineCriteria refine_criteria(const WrapParams& params) {
   return {params.refine_max_triangles, params.refine_normal_spread_deg, params.refine_at_features};
 }
 
+fit::FitParams fit_params(const WrapParams& params) {
+  return {params.presmooth_iterations, params.surface_offset, params.validity_rounds, params.float_coordinates,
+          params.two_sided_sheets};
+}
+
 fit::FeatureInsertParams feature_insert_params(const WrapParams& params, double base, double fine) {
   fit::FeatureInsertParams p;
   p.spacing = 0.5 * fine;     // curve samples: twice per finest cell, so no cell's worth of curve is skipped

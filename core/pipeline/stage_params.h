@@ -5,6 +5,7 @@
 #include <cstddef>
 
 #include "fit/feature_insert.h"
+#include "fit/fit_surface.h"
 #include "grid/refine.h"
 #include "grid/size_controls.h"
 #include "post/coarsen.h"
@@ -26,6 +27,7 @@ grid::SizeRequests size_requests(const WrapParams& params);
 grid::RefineCriteria refine_criteria(const WrapParams& params);
 // base: the base size, fine: the finest cell, both in model units.
 fit::FeatureInsertParams feature_insert_params(const WrapParams& params, double base, double fine);
+fit::FitParams fit_params(const WrapParams& params);
 post::CoarsenParams coarsen_params(const WrapParams& params, double base, double fine);
 post::RemeshParams remesh_params(const WrapParams& params, double base, double fine);
 // The intersection repair of stage 4 moves nothing farther than this.
