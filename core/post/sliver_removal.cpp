@@ -221,6 +221,7 @@ class SliverRemover {
   // Is the change an improvement that keeps the surface valid and near the input?
   bool acceptable(const Change& c) {
     double old_min = 180, new_min = 180;
+    size_t old_bad = 0, new_bad = 0;  // triangles under the target angle
     Spread old_d, new_d;
     std::vector<Tri> made;
     std::vector<check::Corners> made_at;
@@ -244,6 +245,7 @@ class SliverRemover {
       const Vec3 &oa = s_.points[o[0]], &ob = s_.points[o[1]], &oc = s_.points[o[2]];
       const double old_angle = min_angle_deg(oa, ob, oc);
       old_min = std::min(old_min, old_angle);
+      old_bad += old_angle < prm_.target_angle_deg;
       sample(oa, ob, oc, old_d);
       if (c.dies[i]) continue;
       const Tri& t = c.tris[i];
@@ -253,10 +255,14 @@ class SliverRemover {
       if (old_angle >= prm_.target_angle_deg ? dot(normalized(area_vector(oa, ob, oc)), n_new) < cos_turn_
                                              : dot(patch, n_new) < std::min(cos_turn_, patch_cos))
         return refuse("turns");
-      new_min = std::min(new_min, min_angle_deg(at[0], at[1], at[2]));
+      const double new_angle = min_angle_deg(at[0], at[1], at[2]);
+      new_min = std::min(new_min, new_angle);
+      new_bad += new_angle < prm_.target_angle_deg;
       made.push_back(t), made_at.push_back(at);
     }
-    if (new_min < old_min + prm_.min_gain_deg) return refuse("no gain");
+    // The smallest angle grows; or, with a sliver next to it that stays as it is, it does not
+    // shrink and fewer triangles are left under the target.
+    if (new_min < old_min + prm_.min_gain_deg && !(new_min >= old_min && new_bad < old_bad)) return refuse("no gain");
     for (size_t i = 0; i < made.size(); ++i) sample(made_at[i][0], made_at[i][1], made_at[i][2], new_d);
     if (new_d.worst > std::max(prm_.max_deviation, old_d.worst)) return refuse("far");
     // On average no farther from the input than before (a tenth of the bound for rounding).
