@@ -197,7 +197,7 @@ class SliverRemover {
   // q's side; q itself when the input is not near (a bridge over a gap stays a bridge).
   Vec3 onto_input(const Vec3& q, double cell) const {
     decltype(ref_.closest(q)) hit;  // the index's Hit
-    if (!ref_.closest_within(q - ref_.origin, 0.5 * cell, hit)) return q;
+    if (!ref_.closest_within(q - ref_.origin, 0.5 * cell, hit)) return prm_.float_coordinates ? round_to_float(q) : q;
     const Vec3 foot = hit.point + ref_.origin;
     const double d = norm(q - foot);
     Vec3 p = d > 1e-9 * cell ? foot + (q - foot) * (std::min(prm_.offset, d) / d) : foot;
