@@ -35,6 +35,11 @@ void WrapOptions::add_to(CLI::App* cmd, const std::string& threads_help) {
        [this](WrapParams& p) { p.refine_normal_spread_deg = cli_.refine_normal_spread_deg; })
       ->capture_default_str()
       ->group("Size");
+  CLI::Option* fc = cmd->add_flag("--refine-far-cells,!--no-refine-far-cells", refine_far_cells_,
+                                  "Refine a cell the input passes through when a point of its boundary lies more than a "
+                                  "base cell from the input there (the wrap's held-back nodes stay within a base cell)")
+                        ->group("Size");
+  bindings_.push_back({fc, [this](WrapParams& p) { p.refine_far_cells = refine_far_cells_; }});
   bind(cmd, "--volume", volume_,
        "Volume to wrap: outside (around the input), inside (the largest volume it encloses), or the volume(s) "
        "holding seed points X,Y,Z (several separated by ';'); a seed point's volume reaching the outside is a leak",

@@ -39,6 +39,7 @@ class WrapOptions {
   bool no_features_ = false, no_distances_ = false, no_remesh_ = false;
   bool sliver_removal_ = false;
   bool two_sided_sheets_ = false;
+  bool refine_far_cells_ = false;
 };
 
 }  // namespace vdbwrap::cli

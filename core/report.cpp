@@ -80,6 +80,7 @@ json params_json(const WrapParams& p) {
               {"refine_max_triangles", p.refine_max_triangles},
               {"refine_normal_spread_deg", p.refine_normal_spread_deg},
               {"refine_at_features", p.refine_at_features},
+              {"refine_far_cells", p.refine_far_cells},
               {"weld_tolerance", p.weld_tolerance},
               {"surface_offset", p.surface_offset},
               {"presmooth_iterations", p.presmooth_iterations},

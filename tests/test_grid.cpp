@@ -2,6 +2,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <map>
 #include <memory>
 #include <random>
@@ -220,6 +221,29 @@ TEST(Refine, FeaturesRefineAndFlatFacesDoNot) {
   EXPECT_TRUE(without.touched_per_level.size() == 1 || without.touched_per_level[1] == 0);
   // Refined cells only near the edges: far fewer than refining every touched cell.
   EXPECT_LT(with.touched_per_level[2], 8 * 8 * with.touched_per_level[0] / 2);
+}
+
+TEST(Refine, FarCellsRefineOnlyWithTheSwitch) {
+  // A tilted box: its flat faces cut level-0 cells obliquely, leaving points of their boundary
+  // more than a base cell from the face in some of them. Only features and normal spread are off.
+  Mesh box = box_mesh({0, 0, 0}, {1, 1, 1});
+  const double a = 0.5, b = 0.3;
+  for (Vec3& p : box.points) {
+    Vec3 q{std::cos(a) * p[0] - std::sin(a) * p[1], std::sin(a) * p[0] + std::cos(a) * p[1], p[2]};
+    p = Vec3{q[0], std::cos(b) * q[1] - std::sin(b) * q[2], std::sin(b) * q[1] + std::cos(b) * q[2]};
+  }
+  WrapParams plain;
+  plain.refine_normal_spread_deg = 179;
+  plain.refine_at_features = false;
+  auto without = refine(box, 5, 1, plain);
+  WrapParams far = plain;
+  far.refine_far_cells = true;
+  auto with = refine(box, 5, 1, far);
+  ASSERT_GE(without.refined_per_level.size(), 1u);
+  EXPECT_EQ(without.refined_per_level[0], 0u);
+  ASSERT_GE(with.refined_per_level.size(), 1u);
+  EXPECT_GT(with.refined_per_level[0], 0u);
+  EXPECT_LT(with.refined_per_level[0], with.touched_per_level[0]);  // not every touched cell
 }
 
 TEST(Refine, CurvedSurfaceRefinesByNormalSpread) {

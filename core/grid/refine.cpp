@@ -8,6 +8,7 @@
 #include <cmath>
 #include <unordered_map>
 
+#include "common/closest_point.h"
 #include "common/dense_numbers.h"
 #include "common/fill_vector.h"
 #include "common/grid_key.h"
@@ -255,6 +256,27 @@ RefineResult build_refined_grid(const prep::PreparedInput& in, const RefineCrite
 
   const FeatureSegments features = collect_features(in);
   const double cos_spread = std::cos(params.normal_spread_deg * M_PI / 180.0);
+  // Proximity: the 26 points of the cell's boundary on its 3x3x3 lattice, each within the bound
+  // of one of the cell's triangles (the nearest input may be nearer: this refines more, never less).
+  const double far2 = params.far_point_cells > 0 ? (params.far_point_cells * base) * (params.far_point_cells * base) : 0.0;
+  auto has_far_point = [&](const std::vector<uint32_t>& cell_tris, const Vec3& lo, double h) {
+    for (int a = 0; a < 3; ++a)
+      for (int b = 0; b < 3; ++b)
+        for (int c = 0; c < 3; ++c) {
+          if (a == 1 && b == 1 && c == 1) continue;
+          const Vec3 q = lo + Vec3{0.5 * a * h, 0.5 * b * h, 0.5 * c * h};
+          bool near = false;
+          for (uint32_t t : cell_tris) {
+            const Tri& tri = tris[t];
+            if (norm2(closest_on_triangle(q, pts[tri[0]], pts[tri[1]], pts[tri[2]]) - q) <= far2) {
+              near = true;
+              break;
+            }
+          }
+          if (!near) return true;
+        }
+    return false;
+  };
 
   for (int level = 0; level <= levels; ++level) {
     if (progress) {
@@ -317,6 +339,7 @@ RefineResult build_refined_grid(const prep::PreparedInput& in, const RefineCrite
             if (split) break;
           }
         }
+        if (!split && criteria && far2 > 0) split = has_far_point(ct.tris, lo, h);
         if (!split && contact && in_contact()) {
           if (level < sc.contact_level)
             split = true;

@@ -98,6 +98,9 @@ struct WrapParams {
   int refine_max_triangles = 64;        // more triangles than this in a cell: refine
   double refine_normal_spread_deg = 20; // normals spread more than this: refine
   bool refine_at_features = true;       // sharp, boundary or intersection edges: refine
+  // Refine a cell the input passes through when a point of its boundary lies more than a base
+  // cell from its triangles: held-back nodes then stay within a base cell of the input.
+  bool refine_far_cells = false;
 
   // Projection (spec stage 3).
   double weld_tolerance = 1e-7;    // fraction of the diagonal under which vertices merge
