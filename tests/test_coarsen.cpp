@@ -26,12 +26,15 @@ Mesh rotated_cube() {
 
 TEST(Coarsen, FewerTrianglesSameValidityDistanceAndEdges) {
   for (const Mesh& m : {rotated_cube(), sphere_mesh(1.0, 48, 96)}) {
-    // Coarsening alone: the remeshing of stage 4 (which changes triangles too) is off.
+    // Coarsening alone: the remeshing and sliver removal of stage 4 (which change triangles
+    // too) are off.
     WrapParams fine;
     fine.coarsen_tolerance = 0;
     fine.remesh = false;
+    fine.remove_slivers = false;
     WrapParams coarse;  // the default tolerance
     coarse.remesh = false;
+    coarse.remove_slivers = false;
     ASSERT_GT(coarse.coarsen_tolerance, 0);
     WrapResult a = wrap(m, fine), b = wrap(m, coarse);
     auto va = valid_closed_surface(a.surface), vb = valid_closed_surface(b.surface);

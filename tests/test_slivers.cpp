@@ -78,6 +78,7 @@ TEST_P(SliverRemovalWrap, FewSliversAndNoFartherFromTheInput) {
   const Mesh input = io::read_mesh(data_path(GetParam()));
   WrapParams off;
   off.base_size = Length{1, true};
+  off.remove_slivers = false;
   WrapParams on = off;
   on.remove_slivers = true;
   const WrapResult a = wrap(input, off), b = wrap(input, on);

@@ -108,7 +108,7 @@ struct WrapParams {
   // Where the volume lies on both sides of an input surface (open sheets, scans with holes), a node
   // that would make the wrap invalid first moves farther off the input on its own side (up to
   // 64 x the offset) before it is pulled back toward the lattice.
-  bool two_sided_sheets = false;
+  bool two_sided_sheets = true;
   int presmooth_iterations = 16;   // smoothing of the voxel surface before projection (untangling)
   // Rounds of the projection's validity loop (offending nodes pulled back toward the lattice);
   // intersections still left afterwards go to stage 4's remeshing and intersection repair.
@@ -127,8 +127,8 @@ struct WrapParams {
   // from the input (constrained Delaunay on nearly flat patches) or by ear clipping.
   bool remesh = true;
   // Stage 4: triangles with an angle under 10 degrees left after the rebuilds are removed by edge
-  // flips, collapses and tangential moves checked against the input (off by default for now).
-  bool remove_slivers = false;
+  // flips, collapses and tangential moves checked against the input.
+  bool remove_slivers = true;
   QualityThresholds quality;       // what counts as a defect (fixed; listed in the report)
 
   // The output will be stored in single precision (binary STL): coordinates are rounded to
