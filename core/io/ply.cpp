@@ -375,12 +375,19 @@ class BodyReader {
     vertices_read_ = true;
   }
 
-  void read_faces(const Element& e) {
+  // The element's list of vertex indices (vertex_indices, or vertex_index as some exporters
+  // write): its property number; an error naming `what` when there is none or it is not integer.
+  int index_list(const Element& e, const std::string& what) {
     int list = find_property(e, "vertex_indices", true);
     if (list < 0) list = find_property(e, "vertex_index", true);
-    if (list < 0) fail_line(name_, e.header_line, "face element has no vertex_indices list");
+    if (list < 0) fail_line(name_, e.header_line, what + " element has no vertex_indices list");
     if (!is_integer(e.props[size_t(list)].type))
-      fail_line(name_, e.header_line, "face vertex indices must have an integer type");
+      fail_line(name_, e.header_line, what + " vertex indices must have an integer type");
+    return list;
+  }
+
+  void read_faces(const Element& e) {
+    const int list = index_list(e, "face");
     int part = find_property(e, "part", false);
     if (part >= 0 && !is_integer(e.props[size_t(part)].type)) part = -1;  // not ours: skip it
     if (e.count > 0 && !vertices_read_)
@@ -414,11 +421,7 @@ class BodyReader {
   // Triangles that repeat an index are the strip's joins, not geometry: they are dropped but
   // still count for the turn.
   void read_strips(const Element& e) {
-    int list = find_property(e, "vertex_indices", true);
-    if (list < 0) list = find_property(e, "vertex_index", true);
-    if (list < 0) fail_line(name_, e.header_line, "tristrips element has no vertex_indices list");
-    if (!is_integer(e.props[size_t(list)].type))
-      fail_line(name_, e.header_line, "tristrips vertex indices must have an integer type");
+    const int list = index_list(e, "tristrips");
     if (e.count > 0 && !vertices_read_)
       fail_line(name_, e.header_line, "tristrips element before the vertex element is not supported");
     for (uint64_t i = 0; i < e.count; ++i) {
@@ -547,15 +550,6 @@ Mesh read_ply(std::string_view bytes, const std::string& name, MeshData* data) {
 
 namespace {
 
-const char* ply_type(DataArray::Type t) {
-  switch (t) {
-    case DataArray::Type::Int32: return "int";
-    case DataArray::Type::UInt8: return "uchar";
-    case DataArray::Type::Float64: break;
-  }
-  return "double";
-}
-
 // One value of an extra array, at p; returns the bytes written.
 size_t store_value(char* p, DataArray::Type t, double v) {
   v = storable(t, v);
@@ -583,12 +577,12 @@ void write_ply(const Mesh& mesh, Sink& out, const MeshData* data) {
             "\n");
   out.put("element vertex " + std::to_string(mesh.points.size()) + "\n");
   out.put("property double x\nproperty double y\nproperty double z\n");
-  for (const DataArray& a : point_data) out.put(std::string("property ") + ply_type(a.type) + " " + a.name + "\n");
+  for (const DataArray& a : point_data) out.put(std::string("property ") + written_type(a.type).ply + " " + a.name + "\n");
   out.put("element face " + std::to_string(mesh.triangles.size()) + "\n");
   out.put(mesh.points.size() <= uint64_t(INT32_MAX) ? "property list uchar int vertex_indices\n"
                                                     : "property list uchar uint vertex_indices\n");
   if (parts) out.put("property int part\n");
-  for (const DataArray& a : cell_data) out.put(std::string("property ") + ply_type(a.type) + " " + a.name + "\n");
+  for (const DataArray& a : cell_data) out.put(std::string("property ") + written_type(a.type).ply + " " + a.name + "\n");
   out.put("end_header\n");
 
   std::vector<char> record(24 + 8 * point_data.size());

@@ -35,6 +35,21 @@ inline DataArray::Type data_type(ScalarType t) {
   return is_integer(t) ? DataArray::Type::Int32 : DataArray::Type::Float64;
 }
 
+// How an extra array's values are written: the type's name in PLY and in VTK, and its size.
+struct WrittenType {
+  const char* ply;
+  const char* vtk;
+  size_t bytes;
+};
+inline WrittenType written_type(DataArray::Type t) {
+  switch (t) {
+    case DataArray::Type::Int32: return {"int", "Int32", 4};
+    case DataArray::Type::UInt8: return {"uchar", "UInt8", 1};
+    case DataArray::Type::Float64: break;
+  }
+  return {"double", "Float64", 8};
+}
+
 // The value of type t at p, as T. An integer T gets UInt64 values above INT64_MAX as INT64_MAX
 // (out of any index's range anyway); every smaller integer type is exact in a double.
 template <class T>

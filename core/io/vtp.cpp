@@ -673,18 +673,7 @@ void put_block(Sink& out, size_t count, Values&& value_at) {
   out.put_bytes(buffer, used);
 }
 
-const char* data_type_name(DataArray::Type t) {
-  switch (t) {
-    case DataArray::Type::Int32: return "Int32";
-    case DataArray::Type::UInt8: return "UInt8";
-    case DataArray::Type::Float64: break;
-  }
-  return "Float64";
-}
 
-size_t data_scalar_size(DataArray::Type t) {
-  return t == DataArray::Type::Int32 ? 4 : t == DataArray::Type::UInt8 ? 1 : 8;
-}
 
 }  // namespace
 
@@ -720,11 +709,11 @@ void write_vtp(const Mesh& mesh, Sink& out, const MeshData* data) {
   for (const auto* arrays : {&point_data, &cell_data})
     for (const DataArray& a : *arrays) {
       data_offsets.push_back(next_offset);
-      next_offset += 8 + a.values.size() * data_scalar_size(a.type);
+      next_offset += 8 + a.values.size() * written_type(a.type).bytes;
     }
   size_t next_array = 0;
   auto declare = [&](const DataArray& a) {
-    out.put(std::string("        <DataArray type=\"") + data_type_name(a.type) + "\" Name=\"" + a.name +
+    out.put(std::string("        <DataArray type=\"") + written_type(a.type).vtk + "\" Name=\"" + a.name +
             "\" format=\"appended\" offset=\"");
     out.put_uint(data_offsets[next_array++]);
     out.put("\"/>\n");

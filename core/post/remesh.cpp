@@ -582,22 +582,8 @@ class Remesher {
 
   // Live triangles and the points they use, with their data.
   void compact() {
-    std::vector<uint32_t> remap(s_.points.size(), UINT32_MAX);
-    PostSurface out;
-    for (uint32_t f = 0; f < s_.triangles.size(); ++f) {
-      if (!alive_[f]) continue;
-      Tri t = s_.triangles[f];
-      for (uint32_t& v : t) {
-        if (remap[v] == UINT32_MAX) {
-          remap[v] = uint32_t(out.points.size());
-          out.points.push_back(s_.points[v]);
-          out.cell_size.push_back(s_.cell_size[v]);
-          out.locked.push_back(s_.locked[v]);
-        }
-        v = remap[v];
-      }
-      out.triangles.push_back(t);
-    }
+    std::vector<uint32_t> remap;
+    PostSurface out = live_part(s_, alive_, remap);
     // The traced feature edges whose nodes stay (the rebuilds keep them as constraints).
     std::vector<uint64_t> kept(feature_edges_.begin(), feature_edges_.end());
     std::sort(kept.begin(), kept.end());
@@ -639,6 +625,26 @@ RemeshStats remesh_bad_regions(PostSurface& surface, const std::vector<uint8_t>&
   if (surface.triangles.empty() || !ref.input) return {};
   Remesher r(surface, flags, ref, input, params);
   return r.run(progress);
+}
+
+PostSurface live_part(const PostSurface& s, const std::vector<uint8_t>& alive, std::vector<uint32_t>& remap) {
+  remap.assign(s.points.size(), UINT32_MAX);
+  PostSurface out;
+  for (uint32_t f = 0; f < s.triangles.size(); ++f) {
+    if (!alive[f]) continue;
+    Tri t = s.triangles[f];
+    for (uint32_t& v : t) {
+      if (remap[v] == UINT32_MAX) {
+        remap[v] = uint32_t(out.points.size());
+        out.points.push_back(s.points[v]);
+        out.cell_size.push_back(s.cell_size[v]);
+        out.locked.push_back(s.locked[v]);
+      }
+      v = remap[v];
+    }
+    out.triangles.push_back(t);
+  }
+  return out;
 }
 
 }  // namespace vdbwrap::post

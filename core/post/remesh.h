@@ -24,6 +24,11 @@ struct PostSurface {
   std::vector<std::pair<uint32_t, uint32_t>> feature_edges;  // edges along the feature curves: stay edges
 };
 
+// The triangles f with alive[f] != 0 and the points they use, with their per-point data;
+// remap[v] is v's index in the result (UINT32_MAX: no live triangle uses it). The feature
+// edges are left to the caller, which knows which of its own still hold.
+PostSurface live_part(const PostSurface& s, const std::vector<uint8_t>& alive, std::vector<uint32_t>& remap);
+
 struct RemeshParams {
   // Triangles with any of these flags are bad: slivers, tiny triangles, poor normals,
   // triangles next to lost sharp edges, intersections (measured on the corpus: a rebuild on

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <initializer_list>
 #include <unordered_map>
 #include <unordered_set>
 
@@ -460,7 +461,12 @@ class SliverRemover {
     const Vec3 step = centroid - p;
     const Vec3 tangential = p + step - normal * dot(step, normal);
     const double cell = s_.cell_size[v] > 0 ? s_.cell_size[v] : norm(step);
-    for (const Vec3& x : {onto_input(tangential, cell), onto_input(p + (tangential - p) * 0.5, cell)}) {
+    return move_to_first_acceptable(v, {onto_input(tangential, cell), onto_input(p + (tangential - p) * 0.5, cell)});
+  }
+
+  // Node v moved to the first of `targets` the checks accept, if any.
+  bool move_to_first_acceptable(uint32_t v, std::initializer_list<Vec3> targets) {
+    for (const Vec3& x : targets) {
       change_.clear();
       change_.moved = v;
       change_.to = x;
@@ -481,37 +487,14 @@ class SliverRemover {
     const Vec3 &a = s_.points[feature_[v][0]], &b = s_.points[feature_[v][1]], p = s_.points[v];
     if (to_segment(p, a, b) > prm_.feature_tolerance) return false;
     const Vec3 middle = (a + b) * 0.5;
-    for (const Vec3& x : {middle, (p + middle) * 0.5}) {
-      change_.clear();
-      change_.moved = v;
-      change_.to = prm_.float_coordinates ? round_to_float(x) : x;
-      for (uint32_t g : vt_[v]) change_.add(g, s_.triangles[g]);
-      if (!acceptable(change_)) continue;
-      apply(change_);
-      ++stats_.moves;
-      return true;
-    }
-    return false;
+    auto stored = [&](const Vec3& x) { return prm_.float_coordinates ? round_to_float(x) : x; };
+    return move_to_first_acceptable(v, {stored(middle), stored((p + middle) * 0.5)});
   }
 
   // Live triangles and the points they use, with their data.
   void compact() {
-    std::vector<uint32_t> remap(s_.points.size(), kNone);
-    PostSurface out;
-    for (uint32_t f = 0; f < s_.triangles.size(); ++f) {
-      if (!alive_[f]) continue;
-      Tri t = s_.triangles[f];
-      for (uint32_t& v : t) {
-        if (remap[v] == kNone) {
-          remap[v] = uint32_t(out.points.size());
-          out.points.push_back(s_.points[v]);
-          out.cell_size.push_back(s_.cell_size[v]);
-          out.locked.push_back(s_.locked[v]);
-        }
-        v = remap[v];
-      }
-      out.triangles.push_back(t);
-    }
+    std::vector<uint32_t> remap;
+    PostSurface out = live_part(s_, alive_, remap);
     for (uint32_t a = 0; a < feature_.size(); ++a)
       for (uint32_t b : feature_[a])
         if (a < b && remap[a] != kNone && remap[b] != kNone) out.feature_edges.push_back({remap[a], remap[b]});

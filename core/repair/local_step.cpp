@@ -91,10 +91,7 @@ std::unordered_set<uint32_t> degenerate_among(const Work& w, const std::vector<u
 void run_local(Work& w, const RepairParams& params, const LocalParams& lp, double max_dev, RepairReport& report,
                ProgressSink* progress) {
   for (int iter = 0; iter < params.local_iterations && !w.pairs.empty(); ++iter) {
-    check_cancel(progress);
-    if (progress)
-      progress->progress("repair: local operations", double(iter) / params.local_iterations,
-                         std::to_string(w.pairs.size()) + " intersecting pairs");
+    start_round(progress, "repair: local operations", iter, params.local_iterations, w.pairs.size());
     report.local_iterations_run = size_t(iter + 1);
     const VertexFaces faces = vertex_faces(w.points.size(), w.tris);
     auto regions = group_regions(w.tris, triangles_of(w.pairs), w.pairs);

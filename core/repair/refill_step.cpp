@@ -25,10 +25,7 @@ void run_refill(Work& w, const RepairParams& params, double max_dev, const mesh:
   rp.fair = params.fair && fair;
   rp.float_coordinates = params.float_coordinates;
   for (int j = 0; j < params.refill_iterations && !w.pairs.empty(); ++j) {
-    check_cancel(progress);
-    if (progress)
-      progress->progress("repair: remove and refill", double(j) / params.refill_iterations,
-                         std::to_string(w.pairs.size()) + " intersecting pairs");
+    start_round(progress, "repair: remove and refill", j, params.refill_iterations, w.pairs.size());
     report.refill_iterations_run = size_t(j + 1);
     VertexFaces faces = vertex_faces(w.points.size(), w.tris);
     T.erase(std::remove_if(T.begin(), T.end(), [&](uint32_t t) { return is_dead(w.tris[t]); }), T.end());

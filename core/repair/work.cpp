@@ -148,6 +148,11 @@ void check_cancel(ProgressSink* progress) {
   if (progress && progress->cancelled()) throw Error(ErrorKind::Cancelled, "cancelled");
 }
 
+void start_round(ProgressSink* progress, const std::string& step, int round, int rounds, size_t pairs_left) {
+  check_cancel(progress);
+  if (progress) progress->progress(step, double(round) / rounds, std::to_string(pairs_left) + " intersecting pairs");
+}
+
 bool debug_enabled() {
   static const bool on = debug::setting("VDBWRAP_REPAIR_DEBUG") != nullptr;
   return on;

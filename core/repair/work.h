@@ -3,6 +3,7 @@
 // (local_repair::dead_triangle), new triangles are appended.
 #pragma once
 #include <cstdint>
+#include <string>
 #include <unordered_set>
 #include <vector>
 
@@ -59,6 +60,9 @@ void split_edge(Work& w, std::vector<std::vector<uint32_t>>& vf, uint32_t u, uin
 
 // Throws Error(Cancelled) when the caller asked to stop: every step checks between rounds.
 void check_cancel(ProgressSink* progress);
+// Before each round of a repeated step: cancellation, then the progress (round of rounds and
+// the intersecting pairs left).
+void start_round(ProgressSink* progress, const std::string& step, int round, int rounds, size_t pairs_left);
 
 // The repair's trace on stderr (VDBWRAP_REPAIR_DEBUG, only in a build with
 // VDBWRAP_DEBUG_DUMPS: common/debug_switch.h).

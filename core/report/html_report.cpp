@@ -7,6 +7,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <initializer_list>
 #include <sstream>
 
 #include "common/vec.h"
@@ -120,6 +121,10 @@ class Tables {
   void row(const std::string& label, const std::string& path, Shown how = Shown::Plain) {
     if (const json* v = at_path(report_, path)) value_row(label, path, *v, how);
   }
+  // Plain rows: (label, path) pairs.
+  void rows(std::initializer_list<std::pair<const char*, const char*>> list) {
+    for (const auto& [label, path] : list) row(label, path);
+  }
   void value_row(const std::string& label, const std::string& path, const json& v, Shown how = Shown::Plain) {
     if (!open_) html_ << pending_, open_ = true;
     html_ << "<tr><th>" << escape_html(label) << "</th><td data-key=\"" << escape_html(path) << "\" data-value=\""
@@ -148,23 +153,23 @@ std::string numbers_html(const json& r, bool has_wrap) {
   const bool leaked = leak && leak->is_boolean() && leak->get<bool>();
   if (leaked) {
     t.section("Leak", "leak");
-    t.row("What", "leak.description");
-    t.row("Narrowest passage at", "leak.location");
-    t.row("Passage width", "leak.width");
+    t.rows({{"What", "leak.description"},
+            {"Narrowest passage at", "leak.location"},
+            {"Passage width", "leak.width"}});
   }
   t.section("Input", "input");
-  t.row("Triangles", "input.triangles");
-  t.row("Vertices", "input.vertices");
-  t.row("Parts", "input.parts");
-  t.row("Connected components", "input.components");
-  t.row("Border edges", "input.border_edges");
-  t.row("Non-manifold edges", "input.nonmanifold_edges");
-  t.row("Non-manifold vertices", "input.nonmanifold_vertices");
-  t.row("Misoriented edges", "input.misoriented_edges");
-  t.row("Degenerate triangles", "input.degenerate_triangles");
-  t.row("Intersecting triangles", "input.intersecting_triangles");
-  t.row("Closed", "input.closed");
-  t.row("Bounding-box diagonal", "input.diagonal");
+  t.rows({{"Triangles", "input.triangles"},
+          {"Vertices", "input.vertices"},
+          {"Parts", "input.parts"},
+          {"Connected components", "input.components"},
+          {"Border edges", "input.border_edges"},
+          {"Non-manifold edges", "input.nonmanifold_edges"},
+          {"Non-manifold vertices", "input.nonmanifold_vertices"},
+          {"Misoriented edges", "input.misoriented_edges"},
+          {"Degenerate triangles", "input.degenerate_triangles"},
+          {"Intersecting triangles", "input.intersecting_triangles"},
+          {"Closed", "input.closed"},
+          {"Bounding-box diagonal", "input.diagonal"}});
   if (const json* parts = at_path(r, "source.parts"); parts && parts->is_array() && parts->size() > 1)
     for (size_t i = 0; i < parts->size(); ++i) {
       const json* name = at_path(r, "source.parts." + std::to_string(i) + ".name");
@@ -174,16 +179,16 @@ std::string numbers_html(const json& r, bool has_wrap) {
     }
   if (has_wrap) {
     t.section("Wrap", "wrap");
-    t.row("Valid closed surface", "output.valid_closed_surface");
-    t.row("Triangles", "output.triangles");
-    t.row("Vertices", "output.vertices");
-    t.row("Connected components", "output.components");
-    t.row("Closed", "output.closed");
-    t.row("Manifold", "output.manifold");
-    t.row("Outward oriented", "output.outward");
-    t.row("Self-intersecting", "output.self_intersecting");
-    t.row("Area", "output.area");
-    t.row("Volume", "output.volume");
+    t.rows({{"Valid closed surface", "output.valid_closed_surface"},
+            {"Triangles", "output.triangles"},
+            {"Vertices", "output.vertices"},
+            {"Connected components", "output.components"},
+            {"Closed", "output.closed"},
+            {"Manifold", "output.manifold"},
+            {"Outward oriented", "output.outward"},
+            {"Self-intersecting", "output.self_intersecting"},
+            {"Area", "output.area"},
+            {"Volume", "output.volume"}});
     t.section("Distance (% of the diagonal)", "distance");
     for (const auto& [label, key] : {std::pair<std::string, std::string>{"Wrap to input", "distance_output_to_input"},
                                      {"Input to wrap", "distance_input_to_output"},
@@ -195,29 +200,29 @@ std::string numbers_html(const json& r, bool has_wrap) {
       t.row(label + ", max", key + ".max_percent_of_diagonal", Shown::Percent);
     }
     t.section("Quality of the wrap", "quality");
-    t.row("Smallest angle (degrees)", "quality.after.min_angle_deg");
-    t.row("Sliver triangles", "quality.after.sliver_triangles");
-    t.row("Small triangles", "quality.after.small_area_triangles");
-    t.row("Short edges", "quality.after.short_edges");
-    t.row("Long edges", "quality.after.long_edges");
-    t.row("Normal off the input", "quality.after.normal_deviation_triangles");
-    t.row("Sharp-edge samples lost", "quality.after.lost_feature_samples");
-    t.row("Regions rebuilt", "quality.remesh.regions");
+    t.rows({{"Smallest angle (degrees)", "quality.after.min_angle_deg"},
+            {"Sliver triangles", "quality.after.sliver_triangles"},
+            {"Small triangles", "quality.after.small_area_triangles"},
+            {"Short edges", "quality.after.short_edges"},
+            {"Long edges", "quality.after.long_edges"},
+            {"Normal off the input", "quality.after.normal_deviation_triangles"},
+            {"Sharp-edge samples lost", "quality.after.lost_feature_samples"},
+            {"Regions rebuilt", "quality.remesh.regions"}});
   }
   t.section("Features", "features");
-  t.row("Sharp edges", "features.sharp_edges");
-  t.row("Curves", "features.curves");
-  t.row("Corners", "features.corners");
-  t.row("Curves captured", "features.curves_captured");
-  t.row("Corners captured", "features.corners_captured");
+  t.rows({{"Sharp edges", "features.sharp_edges"},
+          {"Curves", "features.curves"},
+          {"Corners", "features.corners"},
+          {"Curves captured", "features.curves_captured"},
+          {"Corners captured", "features.corners_captured"}});
   t.section("Grid and volumes", "grid");
-  t.row("Base cell", "grid.base_size");
-  t.row("Finest cell", "grid.finest_size");
-  t.row("Cells on the input per level", "grid.cells_on_input_per_level");
-  t.row("Free volumes", "volumes.free_volumes");
-  t.row("Enclosed volumes", "volumes.enclosed_volumes");
-  t.row("Input encloses a volume", "volumes.input_encloses_a_volume");
-  t.row("Chosen volume", "volumes.chosen_volume");
+  t.rows({{"Base cell", "grid.base_size"},
+          {"Finest cell", "grid.finest_size"},
+          {"Cells on the input per level", "grid.cells_on_input_per_level"},
+          {"Free volumes", "volumes.free_volumes"},
+          {"Enclosed volumes", "volumes.enclosed_volumes"},
+          {"Input encloses a volume", "volumes.input_encloses_a_volume"},
+          {"Chosen volume", "volumes.chosen_volume"}});
   if (const json* params = at_path(r, "parameters"); params && params->is_object()) {
     t.section("Parameters", "parameters");
     for (const auto& [key, value] : params->items()) t.value_row(key, "parameters." + key, value);
