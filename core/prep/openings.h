@@ -80,7 +80,7 @@ inline std::vector<Opening> find_openings(const PreparedInput& in) {
       const double dn = norm(d);
       if (!(dn > 0)) break;
       const Vec3 y = x + d * (step / dn);
-      Vec3 near_y;
+      Vec3 near_y{0, 0, 0};
       const double c = clearance(y, near_y);
       if (c > best) {
         x = y, best = c, near = near_y;

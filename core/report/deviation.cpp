@@ -17,10 +17,12 @@
 namespace vdbwrap {
 
 // The public bits are the quality analysis' own (one byte per triangle crosses unchanged).
-static_assert(kDefectSelfIntersecting == post::kSelfIntersecting && kDefectSmallArea == post::kSmallArea &&
-                  kDefectSliver == post::kSliver && kDefectShortEdge == post::kShortEdge &&
-                  kDefectLongEdge == post::kLongEdge && kDefectNormalDeviation == post::kNormalDeviation &&
-                  kDefectLostFeature == post::kLostFeature,
+constexpr bool same_bit(DefectFlag a, post::DefectFlag b) { return int(a) == int(b); }
+static_assert(same_bit(kDefectSelfIntersecting, post::kSelfIntersecting) &&
+                  same_bit(kDefectSmallArea, post::kSmallArea) && same_bit(kDefectSliver, post::kSliver) &&
+                  same_bit(kDefectShortEdge, post::kShortEdge) && same_bit(kDefectLongEdge, post::kLongEdge) &&
+                  same_bit(kDefectNormalDeviation, post::kNormalDeviation) &&
+                  same_bit(kDefectLostFeature, post::kLostFeature),
               "DefectFlag must match post::DefectFlag");
 
 namespace {
