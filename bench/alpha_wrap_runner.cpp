@@ -30,7 +30,8 @@ int main(int argc, char** argv) {
       points.emplace_back(p[0], p[1], p[2]);
       for (int k = 0; k < 3; ++k) lo[k] = std::min(lo[k], p[k]), hi[k] = std::max(hi[k], p[k]);
     }
-    const double diag = std::sqrt((hi[0] - lo[0]) * (hi[0] - lo[0]) + (hi[1] - lo[1]) * (hi[1] - lo[1]) + (hi[2] - lo[2]) * (hi[2] - lo[2]));
+    const double diag = std::sqrt((hi[0] - lo[0]) * (hi[0] - lo[0]) + (hi[1] - lo[1]) * (hi[1] - lo[1]) +
+                                  (hi[2] - lo[2]) * (hi[2] - lo[2]));
     std::vector<std::array<std::size_t, 3>> faces;
     for (const auto& t : in.triangles) faces.push_back({t[0], t[1], t[2]});
     CGAL::Surface_mesh<Point> wrap;
@@ -51,8 +52,8 @@ int main(int argc, char** argv) {
       out.triangles.push_back(t);
     }
     vdbwrap::io::write_mesh(out, argv[2]);
-    std::printf("{\"seconds\": %.4f, \"triangles\": %zu, \"alpha\": %.9g, \"offset\": %.9g}\n", seconds, out.triangles.size(),
-                alpha_fraction * diag, offset_fraction * diag);
+    std::printf("{\"seconds\": %.4f, \"triangles\": %zu, \"alpha\": %.9g, \"offset\": %.9g}\n", seconds,
+                out.triangles.size(), alpha_fraction * diag, offset_fraction * diag);
   } catch (const vdbwrap::Error& e) {
     std::fprintf(stderr, "alpha_wrap_runner: %s\n", e.what());
     return vdbwrap::exit_code(e.kind());

@@ -83,8 +83,10 @@ int main(int argc, char** argv) {
     for (const Vec3& p : q) sink += index.touches(p, p + Vec3{h, 0, 0}, p + Vec3{0, h, h});
     touches_s.push_back(seconds_since(t0));
   }
-  std::printf("%s: %zu triangles, build %.2f s, +%ld MB; per query (median of %d): closest %.2f us, within %.2f us, touches %.2f us (%g)\n",
-              argv[1], mesh.triangles.size(), build, rss_after - rss_before, rounds, 1e6 * median(closest_s) / queries,
-              1e6 * median(within_s) / queries, 1e6 * median(touches_s) / queries, sink > 0 ? 1.0 : 0.0);
+  std::printf(
+      "%s: %zu triangles, build %.2f s, +%ld MB; per query (median of %d): closest %.2f us, within %.2f us, touches "
+      "%.2f us (%g)\n",
+      argv[1], mesh.triangles.size(), build, rss_after - rss_before, rounds, 1e6 * median(closest_s) / queries,
+      1e6 * median(within_s) / queries, 1e6 * median(touches_s) / queries, sink > 0 ? 1.0 : 0.0);
   return 0;
 }

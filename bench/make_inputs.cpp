@@ -36,7 +36,8 @@ struct Frame {
 Frame random_frame(std::mt19937& rng, const Vec3& origin) {
   std::uniform_real_distribution<double> u(0, 2 * M_PI);
   const double a = u(rng), b = u(rng), c = u(rng);
-  const double ca = std::cos(a), sa = std::sin(a), cb = std::cos(b), sb = std::sin(b), cc = std::cos(c), sc = std::sin(c);
+  const double ca = std::cos(a), sa = std::sin(a), cb = std::cos(b), sb = std::sin(b), cc = std::cos(c),
+               sc = std::sin(c);
   Frame f;
   f.origin = origin;
   // Rz(a) * Ry(b) * Rx(c)
@@ -145,9 +146,15 @@ Mesh assembly(int density, unsigned seed) {
         const bool flip = inside_out(rng);
         const double s = size(rng);
         switch (kind(rng)) {
-          case 0: b.cylinder(f, 0.45 * s, 1.6 * s, 250 * k * k, flip); break;
-          case 1: b.box(f, {1.1 * s, 0.9 * s, 0.7 * s}, 12 * k, flip); break;
-          default: b.sphere(f, 0.65 * s, 18 * k, flip); break;
+          case 0:
+            b.cylinder(f, 0.45 * s, 1.6 * s, 250 * k * k, flip);
+            break;
+          case 1:
+            b.box(f, {1.1 * s, 0.9 * s, 0.7 * s}, 12 * k, flip);
+            break;
+          default:
+            b.sphere(f, 0.65 * s, 18 * k, flip);
+            break;
         }
       }
   // Dirt: duplicates, slivers, gaps.
@@ -158,7 +165,8 @@ Mesh assembly(int density, unsigned seed) {
     Tri t = m.triangles[pick(rng)];
     m.triangles.push_back({t[0], t[1], t[1]});  // degenerate: a repeated vertex
   }
-  for (size_t i = 0; i < n / 2000; ++i) m.triangles[pick(rng)] = m.triangles[pick(rng)];  // a dropped triangle (gap), duplicated elsewhere
+  for (size_t i = 0; i < n / 2000; ++i)
+    m.triangles[pick(rng)] = m.triangles[pick(rng)];  // a dropped triangle (gap), duplicated elsewhere
   return m;
 }
 
@@ -194,8 +202,10 @@ int main(int argc, char** argv) {
   unsigned seed = 7;
   for (int i = 3; i + 1 < argc; i += 2) {
     std::string opt = argv[i];
-    if (opt == "--density") density = std::atoi(argv[i + 1]);
-    else if (opt == "--seed") seed = unsigned(std::atoi(argv[i + 1]));
+    if (opt == "--density")
+      density = std::atoi(argv[i + 1]);
+    else if (opt == "--seed")
+      seed = unsigned(std::atoi(argv[i + 1]));
     else {
       std::fprintf(stderr, "unknown option %s\n", opt.c_str());
       return 2;
@@ -206,8 +216,10 @@ int main(int argc, char** argv) {
     return 2;
   }
   Mesh m;
-  if (what == "assembly") m = assembly(density, seed);
-  else if (what == "smooth") m = smooth_body(density);
+  if (what == "assembly")
+    m = assembly(density, seed);
+  else if (what == "smooth")
+    m = smooth_body(density);
   else {
     std::fprintf(stderr, "unknown scene %s (assembly or smooth)\n", what.c_str());
     return 2;

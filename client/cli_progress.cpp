@@ -11,9 +11,8 @@ namespace vdbwrap::cli {
 // Shares of a typical run (the report's stage timings on the test corpus, rounded); they only
 // need to keep the figure moving evenly, not to predict the time left.
 StageWeights wrap_stage_weights() {
-  return {{"read", 3},     {"diagnose input", 6}, {"prepare", 8},   {"refine", 8},   {"flood fill", 6},
-          {"extract", 10}, {"project", 30},       {"coarsen", 5},   {"remesh", 8},   {"validate", 6},
-          {"distances", 8}, {"write", 2}};
+  return {{"read", 3},     {"diagnose input", 6}, {"prepare", 8}, {"refine", 8},   {"flood fill", 6}, {"extract", 10},
+          {"project", 30}, {"coarsen", 5},        {"remesh", 8},  {"validate", 6}, {"distances", 8},  {"write", 2}};
 }
 
 StageWeights repair_stage_weights() {

@@ -41,7 +41,8 @@ std::string HtmlOutput::write(const Mesh& input, const Mesh* wrap, const std::st
     out << page;
     if (!out) throw Error(ErrorKind::OutputFailed, path_ + ": cannot write the HTML report");
   }
-  if (std::rename(tmp.c_str(), path_.c_str()) != 0) throw Error(ErrorKind::OutputFailed, path_ + ": cannot write the HTML report");
+  if (std::rename(tmp.c_str(), path_.c_str()) != 0)
+    throw Error(ErrorKind::OutputFailed, path_ + ": cannot write the HTML report");
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   char line[256];
   std::snprintf(line, sizeof line, "page %s (%.1f MB, %.2fs)", path_.c_str(), double(page.size()) / 1e6, seconds);

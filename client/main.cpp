@@ -40,7 +40,8 @@ void write_text(const std::string& path, const std::string& text) {
     out << text << '\n';
     if (!out) throw Error(ErrorKind::OutputFailed, path + ": cannot write the report");
   }
-  if (std::rename(tmp.c_str(), path.c_str()) != 0) throw Error(ErrorKind::OutputFailed, path + ": cannot write the report");
+  if (std::rename(tmp.c_str(), path.c_str()) != 0)
+    throw Error(ErrorKind::OutputFailed, path + ": cannot write the report");
 }
 
 std::string percent(double v, double diag) {
@@ -61,38 +62,45 @@ void print_diagnostics(const std::string& name, const MeshDiagnostics& d) {
               d.manifold ? "yes" : "no", d.oriented ? "yes" : "no", d.outward ? "yes" : "no",
               d.self_intersecting ? "yes" : "no");
   std::printf("  bounding-box diagonal %.6g, area %.6g, volume %.6g\n", d.diagonal, d.area, d.volume);
-  std::printf("  verdict: %s\n", d.valid_closed_surface() ? "valid closed surface (watertight)" : "NOT a valid closed surface");
+  std::printf("  verdict: %s\n",
+              d.valid_closed_surface() ? "valid closed surface (watertight)" : "NOT a valid closed surface");
 }
 
 void print_repair_report(const std::string& output, const RepairReport& r) {
   std::printf("repair of %zu triangles -> %s\n", r.before.triangles, output.c_str());
-  std::printf("  regions of intersecting triangles: %zu found, %zu fixed by local operations, %zu fixed by refill, "
-              "%zu fixed by uniting bodies, %zu left unfixed\n",
-              r.regions_found, r.fixed_by_local, r.fixed_by_refill, r.fixed_by_union, r.left_unfixed);
-  std::printf("  local operations: %zu iterations, %zu vertex shifts, %zu triangle shifts; refill: %zu iterations, "
-              "%zu refills, %zu refused\n",
-              r.local_iterations_run, r.vertex_shifts, r.triangle_shifts, r.refill_iterations_run, r.refills,
-              r.refill_failures);
+  std::printf(
+      "  regions of intersecting triangles: %zu found, %zu fixed by local operations, %zu fixed by refill, "
+      "%zu fixed by uniting bodies, %zu left unfixed\n",
+      r.regions_found, r.fixed_by_local, r.fixed_by_refill, r.fixed_by_union, r.left_unfixed);
+  std::printf(
+      "  local operations: %zu iterations, %zu vertex shifts, %zu triangle shifts; refill: %zu iterations, "
+      "%zu refills, %zu refused\n",
+      r.local_iterations_run, r.vertex_shifts, r.triangle_shifts, r.refill_iterations_run, r.refills,
+      r.refill_failures);
   for (const auto& [why, count] : r.refusals) std::printf("  refused %zux: %s\n", count, why.c_str());
-  if (r.cracks_stitched > 0) std::printf("  cracks stitched (corners welded or inserted into edges): %zu\n", r.cracks_stitched);
+  if (r.cracks_stitched > 0)
+    std::printf("  cracks stitched (corners welded or inserted into edges): %zu\n", r.cracks_stitched);
   if (r.bodies_united > 0) std::printf("  crossing closed bodies united: %zu\n", r.bodies_united);
   if (r.regions_refined > 0)
     std::printf("  refined before refilling: %zu regions (%zu triangles added)\n", r.regions_refined,
                 r.refined_triangles_added);
   if (r.pieces_removed > 0)
     std::printf("  small pieces removed: %zu (%zu triangles)\n", r.pieces_removed, r.piece_triangles_removed);
-  std::printf("  intersecting pairs %zu -> %zu, border edges %zu -> %zu, non-manifold edges %zu -> %zu, triangles %zu -> %zu\n",
-              r.before.intersecting_pairs, r.after.intersecting_pairs, r.before.border_edges, r.after.border_edges,
-              r.before.nonmanifold_edges, r.after.nonmanifold_edges, r.before.triangles, r.after.triangles);
+  std::printf(
+      "  intersecting pairs %zu -> %zu, border edges %zu -> %zu, non-manifold edges %zu -> %zu, triangles %zu -> %zu\n",
+      r.before.intersecting_pairs, r.after.intersecting_pairs, r.before.border_edges, r.after.border_edges,
+      r.before.nonmanifold_edges, r.after.nonmanifold_edges, r.before.triangles, r.after.triangles);
   if (r.output_to_input.samples > 0)
     std::printf("  largest deviation from the input (two-sided, sampled): %s of the diagonal %.6g (bound %s)\n",
                 percent(r.deviation * r.diagonal, r.diagonal).c_str(), r.diagonal,
                 percent(r.max_deviation, r.diagonal).c_str());
   for (size_t i = 0; i < r.unfixed.size() && i < 20; ++i) {
     const auto& u = r.unfixed[i];
-    std::printf("  unfixed region %zu: %zu triangles, %zu pairs, around (%.6g, %.6g, %.6g), box (%.6g, %.6g, %.6g)-(%.6g, %.6g, %.6g)\n",
-                i + 1, u.triangles, u.pairs, u.center[0], u.center[1], u.center[2], u.bbox_min[0], u.bbox_min[1],
-                u.bbox_min[2], u.bbox_max[0], u.bbox_max[1], u.bbox_max[2]);
+    std::printf(
+        "  unfixed region %zu: %zu triangles, %zu pairs, around (%.6g, %.6g, %.6g), box (%.6g, %.6g, %.6g)-(%.6g, "
+        "%.6g, %.6g)\n",
+        i + 1, u.triangles, u.pairs, u.center[0], u.center[1], u.center[2], u.bbox_min[0], u.bbox_min[1], u.bbox_min[2],
+        u.bbox_max[0], u.bbox_max[1], u.bbox_max[2]);
   }
   if (r.unfixed.size() > 20) std::printf("  ... %zu more unfixed regions in the JSON report\n", r.unfixed.size() - 20);
   std::printf("  %.2fs; %s\n", r.total_seconds, r.all_fixed() ? "no intersections left" : "INTERSECTIONS LEFT");
@@ -157,8 +165,10 @@ std::string unknown_argument(CLI::App& app, int argc, char** argv) {
     std::string t = argv[i];
     if (t == "--") break;  // the rest are values
     if (t.size() < 2 || t[0] != '-' || looks_like_number(t)) continue;
-    if (t[1] == '-') t = t.substr(0, t.find('='));
-    else if (t.size() > 2 && known(takes_value, t.substr(0, 2))) continue;  // -oFILE
+    if (t[1] == '-')
+      t = t.substr(0, t.find('='));
+    else if (t.size() > 2 && known(takes_value, t.substr(0, 2)))
+      continue;  // -oFILE
     if (known(names, t)) continue;
     std::string msg = "unknown option " + t;
     if (auto near = cli::closest_match(t, names)) return msg + "; did you mean " + *near + "?";
@@ -170,8 +180,9 @@ std::string unknown_argument(CLI::App& app, int argc, char** argv) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  CLI::App app{"vdbwrap: shrink-wraps dirty triangle surfaces into closed, 2-manifold, self-intersection-free ones.\n"
-               "Reads and writes STL (binary/ASCII), OBJ, OFF and PLY (ASCII/binary)."};
+  CLI::App app{
+      "vdbwrap: shrink-wraps dirty triangle surfaces into closed, 2-manifold, self-intersection-free ones.\n"
+      "Reads and writes STL (binary/ASCII), OBJ, OFF and PLY (ASCII/binary)."};
   app.require_subcommand(1);
   app.set_version_flag("--version", "vdbwrap " VDBWRAP_VERSION);
   app.footer(
@@ -189,8 +200,12 @@ int main(int argc, char** argv) {
   wrap_cmd->add_option("input", input, "Input mesh (.stl .obj .off .ply .vtp .nas .bdf)")->required();
   wrap_options.add_to(wrap_cmd, "Worker threads (0: all cores)");
   // After the parameters: the help lists its groups in the order they first appear.
-  wrap_cmd->add_option("-o,--output", output, "Output mesh; the format follows the extension")->required()->group("Output");
-  wrap_cmd->add_option("--report", report_path, "Write a JSON report (diagnostics, parameters, validity, distances, timings)")
+  wrap_cmd->add_option("-o,--output", output, "Output mesh; the format follows the extension")
+      ->required()
+      ->group("Output");
+  wrap_cmd
+      ->add_option("--report", report_path,
+                   "Write a JSON report (diagnostics, parameters, validity, distances, timings)")
       ->group("Output");
   wrap_cmd
       ->add_option("--leak-path", leak_path,
@@ -207,8 +222,9 @@ int main(int argc, char** argv) {
   wrap_stl.add_to(wrap_cmd);
   std::string features_path;
   wrap_cmd
-      ->add_option("--features", features_path,
-                   "Write the input's feature curves (the sharp edges the wrap snaps to) as OBJ lines or OpenFOAM's .eMesh")
+      ->add_option(
+          "--features", features_path,
+          "Write the input's feature curves (the sharp edges the wrap snaps to) as OBJ lines or OpenFOAM's .eMesh")
       ->group("Output");
   wrap_cmd->add_flag("-q,--quiet", quiet, "No progress on stderr")->group("Output");
   wrap_cmd->footer(
@@ -239,8 +255,8 @@ int main(int argc, char** argv) {
       "  vdbwrap check part_wrap.stl --require-valid && echo watertight");
 
   // repair
-  auto* repair_cmd = app.add_subcommand(
-      "repair", "Repair the self-intersections of INPUT locally (no re-wrap) and write OUTPUT");
+  auto* repair_cmd =
+      app.add_subcommand("repair", "Repair the self-intersections of INPUT locally (no re-wrap) and write OUTPUT");
   repair_cmd->footer(
       "Examples:\n"
       "  vdbwrap repair part.stl -o part_fixed.stl --report repair.json\n"
@@ -257,7 +273,8 @@ int main(int argc, char** argv) {
   repair_cmd->add_option("-o,--output", repair_output, "Output mesh; the format follows the extension")
       ->required()
       ->group("Output");
-  repair_cmd->add_option("--report", repair_report, "Write a JSON report (regions, diagnostics before/after, deviation)")
+  repair_cmd
+      ->add_option("--report", repair_report, "Write a JSON report (regions, diagnostics before/after, deviation)")
       ->group("Output");
   repair_cmd->add_flag("-q,--quiet", repair_quiet, "No progress on stderr")->group("Output");
 
@@ -288,14 +305,16 @@ int main(int argc, char** argv) {
       // Binary STL stores floats: validate what will be written.
       params.float_coordinates = io::format_from_extension(output) == io::Format::Stl;
       if (io::format_from_extension(output) == io::Format::Unknown)
-        throw Error(ErrorKind::InvalidArgument, output + ": unknown output format (use .stl, .obj, .off, .ply, .vtp, .nas or .bdf)");
+        throw Error(ErrorKind::InvalidArgument,
+                    output + ": unknown output format (use .stl, .obj, .off, .ply, .vtp, .nas or .bdf)");
       cli::check_output_path("-o", output);
       const io::WriteOptions write_options = wrap_stl.write_options(output);
       cli::check_output_path("--report", report_path);
       cli::check_output_path("--leak-path", leak_path);
       if (!features_path.empty()) {
         if (io::curve_format_from_extension(features_path) == io::CurveFormat::Unknown)
-          throw Error(ErrorKind::InvalidArgument, "--features " + features_path + ": feature curves are written as .obj or .eMesh");
+          throw Error(ErrorKind::InvalidArgument,
+                      "--features " + features_path + ": feature curves are written as .obj or .eMesh");
         if (!params.snap_features)
           throw Error(ErrorKind::InvalidArgument, "--features: --no-features turns the feature curves off");
         cli::check_output_path("--features", features_path);
@@ -322,9 +341,9 @@ int main(int argc, char** argv) {
         if (leak.detected) {
           if (!leak_path.empty()) write_text(leak_path, leak_to_obj(leak));
           std::fprintf(stderr, "vdbwrap: %s\n", leak.description.c_str());
-          std::fprintf(stderr, "vdbwrap: narrowest passage at (%.6g, %.6g, %.6g), about %.4g wide%s%s\n", leak.location[0],
-                       leak.location[1], leak.location[2], leak.width, leak_path.empty() ? "" : "; path in ",
-                       leak_path.c_str());
+          std::fprintf(stderr, "vdbwrap: narrowest passage at (%.6g, %.6g, %.6g), about %.4g wide%s%s\n",
+                       leak.location[0], leak.location[1], leak.location[2], leak.width,
+                       leak_path.empty() ? "" : "; path in ", leak_path.c_str());
         }
         if (html_output.wanted()) {  // the page shows the input and the leak
           WrapReport report = failure.report();
@@ -341,24 +360,26 @@ int main(int argc, char** argv) {
       if (!report_path.empty()) write_text(report_path, to_json(result.report));
       if (!deviation_path.empty()) {
         progress.progress("deviation", 0.0, deviation_path);
-        write_deviation(deviation_path, result.surface, measure_deviation(result.surface, mesh, &result.triangle_flags));
+        write_deviation(deviation_path, result.surface,
+                        measure_deviation(result.surface, mesh, &result.triangle_flags));
       }
       progress.complete(output);
       if (html_output.wanted()) {
-        const std::string page = html_output.write(mesh, &result.surface, to_json(result.report), &result.triangle_flags,
-                                                     source.file_name);
+        const std::string page =
+            html_output.write(mesh, &result.surface, to_json(result.report), &result.triangle_flags, source.file_name);
         if (!quiet) std::fprintf(stderr, "wrote %s\n", page.c_str());
       }
       const auto& r = result.report;
       if (!quiet)
-        std::fprintf(stderr,
-                     "wrote %s: %zu triangles, closed, manifold, outward, no self-intersections; distance to input mean %s, "
-                     "p95 %s of the diagonal, max %.6g at (%.6g, %.6g, %.6g); %.2fs%s%s%s%s\n",
-                     output.c_str(), result.surface.triangles.size(), percent(r.output_to_input.mean, r.diagonal).c_str(),
-                     percent(r.output_to_input.p95, r.diagonal).c_str(), r.output_to_input.max, r.output_to_input.max_at[0],
-                     r.output_to_input.max_at[1], r.output_to_input.max_at[2], r.total_seconds,
-                     report_path.empty() ? "" : "; report ", report_path.c_str(),
-                     deviation_path.empty() ? "" : "; deviation field ", deviation_path.c_str());
+        std::fprintf(
+            stderr,
+            "wrote %s: %zu triangles, closed, manifold, outward, no self-intersections; distance to input mean %s, "
+            "p95 %s of the diagonal, max %.6g at (%.6g, %.6g, %.6g); %.2fs%s%s%s%s\n",
+            output.c_str(), result.surface.triangles.size(), percent(r.output_to_input.mean, r.diagonal).c_str(),
+            percent(r.output_to_input.p95, r.diagonal).c_str(), r.output_to_input.max, r.output_to_input.max_at[0],
+            r.output_to_input.max_at[1], r.output_to_input.max_at[2], r.total_seconds,
+            report_path.empty() ? "" : "; report ", report_path.c_str(),
+            deviation_path.empty() ? "" : "; deviation field ", deviation_path.c_str());
       return 0;
     }
     if (*repair_cmd) {
@@ -366,7 +387,8 @@ int main(int argc, char** argv) {
       // Binary STL stores floats: repair what will be written.
       rparams.float_coordinates = io::format_from_extension(repair_output) == io::Format::Stl;
       if (io::format_from_extension(repair_output) == io::Format::Unknown)
-        throw Error(ErrorKind::InvalidArgument, repair_output + ": unknown output format (use .stl, .obj, .off, .ply, .vtp, .nas or .bdf)");
+        throw Error(ErrorKind::InvalidArgument,
+                    repair_output + ": unknown output format (use .stl, .obj, .off, .ply, .vtp, .nas or .bdf)");
       cli::check_output_path("-o", repair_output);
       const io::WriteOptions repair_write_options = repair_stl.write_options(repair_output);
       cli::check_output_path("--report", repair_report);
@@ -385,7 +407,8 @@ int main(int argc, char** argv) {
     if (*check_cmd) {
       cli::check_output_path("--report", check_report);
       if (!check_deviation.empty() && against.empty())
-        throw Error(ErrorKind::InvalidArgument, "--deviation needs --against REFERENCE (the distances are to the reference)");
+        throw Error(ErrorKind::InvalidArgument,
+                    "--deviation needs --against REFERENCE (the distances are to the reference)");
       check_deviation_path(check_deviation);
       Mesh mesh = io::read_mesh(check_input);
       MeshDiagnostics d = diagnose(mesh, true);
@@ -396,17 +419,19 @@ int main(int argc, char** argv) {
         DistanceStats ab = sampled_distance(mesh, ref), ba = sampled_distance(ref, mesh);
         double diag = ab.diagonal;
         std::printf("distance to %s (percent of its diagonal %.6g):\n", against.c_str(), diag);
-        std::printf("  mesh -> reference: mean %s, p95 %s, max %s at (%.6g, %.6g, %.6g)\n", percent(ab.mean, diag).c_str(),
-                    percent(ab.p95, diag).c_str(), percent(ab.max, diag).c_str(), ab.max_at[0], ab.max_at[1], ab.max_at[2]);
-        std::printf("  reference -> mesh: mean %s, p95 %s, max %s at (%.6g, %.6g, %.6g)\n", percent(ba.mean, diag).c_str(),
-                    percent(ba.p95, diag).c_str(), percent(ba.max, diag).c_str(), ba.max_at[0], ba.max_at[1], ba.max_at[2]);
+        std::printf("  mesh -> reference: mean %s, p95 %s, max %s at (%.6g, %.6g, %.6g)\n",
+                    percent(ab.mean, diag).c_str(), percent(ab.p95, diag).c_str(), percent(ab.max, diag).c_str(),
+                    ab.max_at[0], ab.max_at[1], ab.max_at[2]);
+        std::printf("  reference -> mesh: mean %s, p95 %s, max %s at (%.6g, %.6g, %.6g)\n",
+                    percent(ba.mean, diag).c_str(), percent(ba.p95, diag).c_str(), percent(ba.max, diag).c_str(),
+                    ba.max_at[0], ba.max_at[1], ba.max_at[2]);
         std::printf("  two-sided (Hausdorff) max %s\n", percent(std::max(ab.max, ba.max), diag).c_str());
         // How well the mesh keeps the reference's sharp edges (samples every 0.1 % of the diagonal).
         DistanceStats edges = sharp_edge_distance(ref, mesh);
         if (edges.samples > 0)
           std::printf("  reference's sharp edges -> mesh: mean %s, p95 %s, max %s (%zu samples)\n",
-                      percent(edges.mean, diag).c_str(), percent(edges.p95, diag).c_str(), percent(edges.max, diag).c_str(),
-                      edges.samples);
+                      percent(edges.mean, diag).c_str(), percent(edges.p95, diag).c_str(),
+                      percent(edges.max, diag).c_str(), edges.samples);
         json += ", \"to_reference\": " + to_json(ab) + ", \"from_reference\": " + to_json(ba) +
                 ", \"sharp_edges_from_reference\": " + to_json(edges);
         if (!check_deviation.empty()) {
@@ -417,7 +442,8 @@ int main(int argc, char** argv) {
                       field.sign == DistanceSign::Outside     ? "signed, + outside the reference"
                       : field.sign == DistanceSign::FrontSide ? "signed, + on the side the reference faces"
                                                               : "unsigned: the reference's orientation is inconsistent",
-                      field.max_abs, percent(field.max_abs, diag).c_str(), at[0], at[1], at[2], check_deviation.c_str());
+                      field.max_abs, percent(field.max_abs, diag).c_str(), at[0], at[1], at[2],
+                      check_deviation.c_str());
         }
       }
       json += "}";

@@ -41,11 +41,11 @@ constexpr size_t kChunk = 1 << 20;
 // --- connection --------------------------------------------------------------------------
 
 struct Connection {
-  std::string server;       // --server
-  std::string token_file;   // --token-file
-  std::string tls_ca;       // --tls-ca
-  std::string tls_name;     // --tls-server-name
-  bool round_robin = false; // --round-robin
+  std::string server;        // --server
+  std::string token_file;    // --token-file
+  std::string tls_ca;        // --tls-ca
+  std::string tls_name;      // --tls-server-name
+  bool round_robin = false;  // --round-robin
   double retry_seconds = 30;
 
   std::string token;
@@ -95,9 +95,12 @@ struct Connection {
   // name the server's certificate must carry when the CLI connects to an address found at
   // run time (the replica that accepted a job).
   static std::string host_of(std::string target) {
-    if (auto p = target.find(":///"); p != std::string::npos) target = target.substr(p + 4);
-    else if (target.rfind("ipv4:", 0) == 0 || target.rfind("ipv6:", 0) == 0) target = target.substr(5);
-    else if (target.rfind("dns:", 0) == 0) target = target.substr(4);
+    if (auto p = target.find(":///"); p != std::string::npos)
+      target = target.substr(p + 4);
+    else if (target.rfind("ipv4:", 0) == 0 || target.rfind("ipv6:", 0) == 0)
+      target = target.substr(5);
+    else if (target.rfind("dns:", 0) == 0)
+      target = target.substr(4);
     target = target.substr(0, target.find(','));
     if (!target.empty() && target.front() == '[') return target.substr(1, target.find(']') - 1);
     const auto colon = target.rfind(':');
@@ -118,28 +121,43 @@ int exit_code_of(const grpc::Status& st, const grpc::ClientContext& ctx) {
     case grpc::StatusCode::INVALID_ARGUMENT:
     case grpc::StatusCode::UNAUTHENTICATED:
     case grpc::StatusCode::PERMISSION_DENIED:
-    case grpc::StatusCode::NOT_FOUND: return exit_code(ErrorKind::InvalidArgument);
-    case grpc::StatusCode::RESOURCE_EXHAUSTED: return exit_code(ErrorKind::InvalidInput);  // upload too large
-    default: return exit_code(ErrorKind::Internal);
+    case grpc::StatusCode::NOT_FOUND:
+      return exit_code(ErrorKind::InvalidArgument);
+    case grpc::StatusCode::RESOURCE_EXHAUSTED:
+      return exit_code(ErrorKind::InvalidInput);  // upload too large
+    default:
+      return exit_code(ErrorKind::Internal);
   }
 }
 
 const char* code_name(grpc::StatusCode c) {
   switch (c) {
-    case grpc::StatusCode::CANCELLED: return "CANCELLED";
-    case grpc::StatusCode::INVALID_ARGUMENT: return "INVALID_ARGUMENT";
-    case grpc::StatusCode::DEADLINE_EXCEEDED: return "DEADLINE_EXCEEDED";
-    case grpc::StatusCode::NOT_FOUND: return "NOT_FOUND";
-    case grpc::StatusCode::RESOURCE_EXHAUSTED: return "RESOURCE_EXHAUSTED";
-    case grpc::StatusCode::FAILED_PRECONDITION: return "FAILED_PRECONDITION";
-    case grpc::StatusCode::UNAVAILABLE: return "UNAVAILABLE";
-    case grpc::StatusCode::UNAUTHENTICATED: return "UNAUTHENTICATED";
-    case grpc::StatusCode::INTERNAL: return "INTERNAL";
-    default: return "ERROR";
+    case grpc::StatusCode::CANCELLED:
+      return "CANCELLED";
+    case grpc::StatusCode::INVALID_ARGUMENT:
+      return "INVALID_ARGUMENT";
+    case grpc::StatusCode::DEADLINE_EXCEEDED:
+      return "DEADLINE_EXCEEDED";
+    case grpc::StatusCode::NOT_FOUND:
+      return "NOT_FOUND";
+    case grpc::StatusCode::RESOURCE_EXHAUSTED:
+      return "RESOURCE_EXHAUSTED";
+    case grpc::StatusCode::FAILED_PRECONDITION:
+      return "FAILED_PRECONDITION";
+    case grpc::StatusCode::UNAVAILABLE:
+      return "UNAVAILABLE";
+    case grpc::StatusCode::UNAUTHENTICATED:
+      return "UNAUTHENTICATED";
+    case grpc::StatusCode::INTERNAL:
+      return "INTERNAL";
+    default:
+      return "ERROR";
   }
 }
 
-std::string describe(const grpc::Status& st) { return std::string(code_name(st.error_code())) + ": " + st.error_message(); }
+std::string describe(const grpc::Status& st) {
+  return std::string(code_name(st.error_code())) + ": " + st.error_message();
+}
 
 // --- progress display --------------------------------------------------------------------
 
@@ -177,7 +195,8 @@ class Display {
     std::string stage = ev.stage().empty() || api::is_final(ev.state()) || ev.state() == pb::JOB_STATE_QUEUED
                             ? std::string(state)
                             : ev.stage();
-    lines_[i] = pad(names_[i]) + " " + bar + " " + pct + " " + stage + (ev.message() == stage ? "" : ": " + ev.message());
+    lines_[i] =
+        pad(names_[i]) + " " + bar + " " + pct + " " + stage + (ev.message() == stage ? "" : ": " + ev.message());
     redraw(api::is_final(ev.state()));
   }
 
@@ -260,7 +279,8 @@ void write_file(const std::string& path, const std::string& bytes) {
 int follow(const Connection& conn, const std::shared_ptr<grpc::Channel>& channel, const std::string& id,
            const Target& target, pb::MeshFormat format, Display& display, size_t index) {
   auto stub = pb::Jobs::NewStub(channel);
-  const auto give_up = Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(conn.retry_seconds));
+  const auto give_up =
+      Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(conn.retry_seconds));
   // Watch until a final state.
   for (int attempt = 0;; ++attempt) {
     grpc::ClientContext ctx;
@@ -299,8 +319,8 @@ int follow(const Connection& conn, const std::shared_ptr<grpc::Channel>& channel
     }
   }
   if (status.state() != pb::JOB_STATE_SUCCEEDED) {
-    display.note(index, "error: job " + id + " (" + status.spec().file_name() + ") " + api::state_name(status.state()) + ": " +
-                            status.error_message());
+    display.note(index, "error: job " + id + " (" + status.spec().file_name() + ") " + api::state_name(status.state()) +
+                            ": " + status.error_message());
     // A failed job's report (a leak's location) is kept like a successful one's.
     if (!status.report_json().empty()) {
       try {
@@ -346,12 +366,14 @@ int follow(const Connection& conn, const std::shared_ptr<grpc::Channel>& channel
         display.note(index, "error: job " + id + ": download failed: " + describe(st));
         return exit_code_of(st, ctx);
       }
-      display.note(index, "error: job " + id + (got != total ? ": download incomplete" : ": cannot write " + target.output));
+      display.note(index,
+                   "error: job " + id + (got != total ? ": download incomplete" : ": cannot write " + target.output));
       return exit_code(got != total ? ErrorKind::Internal : ErrorKind::OutputFailed);
     }
   }
   try {
-    if (std::rename(tmp.c_str(), target.output.c_str()) != 0) throw Error(ErrorKind::OutputFailed, target.output + ": cannot write");
+    if (std::rename(tmp.c_str(), target.output.c_str()) != 0)
+      throw Error(ErrorKind::OutputFailed, target.output + ": cannot write");
     if (!target.report.empty()) write_file(target.report, status.report_json() + "\n");
   } catch (const Error& e) {
     display.note(index, std::string("error: ") + e.what());
@@ -462,10 +484,12 @@ struct RemoteCommands::Impl {
     cmd->add_option("--token-file", own.token_file, "File holding the server's bearer token")
         ->envname("VDBWRAP_TOKEN_FILE")
         ->group("Server");
-    cmd->add_option("--tls-ca", conn.tls_ca, "PEM file of the CA that signed the server's certificate: connect with TLS")
+    cmd->add_option("--tls-ca", conn.tls_ca,
+                    "PEM file of the CA that signed the server's certificate: connect with TLS")
         ->check(CLI::ExistingFile)
         ->group("Server");
-    cmd->add_option("--tls-server-name", conn.tls_name, "Host name to expect in the server's certificate (TLS)")->group("Server");
+    cmd->add_option("--tls-server-name", conn.tls_name, "Host name to expect in the server's certificate (TLS)")
+        ->group("Server");
     cmd->add_option("--retry", conn.retry_seconds, "Seconds to keep retrying while the server is unreachable")
         ->capture_default_str()
         ->check(CLI::NonNegativeNumber)
@@ -474,46 +498,56 @@ struct RemoteCommands::Impl {
 
   explicit Impl(CLI::App& app) {
     submit = app.add_subcommand(
-        "submit", "Wrap (or with --repair, repair) INPUT... on a vdbwrap-server: upload, show progress, download the results");
+        "submit",
+        "Wrap (or with --repair, repair) INPUT... on a vdbwrap-server: upload, show progress, download the results");
     add_connection(submit);
-    submit->add_option("input", inputs, "Input meshes (.stl .obj .off .ply .vtp .nas .bdf); several run concurrently on the server")
+    submit
+        ->add_option("input", inputs,
+                     "Input meshes (.stl .obj .off .ply .vtp .nas .bdf); several run concurrently on the server")
         ->required()
         ->check(CLI::ExistingFile);
     // The wrap options, as in `vdbwrap wrap`; with --repair, the repair options of `vdbwrap repair`.
     wrap_options.add_to(submit, "Worker threads on the server (0: all its cores)");
-    submit->add_option("-o,--output", output, "Output mesh (one input); the format follows the extension")->group("Output");
-    submit->add_option("--out-dir", out_dir,
-                       "Folder for the results NAME_wrap.EXT (repairs: NAME_repaired.EXT) and reports NAME_wrap.json; "
-                       "created when missing")
+    submit->add_option("-o,--output", output, "Output mesh (one input); the format follows the extension")
+        ->group("Output");
+    submit
+        ->add_option("--out-dir", out_dir,
+                     "Folder for the results NAME_wrap.EXT (repairs: NAME_repaired.EXT) and reports NAME_wrap.json; "
+                     "created when missing")
         ->group("Output");
     submit->add_option("--format", format, "Output format with --out-dir (default: the input's)")
         ->check(CLI::IsMember({"stl", "obj", "off", "ply"}))
         ->group("Output");
     submit->add_option("--report", report, "Write the JSON report (one input)")->group("Output");
-    submit->add_option("--leak-path", leak_path,
-                       "When a seed point's volume leaks: write the narrowest passage and the path to it here (OBJ; one input)")
+    submit
+        ->add_option(
+            "--leak-path", leak_path,
+            "When a seed point's volume leaks: write the narrowest passage and the path to it here (OBJ; one input)")
         ->group("Output");
     submit->add_flag("-q,--quiet", quiet, "No progress on stderr")->group("Output");
     submit->add_flag("--detach", detach, "Print the job ids (one per line) once accepted and exit; see `vdbwrap wait`")
         ->group("Job");
-    submit->add_flag("--round-robin", conn.round_robin,
-                     "Spread the jobs over every address of --server (gRPC round_robin); each job is then followed on "
-                     "the server that accepted it")
+    submit
+        ->add_flag("--round-robin", conn.round_robin,
+                   "Spread the jobs over every address of --server (gRPC round_robin); each job is then followed on "
+                   "the server that accepted it")
         ->group("Job");
     submit->add_option("--queue-wait", queue_wait, "Seconds to keep retrying while the server's queue is full")
         ->capture_default_str()
         ->check(CLI::NonNegativeNumber)
         ->group("Job");
-    submit->add_flag("--repair", repair_job,
-                     "Repair the self-intersections of each input locally, as `vdbwrap repair`, instead of wrapping it "
-                     "(takes the repair options below, not the wrap options; exit code 4 when intersections are left)")
+    submit
+        ->add_flag("--repair", repair_job,
+                   "Repair the self-intersections of each input locally, as `vdbwrap repair`, instead of wrapping it "
+                   "(takes the repair options below, not the wrap options; exit code 4 when intersections are left)")
         ->group("Job");
     repair_options.add_to(submit, false);
     submit->footer(
         "Examples:\n"
         "  vdbwrap submit --server host:50051 part.stl -o part_wrap.stl --base-size 0.5% --report part_wrap.json\n"
         "  vdbwrap submit --server host:50051 a.stl b.obj --out-dir results --format stl\n"
-        "  vdbwrap submit --server host:50051 a.stl b.stl --detach > ids.txt; vdbwrap wait --server host:50051 $(cat ids.txt)\n"
+        "  vdbwrap submit --server host:50051 a.stl b.stl --detach > ids.txt; vdbwrap wait --server host:50051 $(cat "
+        "ids.txt)\n"
         "The server's address and token file can come from VDBWRAP_SERVER and VDBWRAP_TOKEN_FILE.");
 
     wait = app.add_subcommand("wait", "Wait for jobs on a vdbwrap-server and download their results");
@@ -534,13 +568,16 @@ struct RemoteCommands::Impl {
     add_connection(cancel);
     cancel->add_option("id", ids, "Job ids")->required();
 
-    remove = app.add_subcommand("delete", "Delete ended jobs and their files from a vdbwrap-server (cancel a running job first)");
+    remove = app.add_subcommand("delete",
+                                "Delete ended jobs and their files from a vdbwrap-server (cancel a running job first)");
     add_connection(remove);
     remove->add_option("id", ids, "Job ids")->required();
 
-    health = app.add_subcommand("health", "Exit 0 when the server's gRPC health service answers SERVING (no token needed)");
+    health =
+        app.add_subcommand("health", "Exit 0 when the server's gRPC health service answers SERVING (no token needed)");
     add_connection(health);
-    health->add_option("--service", health_service, "Service name to ask about (empty: the whole server)")->capture_default_str();
+    health->add_option("--service", health_service, "Service name to ask about (empty: the whole server)")
+        ->capture_default_str();
   }
 
   int run_submit();
@@ -600,9 +637,11 @@ int RemoteCommands::Impl::run_submit() {
   if (!detach && output.empty() && out_dir.empty())
     throw Error(ErrorKind::InvalidArgument, "give -o OUTPUT, --out-dir DIR or --detach");
   if (!report.empty() && inputs.size() > 1)
-    throw Error(ErrorKind::InvalidArgument, "--report names one file: with --out-dir the reports are NAME_wrap.json (NAME_repaired.json)");
+    throw Error(ErrorKind::InvalidArgument,
+                "--report names one file: with --out-dir the reports are NAME_wrap.json (NAME_repaired.json)");
   if (!output.empty() && io::format_from_extension(output) == io::Format::Unknown)
-    throw Error(ErrorKind::InvalidArgument, output + ": unknown output format (use .stl, .obj, .off, .ply, .vtp, .nas or .bdf)");
+    throw Error(ErrorKind::InvalidArgument,
+                output + ": unknown output format (use .stl, .obj, .off, .ply, .vtp, .nas or .bdf)");
   cli::check_output_path("-o", output);
   cli::check_output_path("--report", report);
   cli::check_output_path("--leak-path", leak_path);
@@ -611,8 +650,10 @@ int RemoteCommands::Impl::run_submit() {
   pb::RepairParameters wire_repair;
   if (repair_job) {
     for (const std::string& name : wrap_options.given())
-      if (name != "--threads") throw Error(ErrorKind::InvalidArgument, name + " is a wrap option: it has no meaning with --repair");
-    if (!leak_path.empty()) throw Error(ErrorKind::InvalidArgument, "--leak-path is a wrap option: it has no meaning with --repair");
+      if (name != "--threads")
+        throw Error(ErrorKind::InvalidArgument, name + " is a wrap option: it has no meaning with --repair");
+    if (!leak_path.empty())
+      throw Error(ErrorKind::InvalidArgument, "--leak-path is a wrap option: it has no meaning with --repair");
     RepairParams rp = repair_options.resolve();
     rp.threads = wrap_options.resolve().threads;
     wire_repair = api::to_proto(rp);
@@ -630,9 +671,12 @@ int RemoteCommands::Impl::run_submit() {
   std::vector<std::string> names, stems;
   for (const auto& in : inputs) {
     pb::MeshFormat f = pb::MESH_FORMAT_UNSPECIFIED;
-    if (!output.empty()) f = api::format_from_file_name(output);
-    else if (!format.empty()) f = api::format_from_file_name("x." + format);
-    else f = api::format_from_file_name(in);
+    if (!output.empty())
+      f = api::format_from_file_name(output);
+    else if (!format.empty())
+      f = api::format_from_file_name("x." + format);
+    else
+      f = api::format_from_file_name(in);
     if (f == pb::MESH_FORMAT_UNSPECIFIED) f = pb::MESH_FORMAT_PLY;
     formats.push_back(f);
     names.push_back(fs::path(in).filename().string());
@@ -689,8 +733,10 @@ int RemoteCommands::Impl::run_submit() {
         // address this call reached; else the one the server advertises). Otherwise the
         // channel's one connection stays on one server.
         if (conn.round_robin) {
-          if (!ctx.peer().empty()) job_channels[i] = conn.channel(ctx.peer());
-          else if (!reply.server().empty()) job_channels[i] = conn.channel(reply.server());
+          if (!ctx.peer().empty())
+            job_channels[i] = conn.channel(ctx.peer());
+          else if (!reply.server().empty())
+            job_channels[i] = conn.channel(reply.server());
         }
         break;
       }
@@ -717,7 +763,8 @@ int RemoteCommands::Impl::run_submit() {
   }
 
   std::vector<Target> targets;
-  if (!output.empty()) targets.push_back({output, report, leak_path});
+  if (!output.empty())
+    targets.push_back({output, report, leak_path});
   else
     targets = targets_in(out_dir, stems, api::extension_of(formats.empty() ? pb::MESH_FORMAT_PLY : formats[0]), ids,
                          std::vector<bool>(ids.size(), repair_job));
@@ -833,7 +880,8 @@ int RemoteCommands::Impl::run_jobs() {
     char when[32];
     std::strftime(when, sizeof when, "%Y-%m-%d %H:%M:%S", &tm);
     char progress[64] = "";
-    if (j.state() == pb::JOB_STATE_RUNNING) std::snprintf(progress, sizeof progress, "%s %.0f%%", j.stage().c_str(), 100 * j.fraction());
+    if (j.state() == pb::JOB_STATE_RUNNING)
+      std::snprintf(progress, sizeof progress, "%s %.0f%%", j.stage().c_str(), 100 * j.fraction());
     std::string detail = j.state() == pb::JOB_STATE_FAILED ? j.error_message() : std::string();
     std::printf("%-32s  %-9s  %-19s  %-24s  %s%s%s\n", j.job_id().c_str(), api::state_name(j.state()), when, progress,
                 j.spec().file_name().c_str(), detail.empty() ? "" : ": ", detail.c_str());
@@ -872,7 +920,8 @@ int RemoteCommands::Impl::run_cancel() {
         return stub.Cancel(ctx, req, status);
       },
       [](const pb::JobStatus& status) {
-        return status.state() == pb::JOB_STATE_CANCELLED ? "cancelled" : "cancel requested (the job stops within moments)";
+        return status.state() == pb::JOB_STATE_CANCELLED ? "cancelled"
+                                                         : "cancel requested (the job stops within moments)";
       },
       [](const grpc::Status& st, grpc::ClientContext& ctx) { return exit_code_of(st, ctx); });
 }

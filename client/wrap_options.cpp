@@ -16,11 +16,13 @@ CLI::Option* WrapOptions::bind(CLI::App* cmd, const std::string& name, T& value,
 
 void WrapOptions::add_to(CLI::App* cmd, const std::string& threads_help) {
   // Added group by group: the help lists the groups in the order they first appear.
-  bind(cmd, "--base-size", base_size_, "Level-0 cell edge: model units (0.5) or percent of the bounding-box diagonal (1%)",
+  bind(cmd, "--base-size", base_size_,
+       "Level-0 cell edge: model units (0.5) or percent of the bounding-box diagonal (1%)",
        [this](WrapParams& p) { p.base_size = Length::parse(base_size_); })
       ->capture_default_str()
       ->group("Size");
-  bind(cmd, "--levels", cli_.levels, "Most 2x2x2 refinement levels below the base size by the refinement criteria (0-6)",
+  bind(cmd, "--levels", cli_.levels,
+       "Most 2x2x2 refinement levels below the base size by the refinement criteria (0-6)",
        [this](WrapParams& p) { p.levels = cli_.levels; })
       ->capture_default_str()
       ->check(CLI::Range(0, 6))
@@ -35,10 +37,11 @@ void WrapOptions::add_to(CLI::App* cmd, const std::string& threads_help) {
        [this](WrapParams& p) { p.refine_normal_spread_deg = cli_.refine_normal_spread_deg; })
       ->capture_default_str()
       ->group("Size");
-  CLI::Option* fc = cmd->add_flag("--refine-far-cells,!--no-refine-far-cells", refine_far_cells_,
-                                  "Refine a cell the input passes through when a point of its boundary lies more than a "
-                                  "base cell from the input there (the wrap's held-back nodes stay within a base cell)")
-                        ->group("Size");
+  CLI::Option* fc =
+      cmd->add_flag("--refine-far-cells,!--no-refine-far-cells", refine_far_cells_,
+                    "Refine a cell the input passes through when a point of its boundary lies more than a "
+                    "base cell from the input there (the wrap's held-back nodes stay within a base cell)")
+          ->group("Size");
   bindings_.push_back({fc, [this](WrapParams& p) { p.refine_far_cells = refine_far_cells_; }});
   bind(cmd, "--volume", volume_,
        "Volume to wrap: outside (around the input), inside (the largest volume it encloses), or the volume(s) "
@@ -56,13 +59,15 @@ void WrapOptions::add_to(CLI::App* cmd, const std::string& threads_help) {
       ->capture_default_str()
       ->check(CLI::Range(0.0, 180.0))
       ->group("Features");
-  bind(cmd, "--corner-angle", cli_.corner_angle_deg, "Degrees a feature curve must turn at a point to make a corner there",
+  bind(cmd, "--corner-angle", cli_.corner_angle_deg,
+       "Degrees a feature curve must turn at a point to make a corner there",
        [this](WrapParams& p) { p.corner_angle_deg = cli_.corner_angle_deg; })
       ->capture_default_str()
       ->check(CLI::Range(0.0, 180.0))
       ->group("Features");
-  CLI::Option* nf = cmd->add_flag("--no-features", no_features_, "Do not snap the wrap onto sharp edges, boundaries and corners")
-                         ->group("Features");
+  CLI::Option* nf =
+      cmd->add_flag("--no-features", no_features_, "Do not snap the wrap onto sharp edges, boundaries and corners")
+          ->group("Features");
   bindings_.push_back({nf, [this](WrapParams& p) { p.snap_features = !no_features_; }});
   bind(cmd, "--control-volume", control_volumes_,
        "A region with its own cell size, repeatable: box:X0,Y0,Z0,X1,Y1,Z1:SIZE, sphere:X,Y,Z,R:SIZE, "
@@ -73,7 +78,8 @@ void WrapOptions::add_to(CLI::App* cmd, const std::string& threads_help) {
        })
       ->take_all()
       ->group("Controls");
-  bind(cmd, "--part-size", part_sizes_, "Cell size where an input part (STL solid, OBJ group) passes, repeatable: NAME=SIZE",
+  bind(cmd, "--part-size", part_sizes_,
+       "Cell size where an input part (STL solid, OBJ group) passes, repeatable: NAME=SIZE",
        [this](WrapParams& p) {
          p.part_sizes.clear();
          for (const auto& s : part_sizes_) p.part_sizes.push_back(PartSize::parse(s));
@@ -89,7 +95,8 @@ void WrapOptions::add_to(CLI::App* cmd, const std::string& threads_help) {
        })
       ->take_all()
       ->group("Controls");
-  bind(cmd, "--contact-floor", contact_floor_, "Smallest cell contact prevention may use (default: the finest cell / 8)",
+  bind(cmd, "--contact-floor", contact_floor_,
+       "Smallest cell contact prevention may use (default: the finest cell / 8)",
        [this](WrapParams& p) { p.contact_floor = Length::parse(contact_floor_); })
       ->group("Controls");
   cmd->add_option("--params", params_file_,
@@ -116,28 +123,32 @@ void WrapOptions::add_to(CLI::App* cmd, const std::string& threads_help) {
       ->capture_default_str()
       ->check(CLI::Range(0.0, 0.5))
       ->group("Surface fit");
-  CLI::Option* nr = cmd->add_flag("--no-remesh", no_remesh_,
-                                  "Do not rebuild the bad regions of the wrap (slivers, tiny triangles, very poor normals); "
-                                  "the report's quality section still counts them")
-                         ->group("Surface fit");
+  CLI::Option* nr =
+      cmd->add_flag("--no-remesh", no_remesh_,
+                    "Do not rebuild the bad regions of the wrap (slivers, tiny triangles, very poor normals); "
+                    "the report's quality section still counts them")
+          ->group("Surface fit");
   bindings_.push_back({nr, [this](WrapParams& p) { p.remesh = !no_remesh_; }});
-  CLI::Option* sr = cmd->add_flag("--sliver-removal,!--no-sliver-removal", sliver_removal_,
-                                  "Remove the triangles with an angle under 10 degrees left after the rebuilds (edge flips, "
-                                  "collapses and tangential moves, held near the input)")
-                         ->group("Surface fit");
+  CLI::Option* sr =
+      cmd->add_flag("--sliver-removal,!--no-sliver-removal", sliver_removal_,
+                    "Remove the triangles with an angle under 10 degrees left after the rebuilds (edge flips, "
+                    "collapses and tangential moves, held near the input)")
+          ->group("Surface fit");
   bindings_.push_back({sr, [this](WrapParams& p) { p.remove_slivers = sliver_removal_; }});
-  CLI::Option* ts = cmd->add_flag("--two-sided-sheets,!--no-two-sided-sheets", two_sided_sheets_,
-                                  "Where the volume lies on both sides of an input surface (open sheets, scans with holes), "
-                                  "move offending nodes farther off the input on their own side before pulling them back")
-                         ->group("Surface fit");
+  CLI::Option* ts =
+      cmd->add_flag("--two-sided-sheets,!--no-two-sided-sheets", two_sided_sheets_,
+                    "Where the volume lies on both sides of an input surface (open sheets, scans with holes), "
+                    "move offending nodes farther off the input on their own side before pulling them back")
+          ->group("Surface fit");
   bindings_.push_back({ts, [this](WrapParams& p) { p.two_sided_sheets = two_sided_sheets_; }});
   bind(cmd, "--threads", cli_.threads, threads_help, [this](WrapParams& p) { p.threads = cli_.threads; })
       ->capture_default_str()
       ->check(CLI::NonNegativeNumber)
       ->group("Run");
-  CLI::Option* nd = cmd->add_flag("--no-distances", no_distances_,
-                                  "Skip the sampled distances of the report (timing runs: they cost as much as a stage)")
-                         ->group("Output");
+  CLI::Option* nd =
+      cmd->add_flag("--no-distances", no_distances_,
+                    "Skip the sampled distances of the report (timing runs: they cost as much as a stage)")
+          ->group("Output");
   bindings_.push_back({nd, [this](WrapParams& p) { p.compute_distances = !no_distances_; }});
 }
 
@@ -155,7 +166,8 @@ WrapParams WrapOptions::resolve() const {
 #ifdef VDBWRAP_WITH_REMOTE
     p = api::read_params_file(params_file_);
 #else
-    throw Error(ErrorKind::InvalidArgument, "--params: this vdbwrap was built without the API library (VDBWRAP_BUILD_SERVICE=OFF)");
+    throw Error(ErrorKind::InvalidArgument,
+                "--params: this vdbwrap was built without the API library (VDBWRAP_BUILD_SERVICE=OFF)");
 #endif
   }
   for (const Binding& b : bindings_) {

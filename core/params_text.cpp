@@ -94,9 +94,12 @@ ControlVolume ControlVolume::parse(const std::string& text) {
 
 std::string ControlVolume::to_string() const {
   switch (shape) {
-    case Shape::Box: return "box:" + join({a[0], a[1], a[2], b[0], b[1], b[2]}) + ":" + size.to_string();
-    case Shape::Sphere: return "sphere:" + join({a[0], a[1], a[2], radius}) + ":" + size.to_string();
-    case Shape::Cylinder: return "cylinder:" + join({a[0], a[1], a[2], b[0], b[1], b[2], radius}) + ":" + size.to_string();
+    case Shape::Box:
+      return "box:" + join({a[0], a[1], a[2], b[0], b[1], b[2]}) + ":" + size.to_string();
+    case Shape::Sphere:
+      return "sphere:" + join({a[0], a[1], a[2], radius}) + ":" + size.to_string();
+    case Shape::Cylinder:
+      return "cylinder:" + join({a[0], a[1], a[2], b[0], b[1], b[2], radius}) + ":" + size.to_string();
     case Shape::Cone:
       return "cone:" + join({a[0], a[1], a[2], b[0], b[1], b[2], radius, radius_b}) + ":" + size.to_string();
   }

@@ -55,9 +55,12 @@ void validate(const WrapParams& p) {
   if (p.refine_max_triangles < 1) bad("refine_max_triangles", "must be at least 1");
   if (!(p.refine_normal_spread_deg >= 0 && p.refine_normal_spread_deg <= 180))
     bad("refine_normal_spread_deg", "must be between 0 and 180 degrees");
-  if (!(p.weld_tolerance >= 0 && p.weld_tolerance < 0.01)) bad("weld_tolerance", "must be in [0, 0.01) of the diagonal");
-  if (!(p.surface_offset >= 0 && p.surface_offset < 0.5)) bad("surface_offset", "must be in [0, 0.5) of the finest cell");
-  if (p.presmooth_iterations < 0 || p.presmooth_iterations > 100) bad("presmooth_iterations", "must be between 0 and 100");
+  if (!(p.weld_tolerance >= 0 && p.weld_tolerance < 0.01))
+    bad("weld_tolerance", "must be in [0, 0.01) of the diagonal");
+  if (!(p.surface_offset >= 0 && p.surface_offset < 0.5))
+    bad("surface_offset", "must be in [0, 0.5) of the finest cell");
+  if (p.presmooth_iterations < 0 || p.presmooth_iterations > 100)
+    bad("presmooth_iterations", "must be between 0 and 100");
   if (p.validity_rounds < 0 || p.validity_rounds > 100000) bad("validity_rounds", "must be between 0 and 100000");
   if (!(p.corner_angle_deg > 0 && p.corner_angle_deg < 180))
     bad("corner_angle_deg", "must be strictly between 0 and 180 degrees");

@@ -167,8 +167,8 @@ LeakReport leak_from_report_json(const std::string& text) {
 std::string leak_to_obj(const LeakReport& leak) {
   std::ostringstream o;
   o.precision(9);
-  o << "# vdbwrap leak: " << leak.description << "\n# narrowest passage at " << leak.location[0] << ' ' << leak.location[1]
-    << ' ' << leak.location[2] << ", about " << leak.width << " wide\n";
+  o << "# vdbwrap leak: " << leak.description << "\n# narrowest passage at " << leak.location[0] << ' '
+    << leak.location[1] << ' ' << leak.location[2] << ", about " << leak.width << " wide\n";
   // A small octahedron at the passage, then the path as a polyline.
   const double r = std::max(leak.width * 0.5, 1e-9);
   const Vec3& c = leak.location;
@@ -196,7 +196,8 @@ Length Length::parse(const std::string& text) {
   double v = 0;
   auto [end, ec] = std::from_chars(t.data(), t.data() + t.size(), v);
   if (t.empty() || ec != std::errc() || end != t.data() + t.size() || !std::isfinite(v) || v <= 0)
-    throw Error(ErrorKind::InvalidArgument, "'" + text + "' is not a positive length (model units, or N% of the diagonal)");
+    throw Error(ErrorKind::InvalidArgument,
+                "'" + text + "' is not a positive length (model units, or N% of the diagonal)");
   len.value = v;
   return len;
 }
@@ -213,7 +214,8 @@ std::string to_json(const DistanceStats& s, int indent) { return dist_json(s).du
 
 std::string to_json(const WrapReport& r, int indent) {
   json stages = json::array();
-  for (const auto& s : r.stages) stages.push_back({{"name", s.name}, {"seconds", s.seconds}, {"peak_memory_mb", s.peak_memory_mb}});
+  for (const auto& s : r.stages)
+    stages.push_back({{"name", s.name}, {"seconds", s.seconds}, {"peak_memory_mb", s.peak_memory_mb}});
   json sizes = json::array();
   for (const auto& [what, size] : r.control_sizes) sizes.push_back({{"control", what}, {"cell_size", size}});
   json j{{"input", diag_json(r.input)},
@@ -254,8 +256,10 @@ std::string to_json(const WrapReport& r, int indent) {
            {"unresolved_locations", r.contact.unresolved_locations},
            {"separate_bodies", r.contact.separate_bodies}}},
          {"control_sizes", sizes},
-         {"projection", {{"nodes_held_back", r.nodes_held_back}, {"nodes", r.nodes_projected},
-                         {"triangles_before_coarsening", r.triangles_before_coarsening}}},
+         {"projection",
+          {{"nodes_held_back", r.nodes_held_back},
+           {"nodes", r.nodes_projected},
+           {"triangles_before_coarsening", r.triangles_before_coarsening}}},
          {"two_sided",
           {{"area_percent", 100 * r.two_sided.area_fraction},
            {"nodes", r.two_sided.nodes},

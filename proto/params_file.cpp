@@ -66,7 +66,8 @@ json yaml_to_json(const YAML::Node& node, YamlBudget& budget, int depth = 0) {
       if (!s.empty() && ec == std::errc() && end == s.data() + s.size()) return v;
       return s;
     }
-    default: return nullptr;
+    default:
+      return nullptr;
   }
 }
 
@@ -136,7 +137,8 @@ WrapParams read_params_file(const std::string& path) {
   if (!in) bad(path, "cannot read the parameter file");
   std::stringstream buf;
   buf << in.rdbuf();
-  const bool yaml = path.size() >= 5 && (path.substr(path.size() - 5) == ".yaml" || path.substr(path.size() - 4) == ".yml");
+  const bool yaml =
+      path.size() >= 5 && (path.substr(path.size() - 5) == ".yaml" || path.substr(path.size() - 4) == ".yml");
   v1::WrapParameters msg = parse_params_text(buf.str(), yaml, path);
   try {
     return to_wrap_params(msg);

@@ -23,7 +23,8 @@ Length to_length(const std::string& field, const pb::Size& size) {
     case pb::Size::kModelUnits:
       if (!(finite(field, size.model_units()) > 0)) bad(field, "must be positive");
       return Length{size.model_units(), false};
-    case pb::Size::VALUE_NOT_SET: break;
+    case pb::Size::VALUE_NOT_SET:
+      break;
   }
   bad(field, "set percent or model_units");
 }
@@ -61,10 +62,17 @@ WrapParams to_wrap_params(const pb::WrapParameters& in) {
   if (in.has_feature_angle_deg()) p.feature_angle_deg = in.feature_angle_deg();
   switch (in.volume()) {
     case pb::VOLUME_UNSPECIFIED:
-    case pb::VOLUME_OUTSIDE: p.volume = VolumeChoice::Outside; break;
-    case pb::VOLUME_INSIDE: p.volume = VolumeChoice::Inside; break;
-    case pb::VOLUME_SEED_POINTS: p.volume = VolumeChoice::SeedPoints; break;
-    default: bad("volume", "unknown value " + std::to_string(int(in.volume())));
+    case pb::VOLUME_OUTSIDE:
+      p.volume = VolumeChoice::Outside;
+      break;
+    case pb::VOLUME_INSIDE:
+      p.volume = VolumeChoice::Inside;
+      break;
+    case pb::VOLUME_SEED_POINTS:
+      p.volume = VolumeChoice::SeedPoints;
+      break;
+    default:
+      bad("volume", "unknown value " + std::to_string(int(in.volume())));
   }
   for (const auto& s : in.seed_points())
     p.seed_points.push_back({finite("seed_points", s.x()), finite("seed_points", s.y()), finite("seed_points", s.z())});
@@ -73,14 +81,25 @@ WrapParams to_wrap_params(const pb::WrapParameters& in) {
   for (const auto& c : in.control_volumes()) {
     ControlVolume cv;
     switch (c.shape()) {
-      case pb::ControlVolume::SHAPE_BOX: cv.shape = ControlVolume::Shape::Box; break;
-      case pb::ControlVolume::SHAPE_SPHERE: cv.shape = ControlVolume::Shape::Sphere; break;
-      case pb::ControlVolume::SHAPE_CYLINDER: cv.shape = ControlVolume::Shape::Cylinder; break;
-      case pb::ControlVolume::SHAPE_CONE: cv.shape = ControlVolume::Shape::Cone; break;
-      default: bad("control_volumes", "shape must be SHAPE_BOX, SHAPE_SPHERE, SHAPE_CYLINDER or SHAPE_CONE");
+      case pb::ControlVolume::SHAPE_BOX:
+        cv.shape = ControlVolume::Shape::Box;
+        break;
+      case pb::ControlVolume::SHAPE_SPHERE:
+        cv.shape = ControlVolume::Shape::Sphere;
+        break;
+      case pb::ControlVolume::SHAPE_CYLINDER:
+        cv.shape = ControlVolume::Shape::Cylinder;
+        break;
+      case pb::ControlVolume::SHAPE_CONE:
+        cv.shape = ControlVolume::Shape::Cone;
+        break;
+      default:
+        bad("control_volumes", "shape must be SHAPE_BOX, SHAPE_SPHERE, SHAPE_CYLINDER or SHAPE_CONE");
     }
-    cv.a = {finite("control_volumes.a", c.a().x()), finite("control_volumes.a", c.a().y()), finite("control_volumes.a", c.a().z())};
-    cv.b = {finite("control_volumes.b", c.b().x()), finite("control_volumes.b", c.b().y()), finite("control_volumes.b", c.b().z())};
+    cv.a = {finite("control_volumes.a", c.a().x()), finite("control_volumes.a", c.a().y()),
+            finite("control_volumes.a", c.a().z())};
+    cv.b = {finite("control_volumes.b", c.b().x()), finite("control_volumes.b", c.b().y()),
+            finite("control_volumes.b", c.b().z())};
     if (cv.shape == ControlVolume::Shape::Sphere) cv.b = cv.a;
     if (cv.shape == ControlVolume::Shape::Box)
       for (int k = 0; k < 3; ++k)
@@ -142,10 +161,18 @@ pb::WrapParameters to_proto(const WrapParams& in) {
   for (const ControlVolume& cv : in.control_volumes) {
     auto* c = out.add_control_volumes();
     switch (cv.shape) {
-      case ControlVolume::Shape::Box: c->set_shape(pb::ControlVolume::SHAPE_BOX); break;
-      case ControlVolume::Shape::Sphere: c->set_shape(pb::ControlVolume::SHAPE_SPHERE); break;
-      case ControlVolume::Shape::Cylinder: c->set_shape(pb::ControlVolume::SHAPE_CYLINDER); break;
-      case ControlVolume::Shape::Cone: c->set_shape(pb::ControlVolume::SHAPE_CONE); break;
+      case ControlVolume::Shape::Box:
+        c->set_shape(pb::ControlVolume::SHAPE_BOX);
+        break;
+      case ControlVolume::Shape::Sphere:
+        c->set_shape(pb::ControlVolume::SHAPE_SPHERE);
+        break;
+      case ControlVolume::Shape::Cylinder:
+        c->set_shape(pb::ControlVolume::SHAPE_CYLINDER);
+        break;
+      case ControlVolume::Shape::Cone:
+        c->set_shape(pb::ControlVolume::SHAPE_CONE);
+        break;
     }
     *c->mutable_a() = to_proto_point(cv.a);
     *c->mutable_b() = to_proto_point(cv.b);
@@ -195,7 +222,8 @@ RepairParams to_repair_params(const pb::RepairParameters& in) {
     return v;
   };
   if (in.has_local_iterations()) {
-    if (in.local_iterations() < 0 || in.local_iterations() > 1000) bad("local_iterations", "must be between 0 and 1000");
+    if (in.local_iterations() < 0 || in.local_iterations() > 1000)
+      bad("local_iterations", "must be between 0 and 1000");
     p.local_iterations = in.local_iterations();
   }
   if (in.has_alpha()) p.alpha = fraction("alpha", in.alpha(), false, false);
@@ -208,10 +236,12 @@ RepairParams to_repair_params(const pb::RepairParameters& in) {
     p.accuracy = in.accuracy();
   }
   if (in.has_refill_iterations()) {
-    if (in.refill_iterations() < 0 || in.refill_iterations() > 100) bad("refill_iterations", "must be between 0 and 100");
+    if (in.refill_iterations() < 0 || in.refill_iterations() > 100)
+      bad("refill_iterations", "must be between 0 and 100");
     p.refill_iterations = in.refill_iterations();
   }
-  if (in.has_refill_area_ratio()) p.refill_area_ratio = fraction("refill_area_ratio", in.refill_area_ratio(), false, true);
+  if (in.has_refill_area_ratio())
+    p.refill_area_ratio = fraction("refill_area_ratio", in.refill_area_ratio(), false, true);
   if (in.has_fair()) p.fair = in.fair();
   if (in.has_max_deviation()) p.max_deviation = to_length("max_deviation", in.max_deviation());
   if (in.has_remove_small_pieces()) p.remove_small_pieces = in.remove_small_pieces();
@@ -257,51 +287,74 @@ void check_job_parameters(const pb::JobSpec& spec) {
   switch (spec.kind()) {
     case pb::JOB_KIND_UNSPECIFIED:
     case pb::JOB_KIND_WRAP:
-      if (spec.has_repair_params()) bad("repair_params", "given, but the job is a wrap (kind JOB_KIND_REPAIR for a repair)");
+      if (spec.has_repair_params())
+        bad("repair_params", "given, but the job is a wrap (kind JOB_KIND_REPAIR for a repair)");
       to_wrap_params(spec.params());
       return;
     case pb::JOB_KIND_REPAIR:
       if (spec.has_params()) bad("params", "given, but the job is a repair (use repair_params)");
       to_repair_params(spec.repair_params());
       return;
-    default: bad("kind", "unknown value " + std::to_string(int(spec.kind())));
+    default:
+      bad("kind", "unknown value " + std::to_string(int(spec.kind())));
   }
 }
 
 io::Format to_io_format(pb::MeshFormat format) {
   switch (format) {
-    case pb::MESH_FORMAT_STL: return io::Format::Stl;
-    case pb::MESH_FORMAT_OBJ: return io::Format::Obj;
-    case pb::MESH_FORMAT_OFF: return io::Format::Off;
-    case pb::MESH_FORMAT_PLY: return io::Format::Ply;
-    case pb::MESH_FORMAT_VTP: return io::Format::Vtp;
-    case pb::MESH_FORMAT_NASTRAN: return io::Format::Nastran;
-    default: return io::Format::Unknown;
+    case pb::MESH_FORMAT_STL:
+      return io::Format::Stl;
+    case pb::MESH_FORMAT_OBJ:
+      return io::Format::Obj;
+    case pb::MESH_FORMAT_OFF:
+      return io::Format::Off;
+    case pb::MESH_FORMAT_PLY:
+      return io::Format::Ply;
+    case pb::MESH_FORMAT_VTP:
+      return io::Format::Vtp;
+    case pb::MESH_FORMAT_NASTRAN:
+      return io::Format::Nastran;
+    default:
+      return io::Format::Unknown;
   }
 }
 
 pb::MeshFormat to_proto_format(io::Format format) {
   switch (format) {
-    case io::Format::Stl: return pb::MESH_FORMAT_STL;
-    case io::Format::Obj: return pb::MESH_FORMAT_OBJ;
-    case io::Format::Off: return pb::MESH_FORMAT_OFF;
-    case io::Format::Ply: return pb::MESH_FORMAT_PLY;
-    case io::Format::Vtp: return pb::MESH_FORMAT_VTP;
-    case io::Format::Nastran: return pb::MESH_FORMAT_NASTRAN;
-    case io::Format::Unknown: break;
+    case io::Format::Stl:
+      return pb::MESH_FORMAT_STL;
+    case io::Format::Obj:
+      return pb::MESH_FORMAT_OBJ;
+    case io::Format::Off:
+      return pb::MESH_FORMAT_OFF;
+    case io::Format::Ply:
+      return pb::MESH_FORMAT_PLY;
+    case io::Format::Vtp:
+      return pb::MESH_FORMAT_VTP;
+    case io::Format::Nastran:
+      return pb::MESH_FORMAT_NASTRAN;
+    case io::Format::Unknown:
+      break;
   }
   return pb::MESH_FORMAT_UNSPECIFIED;
 }
 
 std::string extension_of(pb::MeshFormat format) {
   switch (format) {
-    case pb::MESH_FORMAT_STL: return "stl";
-    case pb::MESH_FORMAT_OBJ: return "obj";
-    case pb::MESH_FORMAT_OFF: return "off";
-    case pb::MESH_FORMAT_PLY: return "ply";
-    case pb::MESH_FORMAT_VTP: return "vtp";
-    case pb::MESH_FORMAT_NASTRAN: return "nas";
-    default: return "";
+    case pb::MESH_FORMAT_STL:
+      return "stl";
+    case pb::MESH_FORMAT_OBJ:
+      return "obj";
+    case pb::MESH_FORMAT_OFF:
+      return "off";
+    case pb::MESH_FORMAT_PLY:
+      return "ply";
+    case pb::MESH_FORMAT_VTP:
+      return "vtp";
+    case pb::MESH_FORMAT_NASTRAN:
+      return "nas";
+    default:
+      return "";
   }
 }
 
@@ -311,35 +364,53 @@ pb::MeshFormat format_from_file_name(const std::string& file_name) {
 
 pb::ErrorKind to_proto(ErrorKind kind) {
   switch (kind) {
-    case ErrorKind::Internal: return pb::ERROR_KIND_INTERNAL;
-    case ErrorKind::InvalidArgument: return pb::ERROR_KIND_INVALID_ARGUMENT;
-    case ErrorKind::InvalidInput: return pb::ERROR_KIND_INVALID_INPUT;
-    case ErrorKind::WrapFailed: return pb::ERROR_KIND_WRAP_FAILED;
-    case ErrorKind::OutputFailed: return pb::ERROR_KIND_OUTPUT_FAILED;
-    case ErrorKind::Cancelled: return pb::ERROR_KIND_CANCELLED;
+    case ErrorKind::Internal:
+      return pb::ERROR_KIND_INTERNAL;
+    case ErrorKind::InvalidArgument:
+      return pb::ERROR_KIND_INVALID_ARGUMENT;
+    case ErrorKind::InvalidInput:
+      return pb::ERROR_KIND_INVALID_INPUT;
+    case ErrorKind::WrapFailed:
+      return pb::ERROR_KIND_WRAP_FAILED;
+    case ErrorKind::OutputFailed:
+      return pb::ERROR_KIND_OUTPUT_FAILED;
+    case ErrorKind::Cancelled:
+      return pb::ERROR_KIND_CANCELLED;
   }
   return pb::ERROR_KIND_INTERNAL;
 }
 
 ErrorKind to_error_kind(pb::ErrorKind kind) {
   switch (kind) {
-    case pb::ERROR_KIND_INVALID_ARGUMENT: return ErrorKind::InvalidArgument;
-    case pb::ERROR_KIND_INVALID_INPUT: return ErrorKind::InvalidInput;
-    case pb::ERROR_KIND_WRAP_FAILED: return ErrorKind::WrapFailed;
-    case pb::ERROR_KIND_OUTPUT_FAILED: return ErrorKind::OutputFailed;
-    case pb::ERROR_KIND_CANCELLED: return ErrorKind::Cancelled;
-    default: return ErrorKind::Internal;
+    case pb::ERROR_KIND_INVALID_ARGUMENT:
+      return ErrorKind::InvalidArgument;
+    case pb::ERROR_KIND_INVALID_INPUT:
+      return ErrorKind::InvalidInput;
+    case pb::ERROR_KIND_WRAP_FAILED:
+      return ErrorKind::WrapFailed;
+    case pb::ERROR_KIND_OUTPUT_FAILED:
+      return ErrorKind::OutputFailed;
+    case pb::ERROR_KIND_CANCELLED:
+      return ErrorKind::Cancelled;
+    default:
+      return ErrorKind::Internal;
   }
 }
 
 const char* state_name(pb::JobState state) {
   switch (state) {
-    case pb::JOB_STATE_QUEUED: return "queued";
-    case pb::JOB_STATE_RUNNING: return "running";
-    case pb::JOB_STATE_SUCCEEDED: return "succeeded";
-    case pb::JOB_STATE_FAILED: return "failed";
-    case pb::JOB_STATE_CANCELLED: return "cancelled";
-    default: return "unknown";
+    case pb::JOB_STATE_QUEUED:
+      return "queued";
+    case pb::JOB_STATE_RUNNING:
+      return "running";
+    case pb::JOB_STATE_SUCCEEDED:
+      return "succeeded";
+    case pb::JOB_STATE_FAILED:
+      return "failed";
+    case pb::JOB_STATE_CANCELLED:
+      return "cancelled";
+    default:
+      return "unknown";
   }
 }
 
@@ -350,9 +421,12 @@ bool is_final(pb::JobState state) {
 grpc::StatusCode status_code_for(ErrorKind kind) {
   switch (kind) {
     case ErrorKind::InvalidArgument:
-    case ErrorKind::InvalidInput: return grpc::StatusCode::INVALID_ARGUMENT;
-    case ErrorKind::Cancelled: return grpc::StatusCode::CANCELLED;
-    default: return grpc::StatusCode::INTERNAL;
+    case ErrorKind::InvalidInput:
+      return grpc::StatusCode::INVALID_ARGUMENT;
+    case ErrorKind::Cancelled:
+      return grpc::StatusCode::CANCELLED;
+    default:
+      return grpc::StatusCode::INTERNAL;
   }
 }
 

@@ -20,7 +20,7 @@ namespace {
 
 // The child between fork and exec: async-signal-safe calls only.
 [[noreturn]] void exec_child(char* const* argv, pid_t parent, int events_fd, int null_fd, const rlimit* limit,
-                            int max_fd) {
+                             int max_fd) {
   if (::prctl(PR_SET_PDEATHSIG, SIGKILL) != 0 || ::getppid() != parent) child_fail();
   if (limit && ::setrlimit(RLIMIT_DATA, limit) != 0) child_fail();
   ::setpgid(0, 0);
@@ -63,9 +63,10 @@ JobProcess::JobProcess(const std::vector<std::string>& args, uint64_t memory_lim
     throw std::runtime_error("cannot open /dev/null");
   }
   rlimit files{};
-  const int max_fd = ::getrlimit(RLIMIT_NOFILE, &files) == 0 && files.rlim_cur != RLIM_INFINITY && files.rlim_cur < (1u << 20)
-                         ? int(files.rlim_cur)
-                         : 1 << 20;
+  const int max_fd =
+      ::getrlimit(RLIMIT_NOFILE, &files) == 0 && files.rlim_cur != RLIM_INFINITY && files.rlim_cur < (1u << 20)
+          ? int(files.rlim_cur)
+          : 1 << 20;
   const pid_t parent = ::getpid();
   pid_t pid = ::fork();
   if (pid == 0) exec_child(argv.data(), parent, fds[1], null_fd, memory_limit > 0 ? &limit : nullptr, max_fd);

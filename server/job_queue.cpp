@@ -123,7 +123,8 @@ void JobQueue::restore() {
       ++ended;
     }
   }
-  log_line("spool: " + std::to_string(requeued) + " job(s) queued again, " + std::to_string(ended) + " ended job(s) kept");
+  log_line("spool: " + std::to_string(requeued) + " job(s) queued again, " + std::to_string(ended) +
+           " ended job(s) kept");
   // Before the server listens, so that no client sees a job older than --retain.
   if (options_.retain_seconds > 0) {
     try {
@@ -160,7 +161,8 @@ size_t JobQueue::prune(int64_t cutoff_unix_ms) {
   std::vector<std::shared_ptr<Job>> old;
   for (const auto& job : order_) {
     const pb::JobStatus r = job->snapshot();
-    if (api::is_final(r.state()) && r.finished_unix_ms() > 0 && r.finished_unix_ms() < cutoff_unix_ms) old.push_back(job);
+    if (api::is_final(r.state()) && r.finished_unix_ms() > 0 && r.finished_unix_ms() < cutoff_unix_ms)
+      old.push_back(job);
   }
   for (const auto& job : old) remove_locked(job, "pruned (ended longer ago than --retain)");
   return old.size();
@@ -267,11 +269,11 @@ void JobQueue::shutdown(double grace_seconds) {
     stop_ = true;
     work_.notify_all();
     janitor_wake_.notify_all();
-    auto deadline = std::chrono::steady_clock::now() +
-                    std::chrono::duration_cast<std::chrono::steady_clock::duration>(
-                        std::chrono::duration<double>(std::max(0.0, grace_seconds)));
-    if (running_ > 0) log_line("shutdown: waiting up to " + std::to_string(int(grace_seconds)) + " s for " +
-                               std::to_string(running_) + " running job(s)");
+    auto deadline = std::chrono::steady_clock::now() + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                                                           std::chrono::duration<double>(std::max(0.0, grace_seconds)));
+    if (running_ > 0)
+      log_line("shutdown: waiting up to " + std::to_string(int(grace_seconds)) + " s for " + std::to_string(running_) +
+               " running job(s)");
     idle_.wait_until(g, deadline, [&] { return running_ == 0; });
     if (running_ > 0) {
       log_line("shutdown: interrupting " + std::to_string(running_) + " running job(s); they stay queued on disk");
@@ -323,8 +325,8 @@ void JobQueue::set_state(Job& job, pb::JobState state, pb::ErrorKind kind, const
     log_line("job " + r.job_id() + " warning: cannot save its record: " + e.what());
   }
   const char* msg = state == pb::JOB_STATE_RUNNING ? "started" : api::state_name(state);
-  add_event_locked(job, state == pb::JOB_STATE_RUNNING ? "" : r.stage(), state == pb::JOB_STATE_RUNNING ? 0.0 : r.fraction(),
-                   error.empty() ? std::string(msg) : error);
+  add_event_locked(job, state == pb::JOB_STATE_RUNNING ? "" : r.stage(),
+                   state == pb::JOB_STATE_RUNNING ? 0.0 : r.fraction(), error.empty() ? std::string(msg) : error);
   if (api::is_final(state)) {
     job.events.back().set_error_kind(kind);
     job.events.back().set_error_message(error);
@@ -350,7 +352,6 @@ void JobQueue::worker() {
     idle_.notify_all();
   }
 }
-
 
 // Runs one job in its own process and turns how that process ended into the job's state.
 void JobQueue::run(const std::shared_ptr<Job>& job) {
@@ -392,7 +393,8 @@ void JobQueue::run(const std::shared_ptr<Job>& job) {
   std::unique_ptr<JobProcess> process;
   try {
     process = std::make_unique<JobProcess>(
-        std::vector<std::string>{options_.worker_command, "--worker", store_.job_dir(id).string()}, options_.job_memory);
+        std::vector<std::string>{options_.worker_command, "--worker", store_.job_dir(id).string()},
+        options_.job_memory);
   } catch (const std::exception& e) {
     fail(pb::ERROR_KIND_INTERNAL, e.what());
     return;
@@ -414,8 +416,10 @@ void JobQueue::run(const std::shared_ptr<Job>& job) {
   while (!process->reap()) {
     frames.clear();
     try {
-      if (process->pipe_open()) process->read_frames(kPollInterval, frames);
-      else std::this_thread::sleep_for(kPollInterval / 2);
+      if (process->pipe_open())
+        process->read_frames(kPollInterval, frames);
+      else
+        std::this_thread::sleep_for(kPollInterval / 2);
     } catch (const std::exception& e) {
       if (protocol_error.empty()) protocol_error = e.what();
       process->signal(SIGKILL);
@@ -424,9 +428,12 @@ void JobQueue::run(const std::shared_ptr<Job>& job) {
     for (const auto& f : frames) on_frame(f);
     const auto now = std::chrono::steady_clock::now();
     if (stop == Stop::None) {
-      if (interrupt_) stop = Stop::Shutdown;
-      else if (job->cancel_requested) stop = Stop::Cancel;
-      else if (deadline && now > *deadline) stop = Stop::Timeout;
+      if (interrupt_)
+        stop = Stop::Shutdown;
+      else if (job->cancel_requested)
+        stop = Stop::Cancel;
+      else if (deadline && now > *deadline)
+        stop = Stop::Timeout;
       if (stop != Stop::None) {
         process->signal(SIGTERM);
         stop_asked = now;
@@ -492,7 +499,8 @@ void JobQueue::run(const std::shared_ptr<Job>& job) {
       break;
   }
   if (!protocol_error.empty()) {
-    fail(pb::ERROR_KIND_INTERNAL, std::string(process_name) + " broke the worker protocol" + where + ": " + protocol_error);
+    fail(pb::ERROR_KIND_INTERNAL,
+         std::string(process_name) + " broke the worker protocol" + where + ": " + protocol_error);
     return;
   }
   const bool exited_cleanly = WIFEXITED(status) && WEXITSTATUS(status) == 0;

@@ -25,8 +25,8 @@ int64_t unix_ms_now();
 
 struct Job {
   mutable std::mutex lock;
-  std::condition_variable changed;     // notified on every new event
-  pb::JobStatus record;                // guarded by lock; report_json is never set here
+  std::condition_variable changed;        // notified on every new event
+  pb::JobStatus record;                   // guarded by lock; report_json is never set here
   std::vector<pb::ProgressEvent> events;  // guarded by lock; sequence = index + 1
   std::atomic<bool> cancel_requested{false};
   std::chrono::steady_clock::time_point started{};
@@ -41,9 +41,9 @@ class JobQueue {
  public:
   struct Options {
     int workers = 1;
-    size_t queue_limit = 16;   // most jobs waiting (not counting running ones)
+    size_t queue_limit = 16;         // most jobs waiting (not counting running ones)
     double job_timeout_seconds = 0;  // 0: none
-    std::string advertise;     // copied into each job's record.server
+    std::string advertise;           // copied into each job's record.server
     // The job process: worker_command --worker <job dir>, with RLIMIT_DATA job_memory (0: none).
     std::string worker_command;
     uint64_t job_memory = 0;
@@ -106,10 +106,10 @@ class JobQueue {
   JobStore& store_;
   Options options_;
   mutable std::mutex lock_;
-  std::condition_variable work_;   // a job was queued, or stop
-  std::condition_variable idle_;   // a job finished
+  std::condition_variable work_;  // a job was queued, or stop
+  std::condition_variable idle_;  // a job finished
   std::map<std::string, std::shared_ptr<Job>> jobs_;
-  std::vector<std::shared_ptr<Job>> order_;  // oldest first
+  std::vector<std::shared_ptr<Job>> order_;    // oldest first
   std::map<std::string, std::string> by_key_;  // idempotency key -> job id
   std::deque<std::shared_ptr<Job>> queue_;
   size_t reserved_ = 0;

@@ -76,7 +76,9 @@ class JobStore {
 
   fs::path job_dir(const std::string& id) const { return spool_ / "jobs" / id; }
   fs::path input_path(const pb::JobStatus& record) const { return job_dir(record.job_id()) / input_file_name(record); }
-  fs::path result_path(const std::string& id, pb::MeshFormat format) const { return job_dir(id) / result_file_name(format); }
+  fs::path result_path(const std::string& id, pb::MeshFormat format) const {
+    return job_dir(id) / result_file_name(format);
+  }
   fs::path report_path(const std::string& id) const { return job_dir(id) / kReportFile; }
 
   // The names of a job's files inside its folder (the worker process knows only the folder).

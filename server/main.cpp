@@ -60,7 +60,11 @@ double parse_duration(const std::string& text) {
   size_t pos = 0;
   double v = std::stod(text, &pos);
   const std::string unit = trim(text.substr(pos));
-  const double mult = unit.empty() || unit == "s" ? 1 : unit == "m" ? 60 : unit == "h" ? 3600 : unit == "d" ? 86400 : -1;
+  const double mult = unit.empty() || unit == "s" ? 1
+                      : unit == "m"               ? 60
+                      : unit == "h"               ? 3600
+                      : unit == "d"               ? 86400
+                                                  : -1;
   if (mult < 0) throw std::invalid_argument("unknown unit \"" + unit + "\" (use s, m, h or d)");
   if (!(v >= 0)) throw std::invalid_argument("a duration cannot be negative");
   return v * mult;
@@ -102,7 +106,8 @@ int main(int argc, char** argv) {
       ->capture_default_str()
       ->check(CLI::Range(1, 1000000));
   app.add_option("--spool", spool, "Folder where jobs live on disk (inputs, results, reports)")->capture_default_str();
-  app.add_option("--max-upload", max_upload, "Largest accepted upload in bytes (suffixes k, M, G)")->capture_default_str();
+  app.add_option("--max-upload", max_upload, "Largest accepted upload in bytes (suffixes k, M, G)")
+      ->capture_default_str();
   app.add_option("--job-timeout", job_timeout, "Seconds a job may run before it is stopped (0: no limit)")
       ->capture_default_str()
       ->check(CLI::NonNegativeNumber);
@@ -110,8 +115,9 @@ int main(int argc, char** argv) {
                  "Memory each job's process may allocate (RLIMIT_DATA), bytes with suffixes k, M, G; 0: no limit. "
                  "A job over it fails alone with an out-of-memory message")
       ->capture_default_str();
-  app.add_option("--max-attempts", max_attempts,
-                 "Times a job may be started; a job the server stopped (died) under that often is failed, not run again")
+  app.add_option(
+         "--max-attempts", max_attempts,
+         "Times a job may be started; a job the server stopped (died) under that often is failed, not run again")
       ->capture_default_str()
       ->check(CLI::Range(1, 1000));
   app.add_option("--retain", retain,
@@ -120,11 +126,13 @@ int main(int argc, char** argv) {
   // Operator-level and for tests only (a stand-in that crashes on purpose): the program run as
   // `PATH --worker JOB_DIR` for each job. Not in --help; no client can set it.
   app.add_option("--worker-command", worker_command, "")->group("");
-  app.add_option("--token-file", token_file, "File holding a token: every call must carry 'authorization: Bearer TOKEN'");
+  app.add_option("--token-file", token_file,
+                 "File holding a token: every call must carry 'authorization: Bearer TOKEN'");
   app.add_option("--tls-cert", tls_cert, "PEM certificate chain: serve TLS (with --tls-key)");
   app.add_option("--tls-key", tls_key, "PEM private key of --tls-cert");
-  app.add_option("--advertise", advertise,
-                 "Address clients can reach this server (replica) at, returned with each job (for replicas behind a balancer)");
+  app.add_option(
+      "--advertise", advertise,
+      "Address clients can reach this server (replica) at, returned with each job (for replicas behind a balancer)");
   app.add_option("--shutdown-grace", grace, "On SIGTERM, seconds running jobs get to finish before they are re-queued")
       ->capture_default_str()
       ->check(CLI::NonNegativeNumber);

@@ -30,7 +30,8 @@ bool equal_constant_time(const std::string& a, const std::string& b) {
 
 // The client's file name, reduced to a harmless display name.
 std::string display_name(const std::string& file_name) {
-  std::string name = file_name.substr(file_name.find_last_of("/\\") == std::string::npos ? 0 : file_name.find_last_of("/\\") + 1);
+  std::string name =
+      file_name.substr(file_name.find_last_of("/\\") == std::string::npos ? 0 : file_name.find_last_of("/\\") + 1);
   if (name.size() > 200) name = name.substr(name.size() - 200);
   for (char& c : name)
     if (static_cast<unsigned char>(c) < 0x20 || c == '"') c = '_';
@@ -52,7 +53,8 @@ grpc::Status JobsService::authenticate(grpc::ServerContext* ctx) const {
   const auto& md = ctx->client_metadata();
   auto it = md.find("authorization");
   if (it == md.end())
-    return status(grpc::StatusCode::UNAUTHENTICATED, "missing bearer token (metadata \"authorization: Bearer <token>\")");
+    return status(grpc::StatusCode::UNAUTHENTICATED,
+                  "missing bearer token (metadata \"authorization: Bearer <token>\")");
   std::string value(it->second.data(), it->second.size());
   if (!equal_constant_time(value, "Bearer " + options_.token))
     return status(grpc::StatusCode::UNAUTHENTICATED, "wrong bearer token");
@@ -61,7 +63,8 @@ grpc::Status JobsService::authenticate(grpc::ServerContext* ctx) const {
 
 grpc::Status JobsService::lookup(const std::string& id, std::shared_ptr<Job>& job) const {
   if (!JobStore::valid_id(id))
-    return status(grpc::StatusCode::INVALID_ARGUMENT, "malformed job id \"" + id.substr(0, 64) + "\" (expected 32 hex digits)");
+    return status(grpc::StatusCode::INVALID_ARGUMENT,
+                  "malformed job id \"" + id.substr(0, 64) + "\" (expected 32 hex digits)");
   job = queue_.find(id);
   if (!job) return status(grpc::StatusCode::NOT_FOUND, "no job " + id + " on this server");
   return grpc::Status::OK;
@@ -72,7 +75,8 @@ grpc::Status JobsService::Submit(grpc::ServerContext* ctx, grpc::ServerReader<pb
   if (auto st = authenticate(ctx); !st.ok()) return st;
   pb::SubmitRequest req;
   if (!reader->Read(&req)) return status(grpc::StatusCode::INVALID_ARGUMENT, "empty Submit stream");
-  if (!req.has_spec()) return status(grpc::StatusCode::INVALID_ARGUMENT, "the first Submit message must carry the JobSpec");
+  if (!req.has_spec())
+    return status(grpc::StatusCode::INVALID_ARGUMENT, "the first Submit message must carry the JobSpec");
   pb::JobSpec spec = req.spec();
   const std::string name = display_name(spec.file_name());
   auto reject = [&](grpc::Status st) {
@@ -92,7 +96,8 @@ grpc::Status JobsService::Submit(grpc::ServerContext* ctx, grpc::ServerReader<pb
     return reject(status(grpc::StatusCode::INVALID_ARGUMENT, "unknown mesh format value"));
   if (spec.input_format() == pb::MESH_FORMAT_UNSPECIFIED) spec.set_input_format(api::format_from_file_name(name));
   if (spec.output_format() == pb::MESH_FORMAT_UNSPECIFIED)
-    spec.set_output_format(spec.input_format() == pb::MESH_FORMAT_UNSPECIFIED ? pb::MESH_FORMAT_PLY : spec.input_format());
+    spec.set_output_format(spec.input_format() == pb::MESH_FORMAT_UNSPECIFIED ? pb::MESH_FORMAT_PLY
+                                                                              : spec.input_format());
 
   if (!spec.idempotency_key().empty()) {
     if (auto job = queue_.find_by_key(spec.idempotency_key())) {
@@ -104,12 +109,13 @@ grpc::Status JobsService::Submit(grpc::ServerContext* ctx, grpc::ServerReader<pb
   }
   if (!accepting_) return status(grpc::StatusCode::UNAVAILABLE, "the server is shutting down");
   if (spec.size_bytes() > options_.max_upload)
-    return reject(status(grpc::StatusCode::RESOURCE_EXHAUSTED,
-                         "upload of " + std::to_string(spec.size_bytes()) + " bytes is larger than the server's limit of " +
-                             std::to_string(options_.max_upload) + " bytes"));
+    return reject(status(grpc::StatusCode::RESOURCE_EXHAUSTED, "upload of " + std::to_string(spec.size_bytes()) +
+                                                                   " bytes is larger than the server's limit of " +
+                                                                   std::to_string(options_.max_upload) + " bytes"));
   if (!queue_.try_reserve())
-    return reject(status(grpc::StatusCode::RESOURCE_EXHAUSTED,
-                         "the queue is full (" + std::to_string(queue_.options().queue_limit) + " jobs waiting); retry later"));
+    return reject(
+        status(grpc::StatusCode::RESOURCE_EXHAUSTED,
+               "the queue is full (" + std::to_string(queue_.options().queue_limit) + " jobs waiting); retry later"));
   Reservation reservation{queue_};
 
   // The bytes, to a file in the spool.
@@ -117,11 +123,12 @@ grpc::Status JobsService::Submit(grpc::ServerContext* ctx, grpc::ServerReader<pb
   try {
     upload = queue_.store().begin_upload();
     while (reader->Read(&req)) {
-      if (req.has_spec()) return reject(status(grpc::StatusCode::INVALID_ARGUMENT, "only the first Submit message may carry a JobSpec"));
+      if (req.has_spec())
+        return reject(status(grpc::StatusCode::INVALID_ARGUMENT, "only the first Submit message may carry a JobSpec"));
       const std::string& chunk = req.chunk();
       if (upload->size() + chunk.size() > options_.max_upload)
         return reject(status(grpc::StatusCode::RESOURCE_EXHAUSTED, "upload is larger than the server's limit of " +
-                                                                        std::to_string(options_.max_upload) + " bytes"));
+                                                                       std::to_string(options_.max_upload) + " bytes"));
       upload->append(chunk);
     }
     if (ctx->IsCancelled()) return status(grpc::StatusCode::CANCELLED, "upload cancelled by the client");
@@ -145,7 +152,8 @@ grpc::Status JobsService::Submit(grpc::ServerContext* ctx, grpc::ServerReader<pb
       if (check.error_kind() == pb::ERROR_KIND_INVALID_INPUT || check.error_kind() == pb::ERROR_KIND_INVALID_ARGUMENT)
         return reject(core_error(ctx, Error(api::to_error_kind(check.error_kind()), why)));
       if (why.rfind("out of memory", 0) == 0)
-        return reject(status(grpc::StatusCode::RESOURCE_EXHAUSTED, name + ": not enough memory on the server to read this mesh"));
+        return reject(
+            status(grpc::StatusCode::RESOURCE_EXHAUSTED, name + ": not enough memory on the server to read this mesh"));
       return reject(status(grpc::StatusCode::INTERNAL, why));
     }
     triangles = check.output_triangles();
@@ -177,7 +185,8 @@ grpc::Status JobsService::Submit(grpc::ServerContext* ctx, grpc::ServerReader<pb
   return grpc::Status::OK;
 }
 
-grpc::Status JobsService::Watch(grpc::ServerContext* ctx, const pb::JobId* req, grpc::ServerWriter<pb::ProgressEvent>* writer) {
+grpc::Status JobsService::Watch(grpc::ServerContext* ctx, const pb::JobId* req,
+                                grpc::ServerWriter<pb::ProgressEvent>* writer) {
   if (auto st = authenticate(ctx); !st.ok()) return st;
   std::shared_ptr<Job> job;
   if (auto st = lookup(req->job_id(), job); !st.ok()) return st;
@@ -199,7 +208,8 @@ grpc::Status JobsService::Watch(grpc::ServerContext* ctx, const pb::JobId* req, 
     if (ended) return grpc::Status::OK;
     if (ctx->IsCancelled()) return status(grpc::StatusCode::CANCELLED, "the client went away");
     if (queue_.stopped())
-      return status(grpc::StatusCode::UNAVAILABLE, "the server is shutting down; the job stays queued, watch it again later");
+      return status(grpc::StatusCode::UNAVAILABLE,
+                    "the server is shutting down; the job stays queued, watch it again later");
   }
 }
 
@@ -236,7 +246,8 @@ grpc::Status JobsService::Download(grpc::ServerContext* ctx, const pb::DownloadR
     if (!api::is_final(r.state())) why += "; its result is not ready yet";
     return status(grpc::StatusCode::FAILED_PRECONDITION, why);
   }
-  if (!pb::MeshFormat_IsValid(req->format())) return status(grpc::StatusCode::INVALID_ARGUMENT, "unknown mesh format value");
+  if (!pb::MeshFormat_IsValid(req->format()))
+    return status(grpc::StatusCode::INVALID_ARGUMENT, "unknown mesh format value");
   const pb::MeshFormat format = req->format() == pb::MESH_FORMAT_UNSPECIFIED ? r.spec().output_format() : req->format();
 
   auto send = [&](auto&& read_some, uint64_t total) -> grpc::Status {
@@ -281,11 +292,13 @@ grpc::Status JobsService::Download(grpc::ServerContext* ctx, const pb::DownloadR
       // as it will be written, and refused rather than handed back invalid (a repair's
       // result: with more intersections than the repair left).
       MeshDiagnostics d = diagnose(io::rounded_to_float(mesh), true);
-      const bool worse = api::is_repair(r.spec()) ? d.intersecting_pairs > r.intersecting_pairs_left() : !d.valid_closed_surface();
+      const bool worse =
+          api::is_repair(r.spec()) ? d.intersecting_pairs > r.intersecting_pairs_left() : !d.valid_closed_surface();
       if (worse)
         return status(grpc::StatusCode::FAILED_PRECONDITION,
                       "this result is not valid once rounded to single precision for STL (" +
-                          std::to_string(d.intersecting_triangles) + " intersecting triangles); download it as PLY or OBJ, "
+                          std::to_string(d.intersecting_triangles) +
+                          " intersecting triangles); download it as PLY or OBJ, "
                           "or submit the job with output format STL");
     }
     bytes = io::write_mesh_to_bytes(mesh, api::to_io_format(format));

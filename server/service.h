@@ -12,9 +12,9 @@ namespace vdbwrap::server {
 class JobsService final : public pb::Jobs::Service {
  public:
   struct Options {
-    std::string token;             // empty: no authentication
+    std::string token;  // empty: no authentication
     uint64_t max_upload = 1ull << 30;
-    std::string advertise;         // returned in SubmitReply.server
+    std::string advertise;  // returned in SubmitReply.server
   };
   JobsService(JobQueue& queue, Options options) : queue_(queue), options_(std::move(options)) {}
 
@@ -23,7 +23,8 @@ class JobsService final : public pb::Jobs::Service {
 
   grpc::Status Submit(grpc::ServerContext* ctx, grpc::ServerReader<pb::SubmitRequest>* reader,
                       pb::SubmitReply* reply) override;
-  grpc::Status Watch(grpc::ServerContext* ctx, const pb::JobId* req, grpc::ServerWriter<pb::ProgressEvent>* writer) override;
+  grpc::Status Watch(grpc::ServerContext* ctx, const pb::JobId* req,
+                     grpc::ServerWriter<pb::ProgressEvent>* writer) override;
   grpc::Status GetStatus(grpc::ServerContext* ctx, const pb::JobId* req, pb::JobStatus* reply) override;
   grpc::Status Download(grpc::ServerContext* ctx, const pb::DownloadRequest* req,
                         grpc::ServerWriter<pb::DownloadChunk>* writer) override;

@@ -36,8 +36,10 @@ pb::JobStatus check_upload(const std::string& worker_command, uint64_t memory_li
     JobProcess process({worker_command, "--check-upload", file, std::to_string(int(format)), name}, memory_limit);
     std::vector<pb::JobStatus> frames;
     while (!process.reap()) {
-      if (process.pipe_open()) process.read_frames(std::chrono::milliseconds(50), frames);
-      else std::this_thread::sleep_for(std::chrono::milliseconds(10));
+      if (process.pipe_open())
+        process.read_frames(std::chrono::milliseconds(50), frames);
+      else
+        std::this_thread::sleep_for(std::chrono::milliseconds(10));
       if (abandon()) return failed(pb::ERROR_KIND_CANCELLED, "abandoned");  // the destructor kills and reaps
     }
     while (process.pipe_open() && process.read_frames(std::chrono::milliseconds(0), frames) > 0) {

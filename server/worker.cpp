@@ -31,8 +31,10 @@ void on_sigterm(int) { g_terminate.store(true); }
 // "8 GiB", "300 MiB": the per-job memory limit as the server's operator wrote it, roughly.
 std::string human_bytes(unsigned long long n) {
   char text[64];
-  if (n >= (1ull << 30)) std::snprintf(text, sizeof text, "%.3g GiB", double(n) / double(1ull << 30));
-  else std::snprintf(text, sizeof text, "%.3g MiB", double(n) / double(1ull << 20));
+  if (n >= (1ull << 30))
+    std::snprintf(text, sizeof text, "%.3g GiB", double(n) / double(1ull << 30));
+  else
+    std::snprintf(text, sizeof text, "%.3g MiB", double(n) / double(1ull << 20));
   return text;
 }
 
@@ -204,7 +206,8 @@ int run_worker(const std::string& job_dir_text) {
   } catch (const std::bad_alloc&) {
     return send_verdict(pb::JOB_STATE_FAILED, pb::ERROR_KIND_INTERNAL, out_of_memory_message()) ? 0 : 1;
   } catch (const std::exception& e) {
-    return send_verdict(pb::JOB_STATE_FAILED, pb::ERROR_KIND_INTERNAL, std::string("internal error: ") + e.what()) ? 0 : 1;
+    return send_verdict(pb::JOB_STATE_FAILED, pb::ERROR_KIND_INTERNAL, std::string("internal error: ") + e.what()) ? 0
+                                                                                                                   : 1;
   }
 }
 

@@ -32,7 +32,8 @@ bool FrameReader::next(pb::JobStatus& frame) {
   if (n > kMaxFrameBytes) throw std::runtime_error("the worker sent a frame of " + std::to_string(n) + " bytes");
   if (buffer_.size() < 4 + size_t(n)) return false;
   frame.Clear();
-  if (!frame.ParseFromArray(buffer_.data() + 4, int(n))) throw std::runtime_error("the worker sent an unreadable frame");
+  if (!frame.ParseFromArray(buffer_.data() + 4, int(n)))
+    throw std::runtime_error("the worker sent an unreadable frame");
   buffer_.erase(0, 4 + size_t(n));
   return true;
 }

@@ -72,9 +72,12 @@ class Cli : public ::testing::Test {
     char buf[4096];
     for (;;) {
       const ssize_t n = ::read(master, buf, sizeof buf);
-      if (n > 0) text.append(buf, size_t(n));
-      else if (n < 0 && errno == EINTR) continue;
-      else break;  // EIO once the child has closed the terminal
+      if (n > 0)
+        text.append(buf, size_t(n));
+      else if (n < 0 && errno == EINTR)
+        continue;
+      else
+        break;  // EIO once the child has closed the terminal
     }
     int status = 0;
     ::waitpid(pid, &status, 0);
@@ -108,8 +111,8 @@ std::string read_text(const fs::path& p) {
 }  // namespace
 
 TEST_F(Cli, WrapsAFileAndWritesAReport) {
-  CliRun r = run("wrap " + vdbwrap::testing::data_path("fuze.obj") + " -o " + (dir / "out.ply").string() + " --base-size 2% --report " +
-              (dir / "report.json").string());
+  CliRun r = run("wrap " + vdbwrap::testing::data_path("fuze.obj") + " -o " + (dir / "out.ply").string() +
+                 " --base-size 2% --report " + (dir / "report.json").string());
   ASSERT_EQ(r.code, 0) << r.err;
   Mesh out = io::read_mesh((dir / "out.ply").string());
   auto v = vdbwrap::testing::valid_closed_surface(out);
@@ -122,7 +125,8 @@ TEST_F(Cli, WrapsAFileAndWritesAReport) {
 }
 
 TEST_F(Cli, CheckReportsWatertightnessAndDistance) {
-  CliRun ok = run("check " + vdbwrap::testing::data_path("unit_sphere.STL") + " --against " + vdbwrap::testing::data_path("unit_sphere.STL"));
+  CliRun ok = run("check " + vdbwrap::testing::data_path("unit_sphere.STL") + " --against " +
+                  vdbwrap::testing::data_path("unit_sphere.STL"));
   EXPECT_EQ(ok.code, 0) << ok.err;
 }
 
@@ -154,7 +158,9 @@ TEST_F(Cli, TriangleCountNotMatchingTheSizeIsInvalidInput) {
 TEST_F(Cli, NanCoordinatesAreInvalidInput) {
   CliRun r = run("wrap " + file("nan.stl", binary_stl(2, 2, std::nanf(""))) + " -o " + (dir / "o.stl").string());
   EXPECT_EQ(r.code, 3);
-  std::string ascii = "solid x\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex inf 0 0\nvertex 0 1 0\nendloop\nendfacet\nendsolid x\n";
+  std::string ascii =
+      "solid x\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex inf 0 0\nvertex 0 1 "
+      "0\nendloop\nendfacet\nendsolid x\n";
   CliRun a = run("wrap " + file("inf.stl", ascii) + " -o " + (dir / "o.stl").string());
   EXPECT_EQ(a.code, 3);
   EXPECT_NE(a.err.find("line 5"), std::string::npos) << a.err;
@@ -205,9 +211,9 @@ TEST_F(Cli, MissingOutputFolderFailsBeforeTheWrap) {
   fs::remove(out);
   const std::string missing = (dir / "no_such_folder").string();
   // Each output option names a file in a folder that does not exist: exit 2 at once, naming it.
-  for (const std::string& bad : {" -o " + missing + "/o.stl",
-                                 " -o " + out.string() + " --report " + missing + "/r.json",
-                                 " -o " + out.string() + " --leak-path " + missing + "/leak.obj"}) {
+  for (const std::string& bad :
+       {" -o " + missing + "/o.stl", " -o " + out.string() + " --report " + missing + "/r.json",
+        " -o " + out.string() + " --leak-path " + missing + "/leak.obj"}) {
     CliRun r = run("wrap " + in + bad + ok_args);
     EXPECT_EQ(r.code, 2) << bad << ": " << r.err;
     EXPECT_NE(r.err.find(missing), std::string::npos) << r.err;
@@ -284,9 +290,11 @@ TEST_F(Cli, HelpGroupsTheOptionsAndShowsExamples) {
   CliRun help = run("wrap --help");
   ASSERT_EQ(help.code, 0) << help.err;
   // Each group's heading, in this order, with an option of the group under it.
-  const std::vector<std::pair<std::string, std::string>> groups = {
-      {"Size:", "--base-size"}, {"Volume:", "--gap-closure"}, {"Features:", "--feature-angle"},
-      {"Controls:", "--control-volume"}, {"Output:", "--report"}};
+  const std::vector<std::pair<std::string, std::string>> groups = {{"Size:", "--base-size"},
+                                                                   {"Volume:", "--gap-closure"},
+                                                                   {"Features:", "--feature-angle"},
+                                                                   {"Controls:", "--control-volume"},
+                                                                   {"Output:", "--report"}};
   size_t at = 0;
   for (const auto& [heading, option] : groups) {
     const size_t h = help.out.find("\n" + heading, at);
@@ -298,7 +306,8 @@ TEST_F(Cli, HelpGroupsTheOptionsAndShowsExamples) {
   const size_t examples = help.out.find("Examples:");
   ASSERT_NE(examples, std::string::npos) << help.out;
   size_t lines = 0;
-  for (size_t p = help.out.find("  vdbwrap wrap ", examples); p != std::string::npos; p = help.out.find("  vdbwrap wrap ", p + 1))
+  for (size_t p = help.out.find("  vdbwrap wrap ", examples); p != std::string::npos;
+       p = help.out.find("  vdbwrap wrap ", p + 1))
     ++lines;
   EXPECT_GE(lines, 2u) << help.out;
   EXPECT_NE(run("--help").out.find("Examples:"), std::string::npos);
@@ -308,7 +317,7 @@ TEST_F(Cli, HelpGroupsTheOptionsAndShowsExamples) {
 TEST_F(Cli, InsideOfAnOpenSurfaceFailsClearly) {
   // A single triangle encloses nothing: --volume inside cannot produce a surface.
   CliRun r = run("wrap " + file("tri.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n") + " -o " + (dir / "o.stl").string() +
-              " --volume inside");
+                 " --volume inside");
   EXPECT_EQ(r.code, 4);
   EXPECT_NE(r.err.find("encloses no volume"), std::string::npos) << r.err;
 }
@@ -392,7 +401,8 @@ TEST_F(Cli, ReportsNameTheToolVersionTheInputFileAndItsParts) {
   CliRun version = run("--version");
   ASSERT_EQ(version.code, 0);
   std::string expected_version = version.out.substr(version.out.find(' ') + 1);
-  while (!expected_version.empty() && std::isspace(static_cast<unsigned char>(expected_version.back()))) expected_version.pop_back();
+  while (!expected_version.empty() && std::isspace(static_cast<unsigned char>(expected_version.back())))
+    expected_version.pop_back();
   ASSERT_FALSE(expected_version.empty()) << version.out;
   auto expect_source = [&](const nlohmann::json& j, const std::string& what) {
     EXPECT_EQ(j.value("vdbwrap_version", ""), expected_version) << what;
@@ -411,14 +421,16 @@ TEST_F(Cli, ReportsNameTheToolVersionTheInputFileAndItsParts) {
   nlohmann::json j = nlohmann::json::parse(read_text(report));
   expect_source(j, "wrap");
   // The keys older readers use are all still there.
-  for (const char* key : {"input", "features", "parameters", "grid", "volumes", "leak", "output", "stages", "total_seconds"})
+  for (const char* key :
+       {"input", "features", "parameters", "grid", "volumes", "leak", "output", "stages", "total_seconds"})
     EXPECT_TRUE(j.contains(key)) << key;
   EXPECT_EQ(j["input"].value("parts", size_t(0)), 2u);
   // A leaking seed point's report, written although the wrap stops.
   const std::string holed = (dir / "holed.obj").string();
   io::write_mesh(vdbwrap::testing::holed_cube(0.1), holed);
   fs::remove(report);
-  CliRun leak = run("wrap " + holed + " -o " + (dir / "l.obj").string() + " --volume 0.5,0.5,0.5 --report " + report.string());
+  CliRun leak =
+      run("wrap " + holed + " -o " + (dir / "l.obj").string() + " --volume 0.5,0.5,0.5 --report " + report.string());
   EXPECT_EQ(leak.code, 4) << leak.err;
   nlohmann::json failed = nlohmann::json::parse(read_text(report));
   EXPECT_EQ(failed.value("vdbwrap_version", ""), expected_version);
@@ -436,8 +448,8 @@ TEST_F(Cli, ReportsNameTheToolVersionTheInputFileAndItsParts) {
 }
 
 TEST_F(Cli, OneOverallProgressFigureOnATerminal) {
-  const std::string args = "wrap " + vdbwrap::testing::data_path("fuze.obj") + " -o " + (dir / "o.stl").string() +
-                           " --base-size 3%";
+  const std::string args =
+      "wrap " + vdbwrap::testing::data_path("fuze.obj") + " -o " + (dir / "o.stl").string() + " --base-size 3%";
   CliRun tty = run_on_terminal(args);
   ASSERT_EQ(tty.code, 0) << tty.err;
   // One line redrawn in place: "[ 42%] project: ..." figures that only grow, ending at 100 %.
@@ -454,7 +466,8 @@ TEST_F(Cli, OneOverallProgressFigureOnATerminal) {
   EXPECT_EQ(figures.back(), 100) << tty.err;
   EXPECT_GT(std::set<int>(figures.begin(), figures.end()).size(), 4u) << "the figure moves through the run";
   EXPECT_TRUE(stages.count("project")) << tty.err;
-  EXPECT_FALSE(std::regex_search(tty.err, std::regex("\\[ *[0-9]+\\.[0-9]+s\\]"))) << "no per-stage log lines on a terminal";
+  EXPECT_FALSE(std::regex_search(tty.err, std::regex("\\[ *[0-9]+\\.[0-9]+s\\]")))
+      << "no per-stage log lines on a terminal";
   EXPECT_NE(tty.err.find("wrote "), std::string::npos) << "the summary follows on its own line";
   // -q: nothing at all.
   CliRun quiet = run_on_terminal(args + " -q");
@@ -510,7 +523,7 @@ TEST_F(Cli, RepairErrors) {
   EXPECT_EQ(run("repair " + in + " -o " + (dir / "o.xyz").string()).code, 2);
   EXPECT_EQ(run("repair " + in + " -o " + (dir / "o.stl").string() + " --max-deviation -1").code, 2);
   EXPECT_EQ(run("repair " + in + " -o " + (dir / "o.stl").string() + " --area-ratio 2").code, 2);
-  EXPECT_EQ(run("repair " + in).code, 2);  // no output
+  EXPECT_EQ(run("repair " + in).code, 2);                               // no output
   CliRun ok = run("repair " + in + " -o " + (dir / "o.obj").string());  // clean: nothing to do
   EXPECT_EQ(ok.code, 0) << ok.err;
 }

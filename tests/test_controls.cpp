@@ -60,7 +60,8 @@ TEST(ContactPrevention, TwoBoxesCloseTogetherFuseWithoutItAndStayApartWithIt) {
   // Each body's triangles carry its part, and none crosses the gap.
   for (size_t t = 0; t < apart.surface.triangles.size(); ++t) {
     const Tri& tri = apart.surface.triangles[t];
-    double x = (apart.surface.points[tri[0]][0] + apart.surface.points[tri[1]][0] + apart.surface.points[tri[2]][0]) / 3;
+    double x =
+        (apart.surface.points[tri[0]][0] + apart.surface.points[tri[1]][0] + apart.surface.points[tri[2]][0]) / 3;
     EXPECT_EQ(apart.surface.part_of(t), x < 1 + gap / 2 ? 0 : 1) << "triangle " << t << " at x " << x;
     if (::testing::Test::HasFailure()) break;
   }
@@ -222,7 +223,8 @@ TEST(ControlVolumes, RefineOnlyWhereTheyAre) {
   EXPECT_NEAR(far_after, far_before, 0.05 * far_before);
 
   // The other shapes parse and refine too (a sphere and a cone here).
-  for (const char* spec : {"sphere:0.8,0.8,0.8,0.4:1%", "cone:0,0,0,1,1,1,0.05,0.5:1%", "cylinder:0,0,0,1,1,1,0.3:1%"}) {
+  for (const char* spec :
+       {"sphere:0.8,0.8,0.8,0.4:1%", "cone:0,0,0,1,1,1,0.05,0.5:1%", "cylinder:0,0,0,1,1,1,0.3:1%"}) {
     WrapParams p = plain;
     p.control_volumes.push_back(ControlVolume::parse(spec));
     WrapResult r = wrap(sphere, p);
@@ -235,7 +237,8 @@ TEST(ControlVolumes, ShapeDistancesAndParsing) {
   ControlVolume cone = ControlVolume::parse("cone:0,0,0,0,0,2,1,0:0.1");
   EXPECT_EQ(cone.shape, ControlVolume::Shape::Cone);
   EXPECT_FALSE(cone.size.percent_of_diagonal);
-  for (const char* bad : {"box:0,0,0,1,1:1%", "ball:0,0,0,1:1%", "sphere:0,0,0,1", "cylinder:0,0,0,0,0,0,1:1%", "box:0,0,0,1,1,1:-1"})
+  for (const char* bad :
+       {"box:0,0,0,1,1:1%", "ball:0,0,0,1:1%", "sphere:0,0,0,1", "cylinder:0,0,0,0,0,0,1:1%", "box:0,0,0,1,1,1:-1"})
     EXPECT_THROW(ControlVolume::parse(bad), Error) << bad;
   EXPECT_THROW(ContactRule::parse("hot"), Error);
   EXPECT_THROW(ContactRule::parse("a:b:c"), Error);
@@ -270,5 +273,6 @@ TEST(PartSizes, RefineOnlyTheNamedPart) {
   // finer lattice renumbers them. Refinement of the left box would multiply it by 16.
   const double left_before = double(triangles_with_centroid_in(before.surface, llo, lhi));
   EXPECT_NEAR(double(triangles_with_centroid_in(after.surface, llo, lhi)), left_before, 0.02 * left_before);
-  EXPECT_GT(triangles_with_centroid_in(after.surface, rlo, rhi), 8 * triangles_with_centroid_in(before.surface, rlo, rhi));
+  EXPECT_GT(triangles_with_centroid_in(after.surface, rlo, rhi),
+            8 * triangles_with_centroid_in(before.surface, rlo, rhi));
 }

@@ -271,8 +271,12 @@ TEST(Deviation, VtkReadsTheArrays) {
   std::ofstream(script) << "import sys, vtk\n"
                            "r = vtk.vtkXMLPolyDataReader(); r.SetFileName(sys.argv[1]); r.Update()\n"
                            "o = r.GetOutput()\n"
-                           "assert o.GetNumberOfPoints() == " << outer.points.size() << "\n"
-                           "assert o.GetNumberOfCells() == " << outer.triangles.size() << "\n"
+                           "assert o.GetNumberOfPoints() == "
+                        << outer.points.size()
+                        << "\n"
+                           "assert o.GetNumberOfCells() == "
+                        << outer.triangles.size()
+                        << "\n"
                            "d = o.GetPointData().GetArray('distance')\n"
                            "lo, hi = d.GetRange()\n"
                            "assert 0.4 < lo <= hi < 0.55, (lo, hi)\n"
@@ -292,7 +296,8 @@ TEST(Deviation, CheckWritesTheFieldThroughTheCli) {
   for (Vec3& p : shifted.points) p[2] += 0.5;
   io::write_mesh(shifted, dir.file("shifted.stl"));
   std::string err;
-  ASSERT_EQ(run_cli("check " + dir.file("shifted.stl") + " --against " + tray + " --deviation " + field, dir, &err), 0) << err;
+  ASSERT_EQ(run_cli("check " + dir.file("shifted.stl") + " --against " + tray + " --deviation " + field, dir, &err), 0)
+      << err;
   io::MeshData data;
   const Mesh back = io::read_mesh(field, &data);
   const io::DataArray* distance = data.point_array("distance");
@@ -305,16 +310,21 @@ TEST(Deviation, CliRefusesABadDeviationPathBeforeTheWork) {
   TempDir dir;
   const std::string out = dir.file("wrap.obj");
   std::string err;
-  EXPECT_EQ(run_cli("wrap " + data_path("fandisk.obj") + " -o " + out + " --deviation " + dir.file("missing/field.vtp"), dir, &err), 2);
+  EXPECT_EQ(run_cli("wrap " + data_path("fandisk.obj") + " -o " + out + " --deviation " + dir.file("missing/field.vtp"),
+                    dir, &err),
+            2);
   EXPECT_NE(err.find("--deviation"), std::string::npos) << err;
   EXPECT_FALSE(fs::exists(out));  // refused before the wrap ran
-  EXPECT_EQ(run_cli("wrap " + data_path("fandisk.obj") + " -o " + out + " --deviation " + dir.file("field.stl"), dir, &err), 2);
+  EXPECT_EQ(
+      run_cli("wrap " + data_path("fandisk.obj") + " -o " + out + " --deviation " + dir.file("field.stl"), dir, &err),
+      2);
   EXPECT_NE(err.find(".vtp or .ply"), std::string::npos) << err;
   EXPECT_FALSE(fs::exists(out));
   EXPECT_EQ(run_cli("check " + data_path("fandisk.obj") + " --deviation " + dir.file("field.vtp"), dir, &err), 2);
   EXPECT_NE(err.find("--against"), std::string::npos) << err;
   EXPECT_EQ(run_cli("check " + data_path("fandisk.obj") + " --against " + data_path("fandisk.obj") + " --deviation " +
-                        dir.file("missing/field.ply"), dir, &err),
+                        dir.file("missing/field.ply"),
+                    dir, &err),
             2);
 }
 

@@ -99,7 +99,8 @@ EdgeFile read_emesh(const std::string& text) {
 std::vector<std::array<Vec3, 2>> sharp_edges(const Mesh& m, double angle_deg) {
   std::map<Key, uint32_t> weld;
   std::vector<uint32_t> id(m.points.size());
-  for (size_t i = 0; i < m.points.size(); ++i) id[i] = weld.try_emplace(key(m.points[i]), uint32_t(weld.size())).first->second;
+  for (size_t i = 0; i < m.points.size(); ++i)
+    id[i] = weld.try_emplace(key(m.points[i]), uint32_t(weld.size())).first->second;
   std::map<std::pair<uint32_t, uint32_t>, std::vector<Vec3>> normals;
   std::map<std::pair<uint32_t, uint32_t>, std::array<Vec3, 2>> ends;
   for (const Tri& t : m.triangles) {
@@ -196,8 +197,12 @@ TEST_F(FeatureCurvesFile, CliWritesTheCurvesOfACadPartOnItsSharpEdges) {
   }
 
   const fs::path obj = dir / "angle_block_features.obj", foam = dir / "angle_block_features.eMesh";
-  ASSERT_EQ(cli("wrap " + input + " -o " + (dir / "w.stl").string() + " -q --no-distances --base-size 3% --features " + obj.string()), 0);
-  ASSERT_EQ(cli("wrap " + input + " -o " + (dir / "w.stl").string() + " -q --no-distances --base-size 3% --features " + foam.string()), 0);
+  ASSERT_EQ(cli("wrap " + input + " -o " + (dir / "w.stl").string() + " -q --no-distances --base-size 3% --features " +
+                obj.string()),
+            0);
+  ASSERT_EQ(cli("wrap " + input + " -o " + (dir / "w.stl").string() + " -q --no-distances --base-size 3% --features " +
+                foam.string()),
+            0);
   const EdgeFile from_obj = read_obj_lines(slurp(obj)), from_foam = read_emesh(slurp(foam));
 
   const double diagonal = std::sqrt(dot(result.report.input.bbox_max - result.report.input.bbox_min,

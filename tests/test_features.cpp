@@ -180,9 +180,12 @@ TEST(FeatureInsertion, ChamferedConcaveCreaseGetsNodesOnIt) {
   EXPECT_EQ(wrap.snapped.size(), wrap.points.size());
   // Along the inside of the strip (its ends are borders, where no edge is split), the crease
   // lies on the wrap.
-  for (double y = 0.1; y <= 0.9; y += 0.05) EXPECT_LT(distance_to_wrap({0, y, 0}), 0.01) << "y " << y << " inserted " << stats.nodes_inserted << " moved " << stats.nodes_moved << " refused " << stats.refused;
+  for (double y = 0.1; y <= 0.9; y += 0.05)
+    EXPECT_LT(distance_to_wrap({0, y, 0}), 0.01) << "y " << y << " inserted " << stats.nodes_inserted << " moved "
+                                                 << stats.nodes_moved << " refused " << stats.refused;
   EXPECT_TRUE(check::mesh_self_intersecting_faces(wrap.points, wrap.triangles).empty());
-  for (const Tri& t : wrap.triangles) EXPECT_FALSE(index.touches(wrap.points[t[0]], wrap.points[t[1]], wrap.points[t[2]]));
+  for (const Tri& t : wrap.triangles)
+    EXPECT_FALSE(index.touches(wrap.points[t[0]], wrap.points[t[1]], wrap.points[t[2]]));
   EXPECT_FALSE(wrap.feature_edges.empty());
 }
 
@@ -265,7 +268,8 @@ TEST(FeatureInsertion, NeighbouringCreasesGiveTheSameWrapOnOneThreadAndTwo) {
   Mesh input;
   auto quad = [&](const Vec3& a, const Vec3& b) {  // the profile segment ab swept along y
     const uint32_t i = uint32_t(input.points.size());
-    input.points.insert(input.points.end(), {{a[0], -0.5, a[2]}, {b[0], -0.5, b[2]}, {b[0], 1.5, b[2]}, {a[0], 1.5, a[2]}});
+    input.points.insert(input.points.end(),
+                        {{a[0], -0.5, a[2]}, {b[0], -0.5, b[2]}, {b[0], 1.5, b[2]}, {a[0], 1.5, a[2]}});
     input.triangles.push_back({i, i + 1, i + 2});
     input.triangles.push_back({i, i + 2, i + 3});
   };
@@ -343,14 +347,15 @@ TEST_P(CorpusFeatures, EdgesStayOnTheWrap) {
     const size_t at = text.find("\"triangles\":");
     ASSERT_NE(at, std::string::npos) << text;
     const size_t alpha_triangles = std::stoul(text.substr(at + 12));
-    EXPECT_LE(on.report.output.triangles, alpha_triangles) << "vdbwrap " << on.report.output.triangles << " alpha wrap " << alpha_triangles;
+    EXPECT_LE(on.report.output.triangles, alpha_triangles)
+        << "vdbwrap " << on.report.output.triangles << " alpha wrap " << alpha_triangles;
     std::remove(out.c_str());
   }
 #endif
 }
 
 INSTANTIATE_TEST_SUITE_P(Cad, CorpusFeatures,
-                         ::testing::Values("fandisk.obj", "1002_tray_bottom.STL", "featuretype.STL", "octagonal_pocket.stl",
-                                           "plate_holes.STL", "idler_riser.STL", "angle_block.STL", "busted.STL",
-                                           "20mm-xyz-cube.stl"),
+                         ::testing::Values("fandisk.obj", "1002_tray_bottom.STL", "featuretype.STL",
+                                           "octagonal_pocket.stl", "plate_holes.STL", "idler_riser.STL",
+                                           "angle_block.STL", "busted.STL", "20mm-xyz-cube.stl"),
                          [](const ::testing::TestParamInfo<const char*>& info) { return test_name_of(info.param); });

@@ -63,15 +63,17 @@ void expect_consistent_orientation(const Mesh& m, bool closed) {
 std::string strip_sheet_ply(int n, bool binary, bool element_per_row) {
   std::vector<std::vector<int32_t>> strips(1);
   for (int row = 0; row < n; ++row) {
-    if (element_per_row && row > 0) strips.emplace_back();
-    else if (row > 0) strips.back().push_back(-1);
+    if (element_per_row && row > 0)
+      strips.emplace_back();
+    else if (row > 0)
+      strips.back().push_back(-1);
     for (int col = 0; col <= n; ++col) {
       strips.back().push_back(row * (n + 1) + col);
       strips.back().push_back((row + 1) * (n + 1) + col);
     }
   }
-  std::string h = std::string("ply\nformat ") + (binary ? "binary_little_endian" : "ascii") +
-                  " 1.0\nelement vertex " + std::to_string((n + 1) * (n + 1)) +
+  std::string h = std::string("ply\nformat ") + (binary ? "binary_little_endian" : "ascii") + " 1.0\nelement vertex " +
+                  std::to_string((n + 1) * (n + 1)) +
                   "\nproperty float x\nproperty float y\nproperty float z\nelement tristrips " +
                   std::to_string(strips.size()) + "\nproperty list int int vertex_indices\nend_header\n";
   std::string body;
@@ -204,7 +206,7 @@ TEST_F(FieldInputs, IntersectionLinesSkipDegenerateTrianglesAndAreExact) {
 // plane): CGAL's construction in doubles raised SIGFPE on it (found by fuzz_wrap).
 TEST_F(FieldInputs, IntersectionLineAlongAnEdgeOfOneTriangle) {
   Mesh m;
-  m.points = {{-3.9375, -3.671875, 3.5}, {3.0625, 3.078125, 3.5}, {-3.6875, 3.578125, 1.75},
+  m.points = {{-3.9375, -3.671875, 3.5}, {3.0625, 3.078125, 3.5},  {-3.6875, 3.578125, 1.75},
               {-3.0625, -2.828125, 3.5}, {3.9375, 3.421875, 1.75}, {3.9375, 3.921875, 3.5}};
   m.triangles = {{0, 1, 2}, {3, 4, 5}};
   const auto pairs = check::find_intersecting_pairs(m.points, m.triangles);
@@ -234,7 +236,8 @@ TEST_F(FieldInputs, CsgExportWithDegenerateTrianglesWraps) {
   }
   const std::string in = (dir_ / "csg.obj").string(), out = (dir_ / "csg_wrap.ply").string();
   io::write_mesh(m, in);
-  const int status = std::system((std::string(VDBWRAP_CLI) + " wrap " + in + " -o " + out + " -q > /dev/null 2>&1").c_str());
+  const int status =
+      std::system((std::string(VDBWRAP_CLI) + " wrap " + in + " -o " + out + " -q > /dev/null 2>&1").c_str());
   ASSERT_TRUE(WIFEXITED(status)) << "ended by a signal";
   ASSERT_EQ(WEXITSTATUS(status), 0);
   const Mesh w = io::read_mesh(out);
@@ -289,7 +292,8 @@ TEST_F(FieldInputs, StrayPointsDoNotWidenTheDiagonal) {
 // the way out, instead of listing contradictory validation flags.
 TEST_F(FieldInputs, FloatOutputFarFromTheOriginFailsWithAClearReason) {
   Mesh m = vdbwrap::testing::box_mesh({1e7, 1e7, 1e7}, {1e7 + 1, 1e7 + 1, 1e7 + 1});
-  const std::string in = (dir_ / "far.obj").string(), out = (dir_ / "far.stl").string(), err = (dir_ / "err.txt").string();
+  const std::string in = (dir_ / "far.obj").string(), out = (dir_ / "far.stl").string(),
+                    err = (dir_ / "err.txt").string();
   io::write_mesh(m, in);
   const int status = std::system((std::string(VDBWRAP_CLI) + " wrap " + in + " -o " + out + " -q 2> " + err).c_str());
   ASSERT_TRUE(WIFEXITED(status));
@@ -345,9 +349,9 @@ Mesh open_scan() {
     const Vec3 c{(s.points[t[0]][0] + s.points[t[1]][0] + s.points[t[2]][0]) / 3,
                  (s.points[t[0]][1] + s.points[t[1]][1] + s.points[t[2]][1]) / 3,
                  (s.points[t[0]][2] + s.points[t[1]][2] + s.points[t[2]][2]) / 3};
-    if (c[2] < -0.6) continue;                                                  // the open base
+    if (c[2] < -0.6) continue;                                                       // the open base
     if (std::hypot(c[0] - 0.9, c[1]) < 0.12 && c[2] > -0.3 && c[2] < 0.3) continue;  // a window
-    if (std::hypot(c[1] + 0.9, c[2] - 0.2) < 0.05) continue;                   // a small hole
+    if (std::hypot(c[1] + 0.9, c[2] - 0.2) < 0.05) continue;                         // a small hole
     out.triangles.push_back(t);
   }
   return out;

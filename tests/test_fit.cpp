@@ -33,7 +33,8 @@ Fitted fit_mesh(const Mesh& m, double base_percent, WrapParams params = {}) {
   Fitted f;
   f.input = prep::prepare(m, pipeline::prepare_params(params), nullptr);
   const double base = base_percent * 0.01 * f.input.diagonal;
-  auto controls = grid::make_size_controls(pipeline::size_requests(params), f.input.mesh, f.input.origin, f.input.diagonal, base);
+  auto controls =
+      grid::make_size_controls(pipeline::size_requests(params), f.input.mesh, f.input.origin, f.input.diagonal, base);
   auto refined = grid::build_refined_grid(f.input, pipeline::refine_criteria(params), base, controls, nullptr);
   f.grid = std::move(refined.grid);
   grid::Components comps;
@@ -103,8 +104,7 @@ TEST(Projection, ValidityLoopHoldsNodesBackInsteadOfFolding) {
   EXPECT_TRUE(f.surface.valid);
   EXPECT_GT(f.surface.held_back, 0u);
   EXPECT_TRUE(check::mesh_self_intersecting_faces(f.surface.points, f.surface.triangles).empty());
-  for (const Tri& t : f.surface.triangles)
-    EXPECT_FALSE(check::triangle_is_degenerate(f.surface.points, t));
+  for (const Tri& t : f.surface.triangles) EXPECT_FALSE(check::triangle_is_degenerate(f.surface.points, t));
 }
 
 namespace {
@@ -164,12 +164,14 @@ TEST(SurfaceIndex, NearestPointsAreExactOnSliversAndFans) {
   for (int k = 0; k < 3000; ++k) {
     const Vec3 q{uniform(-2, 3), uniform(-2, 3), uniform(-2, 4)};
     double best = INFINITY;
-    for (const Tri& t : m.triangles) best = std::min(best, norm2(closest_on_triangle(q, m.points[t[0]], m.points[t[1]], m.points[t[2]]) - q));
+    for (const Tri& t : m.triangles)
+      best = std::min(best, norm2(closest_on_triangle(q, m.points[t[0]], m.points[t[1]], m.points[t[2]]) - q));
     const auto hit = index.closest(q);
     ASSERT_NEAR(hit.squared_distance, best, 1e-12 * (1 + best)) << "query " << k;
     ASSERT_NEAR(norm2(hit.point - q), best, 1e-9 * (1 + best));
     const Tri& t = m.triangles[hit.triangle];
-    EXPECT_NEAR(norm2(closest_on_triangle(q, m.points[t[0]], m.points[t[1]], m.points[t[2]]) - q), best, 1e-12 * (1 + best));
+    EXPECT_NEAR(norm2(closest_on_triangle(q, m.points[t[0]], m.points[t[1]], m.points[t[2]]) - q), best,
+                1e-12 * (1 + best));
     const double d = std::sqrt(best);
     EXPECT_TRUE(index.within(q, d * 1.001 + 1e-12));
     if (d > 1e-6) EXPECT_FALSE(index.within(q, d * 0.999));
@@ -201,7 +203,8 @@ TEST(SurfaceIndex, NearestPointsAreExactInCrowdedCells) {
       q = on + Vec3{uniform(-0.01, 0.01), uniform(-0.01, 0.01), uniform(-0.01, 0.01)};
     }
     double best = INFINITY;
-    for (const Tri& t : m.triangles) best = std::min(best, norm2(closest_on_triangle(q, m.points[t[0]], m.points[t[1]], m.points[t[2]]) - q));
+    for (const Tri& t : m.triangles)
+      best = std::min(best, norm2(closest_on_triangle(q, m.points[t[0]], m.points[t[1]], m.points[t[2]]) - q));
     const auto hit = index.closest(q);
     ASSERT_NEAR(hit.squared_distance, best, 1e-12 * (1 + best)) << "query " << k;
     const double d = std::sqrt(best);
@@ -248,7 +251,7 @@ TEST(SurfaceIndex, NearestPointsAreExactBesideThousandsOfSliversFarFromTheOrigin
     m.points.push_back(c + Vec3{uniform(-0.01, 0.01), uniform(-0.01, 0.01), uniform(-0.01, 0.01)});
     m.triangles.push_back({a, a + 1, a + 2});
     if (k % 50 == 0) m.triangles.push_back({a, a + 1, a + 1});  // a repeated vertex
-    if (k % 50 == 1) {                                           // three points on a line
+    if (k % 50 == 1) {                                          // three points on a line
       m.points.push_back(lerp(m.points[a], m.points[a + 1], 0.25));
       m.triangles.push_back({a, uint32_t(m.points.size() - 1), a + 1});
     }
@@ -293,7 +296,8 @@ TEST(SurfaceIndex, TouchesAgreesWithEveryTriangleOnSortedSliversFarFromTheOrigin
     for (int i = 0; i < n; ++i) {
       const double a = 2 * M_PI * i / n;
       const Vec3 p{0.5 * std::cos(a), 0.5 * std::sin(a), 2.0 * end};
-      m.points.push_back(far + Vec3{p[0], p[1] * std::cos(0.6) - p[2] * std::sin(0.6), p[1] * std::sin(0.6) + p[2] * std::cos(0.6)});
+      m.points.push_back(
+          far + Vec3{p[0], p[1] * std::cos(0.6) - p[2] * std::sin(0.6), p[1] * std::sin(0.6) + p[2] * std::cos(0.6)});
     }
   for (uint32_t i = 0; i < uint32_t(n); ++i) {
     const uint32_t a = i, b = (i + 1) % n;
@@ -339,8 +343,8 @@ TEST(SurfaceIndex, AnswersDoNotDependOnTheOrderOfQueries) {
   std::vector<Vec3> queries;
   for (int i = 0; i <= 40; ++i)
     for (int j = 0; j <= 40; ++j) {
-      queries.push_back({1.5 + 0.01 * i, -0.4 + 0.02 * j, 0.5});   // over vertices and edges of the plate
-      queries.push_back({0.05 * i - 1, 0.05 * j - 1, 4.0});        // far above the fan's side
+      queries.push_back({1.5 + 0.01 * i, -0.4 + 0.02 * j, 0.5});  // over vertices and edges of the plate
+      queries.push_back({0.05 * i - 1, 0.05 * j - 1, 4.0});       // far above the fan's side
     }
   mesh::SurfaceIndex index(m.points, m.triangles);
   std::vector<mesh::SurfaceIndex::Hit> forward, backward(queries.size());
@@ -352,7 +356,8 @@ TEST(SurfaceIndex, AnswersDoNotDependOnTheOrderOfQueries) {
     ASSERT_EQ(forward[k].point, backward[k].point) << "query " << k;
     ASSERT_EQ(forward[k].squared_distance, backward[k].squared_distance);
     // A hint (a triangle tried first) changes the work, not the answer: far, near, invalid.
-    for (uint32_t hint : {uint32_t(k * 7919 % m.triangles.size()), forward[k].triangle, uint32_t(m.triangles.size() + 3)}) {
+    for (uint32_t hint :
+         {uint32_t(k * 7919 % m.triangles.size()), forward[k].triangle, uint32_t(m.triangles.size() + 3)}) {
       const auto hinted = index.closest(queries[k], hint);
       ASSERT_EQ(hinted.triangle, forward[k].triangle) << "query " << k << ", hint " << hint;
       ASSERT_EQ(hinted.squared_distance, forward[k].squared_distance);
@@ -363,7 +368,8 @@ TEST(SurfaceIndex, AnswersDoNotDependOnTheOrderOfQueries) {
     size_t equal = 0;
     for (uint32_t f = 0; f < m.triangles.size(); ++f) {
       const Tri& t = m.triangles[f];
-      if (norm2(closest_on_triangle(q, m.points[t[0]], m.points[t[1]], m.points[t[2]]) - q) == forward[k].squared_distance) {
+      if (norm2(closest_on_triangle(q, m.points[t[0]], m.points[t[1]], m.points[t[2]]) - q) ==
+          forward[k].squared_distance) {
         lowest = std::min(lowest, f);
         ++equal;
       }
@@ -417,7 +423,8 @@ TEST(SurfaceIndex, TouchesAgreesWithEveryTriangleTestedDirectly) {
   for (int k = 0; k < 3000; ++k) {
     const Vec3 a{uniform(-1.5, 2.5), uniform(-1.5, 2.5), uniform(-1.5, 3.5)};
     const double s = uniform(0.05, 0.4);
-    const Vec3 b = a + Vec3{uniform(-s, s), uniform(-s, s), uniform(-s, s)}, c = a + Vec3{uniform(-s, s), uniform(-s, s), uniform(-s, s)};
+    const Vec3 b = a + Vec3{uniform(-s, s), uniform(-s, s), uniform(-s, s)},
+               c = a + Vec3{uniform(-s, s), uniform(-s, s), uniform(-s, s)};
     std::vector<Vec3> pts = m.points;
     const uint32_t n = uint32_t(pts.size());
     pts.insert(pts.end(), {a, b, c});
@@ -452,7 +459,8 @@ TEST(TriangleBuckets, FindEveryTriangleWhoseBoxOverlapsNearAndFarFromTheOrigin) 
     std::vector<Tri> t;
     for (uint32_t k = 0; k < 400; ++k) {
       const Vec3 a{offset + coord(rng), offset + coord(rng), offset + coord(rng)};
-      p.push_back(a), p.push_back(a + Vec3{step(rng), step(rng), step(rng)}), p.push_back(a + Vec3{step(rng), step(rng), step(rng)});
+      p.push_back(a), p.push_back(a + Vec3{step(rng), step(rng), step(rng)}),
+          p.push_back(a + Vec3{step(rng), step(rng), step(rng)});
       t.push_back({3 * k, 3 * k + 1, 3 * k + 2});
     }
     TriangleBuckets buckets(p, t, 1000.0);

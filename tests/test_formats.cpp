@@ -42,9 +42,8 @@ class FormatsTest : public ::testing::Test {
   void SetUp() override {
     std::random_device rd;
     dir_ = fs::temp_directory_path() /
-           ("vdbwrap_test_formats_" +
-            std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()) + "_" +
-            std::to_string(rd()));
+           ("vdbwrap_test_formats_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()) +
+            "_" + std::to_string(rd()));
     fs::create_directories(dir_);
   }
   void TearDown() override {
@@ -65,9 +64,7 @@ std::string read_file(const std::string& p) {
   return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
 }
 
-bool contains(const std::string& text, const std::string& part) {
-  return text.find(part) != std::string::npos;
-}
+bool contains(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
 
 // Reading `file` fails with InvalidInput; the message starts with "FILE: " and holds `part`.
 void expect_read_error(const std::string& file, const std::string& part) {
@@ -100,8 +97,7 @@ Mesh interleaved_mesh() {
 Mesh sorted_by_part(const Mesh& m) {
   std::vector<size_t> order(m.triangles.size());
   for (size_t i = 0; i < order.size(); ++i) order[i] = i;
-  std::stable_sort(order.begin(), order.end(),
-                   [&](size_t a, size_t b) { return m.part_of(a) < m.part_of(b); });
+  std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) { return m.part_of(a) < m.part_of(b); });
   Mesh s = m;
   for (size_t i = 0; i < order.size(); ++i) {
     s.triangles[i] = m.triangles[order[i]];
@@ -284,7 +280,8 @@ TEST_F(FormatsTest, VtpIsReadByVtksXmlPolyDataReader) {
   const Mesh m = interleaved_mesh();
   write_mesh(m, path("m.vtp"));
   write_file("read.py", kVtkReadScript);
-  const std::string command = "/usr/bin/python3 " + path("read.py") + " " + path("m.vtp") + " > " + path("out.txt") + " 2> " + path("err.txt");
+  const std::string command =
+      "/usr/bin/python3 " + path("read.py") + " " + path("m.vtp") + " > " + path("out.txt") + " 2> " + path("err.txt");
   ASSERT_EQ(std::system(command.c_str()), 0) << read_file(path("err.txt"));
   // VTK's warnings and errors go to stderr (vtkOutputWindow) even when it returns data.
   EXPECT_EQ(read_file(path("err.txt")), "");
@@ -528,23 +525,21 @@ TEST_F(FormatsTest, VtpAppendedBase64) {
       "\"/></CellData><Points><DataArray type=\"Float32\" NumberOfComponents=\"3\" format=\"appended\" "
       "offset=\"0\"/></Points><Polys>"
       "<DataArray type=\"Int64\" Name=\"connectivity\" format=\"appended\" offset=\"" +
-      std::to_string(points.size()) +
-      "\"/><DataArray type=\"Int64\" Name=\"offsets\" format=\"appended\" offset=\"" +
+      std::to_string(points.size()) + "\"/><DataArray type=\"Int64\" Name=\"offsets\" format=\"appended\" offset=\"" +
       std::to_string(points.size() + connectivity.size()) +
-      "\"/></Polys></Piece></PolyData>\n<AppendedData encoding=\"base64\">\n _" + points + connectivity +
-      offsets + part + "\n</AppendedData></VTKFile>\n";
+      "\"/></Polys></Piece></PolyData>\n<AppendedData encoding=\"base64\">\n _" + points + connectivity + offsets +
+      part + "\n</AppendedData></VTKFile>\n";
   const Mesh m = read_mesh(write_file("b64.vtp", text));
   ASSERT_EQ(m.points.size(), 4u);
   EXPECT_EQ(m.points[3], (Vec3{2, 2, 0}));
-  EXPECT_EQ(m.triangles.size(), 2u);  // the quad
+  EXPECT_EQ(m.triangles.size(), 2u);                       // the quad
   EXPECT_EQ(m.part_names, std::vector<std::string>{"b"});  // part_id 1 names the second entry
 }
 
 // ---- VTP: malformed input -----------------------------------------------------------------
 
-std::string ascii_vtp(const std::string& piece_attributes, const std::string& points,
-                      const std::string& connectivity, const std::string& offsets,
-                      const std::string& extra = "") {
+std::string ascii_vtp(const std::string& piece_attributes, const std::string& points, const std::string& connectivity,
+                      const std::string& offsets, const std::string& extra = "") {
   return "<?xml version=\"1.0\"?>\n<VTKFile type=\"PolyData\" version=\"1.0\">\n<PolyData>\n<Piece " +
          piece_attributes + ">\n" + extra +
          "<Points><DataArray type=\"Float64\" NumberOfComponents=\"3\" format=\"ascii\">" + points +
@@ -567,8 +562,7 @@ TEST_F(FormatsTest, MalformedVtpNamesTheFileAndTheProblem) {
       {"truncated.vtp", good.substr(0, good.size() / 2), "truncated"},
       {"no_root.vtp", "<?xml version=\"1.0\"?>\n<Foo/>\n", "no <VTKFile>"},
       {"grid.vtp", "<VTKFile type=\"UnstructuredGrid\"><UnstructuredGrid/></VTKFile>", "only PolyData"},
-      {"zlib.vtp",
-       "<VTKFile type=\"PolyData\" compressor=\"vtkZLibDataCompressor\"><PolyData/></VTKFile>",
+      {"zlib.vtp", "<VTKFile type=\"PolyData\" compressor=\"vtkZLibDataCompressor\"><PolyData/></VTKFile>",
        "compressed VTP"},
       {"mismatch.vtp", "<VTKFile type=\"PolyData\"><PolyData></Piece></VTKFile>", "does not match"},
       {"attribute.vtp", "<VTKFile type=\"PolyData\" version=1.0><PolyData/></VTKFile>", "no quoted value"},
@@ -580,8 +574,7 @@ TEST_F(FormatsTest, MalformedVtpNamesTheFileAndTheProblem) {
       {"offset.vtp", ascii_vtp(counts, tri, "0 1 2", "4"), "past the connectivity"},
       {"offsets.vtp", ascii_vtp(counts, tri, "0 1 2", "3 3"), "offsets has 2 values for 1 cells"},
       {"two.vtp", ascii_vtp(counts, tri, "0 1", "2"), "polygon 0 has 2 points"},
-      {"float_ids.vtp",
-       ascii_vtp(counts, tri, "0 1 2", "3").replace(good.find("Int32"), 5, "Float"),
+      {"float_ids.vtp", ascii_vtp(counts, tri, "0 1 2", "3").replace(good.find("Int32"), 5, "Float"),
        "must have an integer type"},
       {"count.vtp", ascii_vtp("NumberOfPoints=\"-3\" NumberOfPolys=\"1\"", tri, "0 1 2", "3"), "is not a count"},
       {"huge.vtp", ascii_vtp("NumberOfPoints=\"6148914691236517206\" NumberOfPolys=\"1\"", tri, "0 1 2", "3"),
@@ -835,8 +828,9 @@ TEST_F(FormatsTest, NastranFromOtherToolsInEveryFieldFormat) {
 }
 
 TEST_F(FormatsTest, MalformedNastranNamesTheFileAndTheLine) {
-  const std::string grids = "GRID           1              0.      0.      0.\n"
-                            "GRID           2              1.      0.      0.\n";
+  const std::string grids =
+      "GRID           1              0.      0.      0.\n"
+      "GRID           2              1.      0.      0.\n";
   const struct {
     const char* file;
     std::string text;

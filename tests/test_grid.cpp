@@ -44,7 +44,8 @@ grid::RefineResult refine(const Mesh& m, double base_percent, int levels, WrapPa
   params.levels = levels;
   auto prepared = prep::prepare(m, pipeline::prepare_params(params), nullptr);
   const double base = base_percent * 0.01 * prepared.diagonal;
-  auto controls = grid::make_size_controls(pipeline::size_requests(params), prepared.mesh, prepared.origin, prepared.diagonal, base);
+  auto controls = grid::make_size_controls(pipeline::size_requests(params), prepared.mesh, prepared.origin,
+                                           prepared.diagonal, base);
   return grid::build_refined_grid(prepared, pipeline::refine_criteria(params), base, controls, nullptr);
 }
 
@@ -55,7 +56,8 @@ TEST(TriangleBox, SeparatingAxesDecideOverlap) {
   EXPECT_TRUE(grid::triangle_overlaps_box({-1, -1, 0}, {1, -1, 0}, {0, 1, 0}, c, h));
   EXPECT_FALSE(grid::triangle_overlaps_box({2, 2, 2}, {3, 2, 2}, {2, 3, 2}, c, h));
   // Diagonal triangle that passes near the corner but misses the box (only its bounding box overlaps).
-  EXPECT_FALSE(grid::triangle_overlaps_box({0.9, 0.0, 0.0}, {0.0, 0.9, 0.0}, {0.0, 0.0, 0.9}, {-0.5, -0.5, -0.5}, {0.45, 0.45, 0.45}));
+  EXPECT_FALSE(grid::triangle_overlaps_box({0.9, 0.0, 0.0}, {0.0, 0.9, 0.0}, {0.0, 0.0, 0.9}, {-0.5, -0.5, -0.5},
+                                           {0.45, 0.45, 0.45}));
   EXPECT_TRUE(grid::triangle_overlaps_box({0.6, 0.0, 0.0}, {0.0, 0.6, 0.0}, {0.0, 0.0, 0.6}, {0, 0, 0}, h));
   EXPECT_TRUE(grid::segment_overlaps_box({-1, 0, 0}, {1, 0, 0}, {-0.5, -0.5, -0.5}, {0.5, 0.5, 0.5}));
   EXPECT_FALSE(grid::segment_overlaps_box({-1, 1, 0}, {1, 1, 0}, {-0.5, -0.5, -0.5}, {0.5, 0.5, 0.5}));
@@ -87,7 +89,9 @@ TEST(TriangleBox, BlockSearchFindsTheSameCellsAsTestingEach) {
           const Vec3 center{origin[0] + (x + 0.5) * cell, origin[1] + (y + 0.5) * cell, origin[2] + (z + 0.5) * cell};
           if (triangle_overlaps_box(a, b, c, center, {half_cell, half_cell, half_cell})) each.push_back({x, y, z});
         }
-    for_cells_overlapping(a, b, c, origin, cell, half_cell, lo, hi, [&](int x, int y, int z) { blocks.push_back({x, y, z}); });
+    for_cells_overlapping(a, b, c, origin, cell, half_cell, lo, hi, [&](int x, int y, int z) {
+      blocks.push_back({x, y, z});
+    });
     std::sort(each.begin(), each.end());
     std::sort(blocks.begin(), blocks.end());
     ASSERT_EQ(each, blocks) << "triangle " << n;
@@ -106,7 +110,8 @@ TEST(TriangleBox, PreparedTesterMatchesTheSeparatingAxisTest) {
   std::uniform_real_distribution<double> coord(-1.0, 1.0), size(0.01, 0.6);
   size_t met = 0;
   for (int n = 0; n < 3000; ++n) {
-    const Vec3 a{coord(rng), coord(rng), coord(rng)}, b{coord(rng), coord(rng), coord(rng)}, c{coord(rng), coord(rng), coord(rng)};
+    const Vec3 a{coord(rng), coord(rng), coord(rng)}, b{coord(rng), coord(rng), coord(rng)},
+        c{coord(rng), coord(rng), coord(rng)};
     const TriangleBoxTester tester(a, b, c);
     const Vec3 centre{coord(rng), coord(rng), coord(rng)};
     const double h = size(rng);
@@ -184,7 +189,8 @@ TEST(Refine, LevelZeroCellsAreThoseEachCellTestFinds) {
   params.levels = 0;
   const auto prepared = prep::prepare(soup, pipeline::prepare_params(params), nullptr);
   const double base = 0.01 * prepared.diagonal;  // about 58 cells a side: 4 blocks
-  const auto controls = grid::make_size_controls(pipeline::size_requests(params), prepared.mesh, prepared.origin, prepared.diagonal, base);
+  const auto controls = grid::make_size_controls(pipeline::size_requests(params), prepared.mesh, prepared.origin,
+                                                 prepared.diagonal, base);
   const auto r = grid::build_refined_grid(prepared, pipeline::refine_criteria(params), base, controls, nullptr);
   const auto& g = *r.grid;
   const auto& pts = prepared.mesh.points;
@@ -328,7 +334,8 @@ std::unique_ptr<grid::AdaptiveGrid> blocky_grid(uint32_t seed) {
       for (int y = lo.y(); y <= hi.y(); ++y)
         for (int x = lo.x(); x <= hi.x(); ++x) {
           const bool wall = x == lo.x() || x == hi.x() || y == lo.y() || y == hi.y() || z == lo.z() || z == hi.z();
-          const bool hole = holed && z == hi.z() && std::abs(x - (lo.x() + hi.x()) / 2) <= 1 && std::abs(y - (lo.y() + hi.y()) / 2) <= 1;
+          const bool hole = holed && z == hi.z() && std::abs(x - (lo.x() + hi.x()) / 2) <= 1 &&
+                            std::abs(y - (lo.y() + hi.y()) / 2) <= 1;
           if (wall && !hole) g->set(0, Coord(x, y, z), grid::kTouched);
         }
   }
@@ -394,7 +401,8 @@ TEST(FloodFill, LabellingByBlocksMatchesAWalkFromLeafToLeaf) {
     ASSERT_GE(volume.size(), 2u) << "the configuration should enclose something";
 
     const size_t blocks_before = g->level_grid(0)->tree().leafCount();
-    const grid::Components comps = grid::label_components(*g, [](int32_t v) { return v == grid::kFree; }, 1);
+    const grid::Components comps = grid::label_components(
+        *g, [](int32_t v) { return v == grid::kFree; }, 1);
     ASSERT_EQ(comps.count(), volume.size());
     for (size_t i = 0; i < volume.size(); ++i) {
       EXPECT_EQ(comps.volume[i], volume[i]) << "component " << i;
@@ -445,7 +453,8 @@ TEST(Extract, HandMadeEdgeAndCornerContactsBecomeManifold) {
     g.set(0, Coord(5, 5, 4), grid::kTouched);  // corner contact
     g.set(0, Coord(6, 3, 3), grid::kRefined);  // level transition
     for (int k = 0; k < 8; ++k)
-      g.set(1, Coord(12 + (k & 1), 6 + ((k >> 1) & 1), 6 + ((k >> 2) & 1)), k == 0 || k == 7 ? grid::kTouched : grid::kFree);
+      g.set(1, Coord(12 + (k & 1), 6 + ((k >> 1) & 1), 6 + ((k >> 2) & 1)),
+            k == 0 || k == 7 ? grid::kTouched : grid::kFree);
     grid::Components comps;
     int32_t label = grid::choose_volume(g, choice, comps, nullptr);
     extract::ExtractStats stats;
@@ -536,8 +545,10 @@ TEST(Extract, RoundsNearTheChangesGiveTheSameSurfaceAsWholeRounds) {
         auto a = deep_copy(*near), b = deep_copy(*whole);
         int32_t la = label_near, lb = label_whole;
         extract::ExtractStats sa, sb;
-        const auto surf_near = extract::extract_manifold_surface(*a, la, choice, sa, nullptr, {}, min_exclude_level, false);
-        const auto surf_whole = extract::extract_manifold_surface(*b, lb, choice, sb, nullptr, {}, min_exclude_level, true);
+        const auto surf_near =
+            extract::extract_manifold_surface(*a, la, choice, sa, nullptr, {}, min_exclude_level, false);
+        const auto surf_whole =
+            extract::extract_manifold_surface(*b, lb, choice, sb, nullptr, {}, min_exclude_level, true);
         EXPECT_EQ(sa.rounds, sb.rounds);
         EXPECT_EQ(sa.excluded_cells, sb.excluded_cells);
         EXPECT_EQ(sa.dropped_pieces, sb.dropped_pieces);

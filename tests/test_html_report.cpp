@@ -107,7 +107,8 @@ TEST(HtmlReport, BigMeshesAreClusteredForDisplayAndThePageSaysHowMany) {
   ASSERT_EQ(d.vertex_of.size(), sphere.points.size());
   // Cluster centres of points on the unit sphere stay close to it (origin taken off).
   for (size_t v = 0; v < d.positions.size() / 3; ++v) {
-    const double x = d.positions[3 * v] + origin[0], y = d.positions[3 * v + 1] + origin[1], z = d.positions[3 * v + 2] + origin[2];
+    const double x = d.positions[3 * v] + origin[0], y = d.positions[3 * v + 1] + origin[1],
+                 z = d.positions[3 * v + 2] + origin[2];
     EXPECT_NEAR(std::sqrt(x * x + y * y + z * z), 1.0, 2 * d.cluster_size);
   }
   for (uint32_t t : d.source_triangle) ASSERT_LT(t, sphere.triangles.size());
@@ -143,7 +144,9 @@ TEST(HtmlReport, InputMarksFindHolesFlipsAndSharpEdges) {
   // box's edges stay its sharp edges (the angle is the surface's, not the flip's).
   std::swap(box.triangles[0][1], box.triangles[0][2]);
   report::InputMarks flipped = report::mark_input(box, exact_weld(box.points), 30, false);
-  EXPECT_EQ(std::count_if(flipped.flags.begin(), flipped.flags.end(), [](uint8_t f) { return f & report::kInputMisoriented; }), 4);
+  EXPECT_EQ(std::count_if(flipped.flags.begin(), flipped.flags.end(),
+                          [](uint8_t f) { return f & report::kInputMisoriented; }),
+            4);
   EXPECT_EQ(flipped.sharp_edges.size(), 12u);
   EXPECT_FALSE(flipped.intersections_searched);
 
@@ -152,14 +155,17 @@ TEST(HtmlReport, InputMarksFindHolesFlipsAndSharpEdges) {
   box.triangles.erase(box.triangles.begin());
   box.triangle_part.erase(box.triangle_part.begin());
   report::InputMarks holed = report::mark_input(box, exact_weld(box.points), 30, true);
-  const auto rim = std::count_if(holed.flags.begin(), holed.flags.end(), [](uint8_t f) { return f & report::kInputBorder; });
+  const auto rim =
+      std::count_if(holed.flags.begin(), holed.flags.end(), [](uint8_t f) { return f & report::kInputBorder; });
   EXPECT_EQ(rim, 3) << "the three triangles across the missing one's edges";
 
   // Two boxes pushed into each other cross.
   Mesh two = vdbwrap::testing::box_mesh({0, 0, 0}, {1, 1, 1});
   vdbwrap::testing::add_box(two, {0.5, 0.5, 0.5}, {1.5, 1.5, 1.5});
   report::InputMarks crossing = report::mark_input(two, exact_weld(two.points), 30, true);
-  EXPECT_GT(std::count_if(crossing.flags.begin(), crossing.flags.end(), [](uint8_t f) { return f & report::kInputIntersecting; }), 0);
+  EXPECT_GT(std::count_if(crossing.flags.begin(), crossing.flags.end(),
+                          [](uint8_t f) { return f & report::kInputIntersecting; }),
+            0);
 }
 
 }  // namespace

@@ -42,8 +42,7 @@ class IoTest : public ::testing::Test {
   void SetUp() override {
     std::random_device rd;
     dir_ = fs::temp_directory_path() /
-           ("vdbwrap_test_io_" +
-            std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()) + "_" +
+           ("vdbwrap_test_io_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()) + "_" +
             std::to_string(rd()));
     fs::create_directories(dir_);
   }
@@ -60,9 +59,7 @@ class IoTest : public ::testing::Test {
   fs::path dir_;
 };
 
-bool contains(const std::string& text, const std::string& part) {
-  return text.find(part) != std::string::npos;
-}
+bool contains(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
 
 // Runs f, expects an Error of `kind` whose message contains every one of `parts`.
 template <class F>
@@ -141,8 +138,7 @@ TEST_F(IoTest, ObjRoundTripKeepsPointsAndPartsWithFacesGroupedByPart) {
   write_mesh(m, path("m.obj"));
   Mesh r = read_mesh(path("m.obj"));
   Mesh grouped = m;  // parts {0, 1, 0, 1, 1, 0}: part 0's faces, then part 1's, in order
-  grouped.triangles = {m.triangles[0], m.triangles[2], m.triangles[5],
-                       m.triangles[1], m.triangles[3], m.triangles[4]};
+  grouped.triangles = {m.triangles[0], m.triangles[2], m.triangles[5], m.triangles[1], m.triangles[3], m.triangles[4]};
   expect_same_indexed_mesh(grouped, r);
   EXPECT_EQ(r.part_names, m.part_names);
   EXPECT_EQ(r.triangle_part, (std::vector<int32_t>{0, 0, 0, 1, 1, 1}));
@@ -214,8 +210,7 @@ TEST_F(IoTest, WriteToBytesMatchesTheFile) {
     write_mesh(m, path(name));
     std::ifstream in(path(name), std::ios::binary);
     std::string file((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-    EXPECT_EQ(file, vdbwrap::io::write_mesh_to_bytes(m, vdbwrap::io::format_from_extension(name)))
-        << name;
+    EXPECT_EQ(file, vdbwrap::io::write_mesh_to_bytes(m, vdbwrap::io::format_from_extension(name))) << name;
   }
 }
 
@@ -360,8 +355,7 @@ TEST_F(IoTest, ObjStarPolygonTriangulatesWithItsOwnOrientation) {
 }
 
 TEST_F(IoTest, DegeneratePolygonFallsBackToAFan) {
-  Mesh m = read_mesh(
-      write_file("line.obj", "v 0 0 0\nv 1 0 0\nv 2 0 0\nv 3 0 0\nv 4 0 0\nf 1 2 3 4 5\n"));
+  Mesh m = read_mesh(write_file("line.obj", "v 0 0 0\nv 1 0 0\nv 2 0 0\nv 3 0 0\nv 4 0 0\nf 1 2 3 4 5\n"));
   EXPECT_EQ(m.triangles, (std::vector<Tri>{{0, 1, 2}, {0, 2, 3}, {0, 3, 4}}));
 }
 
@@ -375,8 +369,7 @@ TEST_F(IoTest, ObjNegativeIndicesAreRelative) {
 }
 
 TEST_F(IoTest, ObjVertexColorsAndCrlfAreAccepted) {
-  Mesh m = read_mesh(
-      write_file("c.obj", "v 0 0 0 1 0 0\r\nv 1 0 0 0 1 0\r\nv 0 1 0 0 0 1\r\nf 1 2 3\r\n"));
+  Mesh m = read_mesh(write_file("c.obj", "v 0 0 0 1 0 0\r\nv 1 0 0 0 1 0\r\nv 0 1 0 0 0 1\r\nf 1 2 3\r\n"));
   EXPECT_EQ(m.points[1], (Vec3{1, 0, 0}));
   EXPECT_EQ(m.triangles.size(), 1u);
 }
@@ -454,8 +447,7 @@ std::string big_endian_ply() {
 }
 
 TEST_F(IoTest, PlyBigEndianBinaryWrittenByHand) {
-  static_assert(__BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__,
-                "big_endian_ply() assumes a little-endian host");
+  static_assert(__BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__, "big_endian_ply() assumes a little-endian host");
   Mesh m = read_mesh(write_file("be.ply", big_endian_ply()));
   ASSERT_EQ(m.points.size(), 4u);
   EXPECT_EQ(m.points[2], (Vec3{1, 1, 0.5}));
@@ -516,9 +508,7 @@ std::string triangle_stl(const char* x) {
   return buf;
 }
 
-TEST_F(IoTest, MissingFile) {
-  expect_read_error(path("nope.stl"), {"cannot open", "No such file"});
-}
+TEST_F(IoTest, MissingFile) { expect_read_error(path("nope.stl"), {"cannot open", "No such file"}); }
 
 TEST_F(IoTest, DirectoryInsteadOfFile) { expect_read_error(dir_.string(), {"is a directory"}); }
 
@@ -530,10 +520,8 @@ TEST_F(IoTest, EmptyFile) {
 TEST_F(IoTest, TruncatedBinaryStl) {
   std::string bytes = binary_stl_header(10);
   for (int i = 0; i < 5; ++i) bytes += binary_stl_record(1);
-  expect_read_error(
-      write_file("t.stl", bytes),
-      {"binary STL declares 10 triangles (needs 584 bytes) but the file has 334 bytes",
-       "truncated"});
+  expect_read_error(write_file("t.stl", bytes),
+                    {"binary STL declares 10 triangles (needs 584 bytes) but the file has 334 bytes", "truncated"});
   expect_read_error(write_file("short.stl", std::string(40, '\x01')), {"truncated", "84"});
 }
 
@@ -553,8 +541,7 @@ TEST_F(IoTest, HugeCountsAreErrorsNotAllocations) {
       "property float y\nproperty float z\nelement face 1\nproperty list uchar int vertex_indices\n"
       "end_header\n" +
       std::string(1000, '\x01');
-  expect_read_error(write_file("huge.ply", ply),
-                    {"declares 4000000000 vertex elements", "1000 bytes"});
+  expect_read_error(write_file("huge.ply", ply), {"declares 4000000000 vertex elements", "1000 bytes"});
 
   const std::string ascii_ply =
       "ply\nformat ascii 1.0\n"
@@ -569,26 +556,24 @@ TEST_F(IoTest, HugeCountsAreErrorsNotAllocations) {
 
 TEST_F(IoTest, NonFiniteCoordinatesInAsciiStl) {
   for (const char* bad : {"nan", "inf", "-inf", "1e999"})
-    expect_read_error(write_file("nan.stl", triangle_stl(bad)),
-                      {"line 5:", "non-finite coordinate"});
+    expect_read_error(write_file("nan.stl", triangle_stl(bad)), {"line 5:", "non-finite coordinate"});
 }
 
 TEST_F(IoTest, NonFiniteCoordinatesInBinaryStl) {
-  std::string bytes =
-      binary_stl_header(2) + binary_stl_record(1) + binary_stl_record(std::nanf(""));
+  std::string bytes = binary_stl_header(2) + binary_stl_record(1) + binary_stl_record(std::nanf(""));
   expect_read_error(write_file("nan_bin.stl", bytes), {"triangle 1 has a non-finite coordinate"});
   // Records are parsed in parallel chunks: of several bad triangles far apart, the first in
   // the file is named.
   std::string many = binary_stl_header(60000);
-  for (int t = 0; t < 60000; ++t) many += binary_stl_record(t == 20001 || t == 55555 || t == 41000 ? std::nanf("") : 1.0f);
+  for (int t = 0; t < 60000; ++t)
+    many += binary_stl_record(t == 20001 || t == 55555 || t == 41000 ? std::nanf("") : 1.0f);
   expect_read_error(write_file("nan_many.stl", many), {"triangle 20001 has a non-finite coordinate"});
 }
 
 TEST_F(IoTest, NonFiniteCoordinatesInObj) {
   expect_read_error(write_file("nan.obj", "v 0 0 0\nv 1 0 0\nv 0 NaN 0\nf 1 2 3\n"),
                     {"line 3: vertex 3 has a non-finite coordinate"});
-  expect_read_error(write_file("inf.obj", "# c\nv inf 0 0\n"),
-                    {"line 2: vertex 1 has a non-finite coordinate"});
+  expect_read_error(write_file("inf.obj", "# c\nv inf 0 0\n"), {"line 2: vertex 1 has a non-finite coordinate"});
 }
 
 TEST_F(IoTest, NonFiniteCoordinatesInOffAndPly) {
@@ -603,17 +588,14 @@ TEST_F(IoTest, NonFiniteCoordinatesInOffAndPly) {
 }
 
 TEST_F(IoTest, MalformedNumbers) {
-  expect_read_error(write_file("bad.obj", "v 0 0 0\nv 1 abc 0\n"),
-                    {"line 2", "malformed number 'abc'"});
-  expect_read_error(write_file("bad.stl", triangle_stl("1.0.0")),
-                    {"line 5", "malformed number '1.0.0'"});
+  expect_read_error(write_file("bad.obj", "v 0 0 0\nv 1 abc 0\n"), {"line 2", "malformed number 'abc'"});
+  expect_read_error(write_file("bad.stl", triangle_stl("1.0.0")), {"line 5", "malformed number '1.0.0'"});
   expect_read_error(write_file("bad.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 x 2\n"),
                     {"line 6", "face 0", "malformed vertex index 'x'"});
-  expect_read_error(
-      write_file("bad.ply",
-                 "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\n"
-                 "property float z\nend_header\n0 0 zz\n"),
-      {"line 8", "vertex 0", "malformed number 'zz'"});
+  expect_read_error(write_file("bad.ply",
+                               "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\n"
+                               "property float z\nend_header\n0 0 zz\n"),
+                    {"line 8", "vertex 0", "malformed number 'zz'"});
 }
 
 TEST_F(IoTest, ZeroTriangles) {
@@ -625,14 +607,11 @@ TEST_F(IoTest, ZeroTriangles) {
 
 TEST_F(IoTest, ObjFaceIndexOutOfRangeNamesTheLine) {
   const std::string head = "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
-  expect_read_error(write_file("r.obj", head + "f 1 2 4\n"),
-                    {"line 5:", "face index 4 is out of range", "3 vertices"});
-  expect_read_error(write_file("n.obj", head + "\n\nf 1 2 -4\n"),
-                    {"line 7:", "face index -4 is out of range"});
+  expect_read_error(write_file("r.obj", head + "f 1 2 4\n"), {"line 5:", "face index 4 is out of range", "3 vertices"});
+  expect_read_error(write_file("n.obj", head + "\n\nf 1 2 -4\n"), {"line 7:", "face index -4 is out of range"});
   expect_read_error(write_file("0.obj", head + "f 0 1 2\n"), {"line 5:", "face index 0"});
   expect_read_error(write_file("2.obj", head + "f 1 2\n"), {"line 5:", "face has 2 vertices"});
-  expect_read_error(write_file("m.obj", head + "f 1 2 x/1\n"),
-                    {"line 5:", "malformed face index 'x/1'"});
+  expect_read_error(write_file("m.obj", head + "f 1 2 x/1\n"), {"line 5:", "malformed face index 'x/1'"});
 }
 
 TEST_F(IoTest, OffAndPlyIndexOutOfRange) {
@@ -654,37 +633,32 @@ TEST_F(IoTest, OffAndPlyIndexOutOfRange) {
 
 TEST_F(IoTest, TruncatedTextFiles) {
   std::string stl = triangle_stl("1");
-  expect_read_error(write_file("t.stl", stl.substr(0, stl.find("vertex 0 1 0"))),
-                    {"truncated", "line 5"});
+  expect_read_error(write_file("t.stl", stl.substr(0, stl.find("vertex 0 1 0"))), {"truncated", "line 5"});
   expect_read_error(write_file("t.off", "OFF\n4 1 0\n0 0 0\n1 0 0\n0 1 0\n"),
                     {"truncated", "declares 4 vertices, the file has 3"});
   expect_read_error(write_file("f.off", "OFF\n3 2 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n"),
                     {"truncated", "declares 2 faces, the file has 1"});
-  expect_read_error(
-      write_file("t.ply",
-                 "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
-                 "property float z\nelement face 1\nproperty list uchar int vertex_indices\n"
-                 "end_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1\n"),
-      {"face 0", "truncated"});
-  expect_read_error(write_file("h.ply", "ply\nformat ascii 1.0\nelement vertex 3\n"),
-                    {"end_header"});
+  expect_read_error(write_file("t.ply",
+                               "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+                               "property float z\nelement face 1\nproperty list uchar int vertex_indices\n"
+                               "end_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1\n"),
+                    {"face 0", "truncated"});
+  expect_read_error(write_file("h.ply", "ply\nformat ascii 1.0\nelement vertex 3\n"), {"end_header"});
 }
 
 TEST_F(IoTest, TruncatedBinaryPly) {
   std::string bytes = vdbwrap::io::write_mesh_to_bytes(two_part_mesh(), Format::Ply);
-  expect_read_error(write_file("t.ply", bytes.substr(0, bytes.size() - 7)),
-                    {"face 5", "truncated"});
+  expect_read_error(write_file("t.ply", bytes.substr(0, bytes.size() - 7)), {"face 5", "truncated"});
 }
 
 TEST_F(IoTest, CountMismatchInTextFiles) {
   expect_read_error(write_file("m.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n3 0 2 1\n"),
                     {"line 7", "more data than", "1 faces"});
-  expect_read_error(
-      write_file("m.ply",
-                 "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
-                 "property float z\nelement face 1\nproperty list uchar int vertex_indices\n"
-                 "end_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n3 0 2 1\n"),
-      {"line 14", "more data than the header declares"});
+  expect_read_error(write_file("m.ply",
+                               "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+                               "property float z\nelement face 1\nproperty list uchar int vertex_indices\n"
+                               "end_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n3 0 2 1\n"),
+                    {"line 14", "more data than the header declares"});
 }
 
 TEST_F(IoTest, StlFacetWithWrongVertexCount) {
@@ -700,31 +674,27 @@ TEST_F(IoTest, GarbageBytes) {
   garbage[0] = '\x01';  // never "solid" or "ply" by chance
   garbage[500] = '\0';  // binary for sure
   expect_read_error(write_file("g.bin", garbage), {"unknown format"});
-  expect_read_error(write_file("g.stl", garbage),
-                    {"binary STL declares", "but the file has 1000 bytes"});
+  expect_read_error(write_file("g.stl", garbage), {"binary STL declares", "but the file has 1000 bytes"});
   expect_read_error(write_file("g.obj", garbage), {"binary data"});
   expect_read_error(write_file("g.off", garbage), {"binary data"});
   expect_read_error(write_file("g.ply", garbage), {"not a PLY file"});
   expect_read_error(write_file("g.txt", "hello world\nthis is not a mesh\n"), {"unknown format"});
-  expect_read_error(write_file("text.stl", "solid x\nhello world\n"),
-                    {"line 2", "unexpected 'hello'"});
+  expect_read_error(write_file("text.stl", "solid x\nhello world\n"), {"line 2", "unexpected 'hello'"});
 }
 
 TEST_F(IoTest, FromBytesUsesTheDisplayName) {
   expect_error([] { read_mesh_from_bytes("", Format::Stl, "upload #3"); }, ErrorKind::InvalidInput,
                {"upload #3: file is empty"});
-  expect_error([] { read_mesh_from_bytes("v 0 0 0\nf 1 1 2\n", Format::Obj, "upload #4"); },
-               ErrorKind::InvalidInput, {"upload #4: line 2: face index 2 is out of range"});
+  expect_error([] { read_mesh_from_bytes("v 0 0 0\nf 1 1 2\n", Format::Obj, "upload #4"); }, ErrorKind::InvalidInput,
+               {"upload #4: line 2: face index 2 is out of range"});
 }
 
 TEST_F(IoTest, WriteErrors) {
   Mesh m = two_part_mesh();
   const std::string unknown = path("out.xyz");
-  expect_error([&] { write_mesh(m, unknown); }, ErrorKind::OutputFailed,
-               {unknown, "unknown output format"});
+  expect_error([&] { write_mesh(m, unknown); }, ErrorKind::OutputFailed, {unknown, "unknown output format"});
   const std::string unwritable = path("no/such/dir/out.stl");
-  expect_error([&] { write_mesh(m, unwritable); }, ErrorKind::OutputFailed,
-               {unwritable, "cannot create"});
+  expect_error([&] { write_mesh(m, unwritable); }, ErrorKind::OutputFailed, {unwritable, "cannot create"});
   Mesh broken = m;
   broken.triangles[2][1] = 99;
   expect_error([&] { write_mesh(broken, path("broken.obj")); }, ErrorKind::OutputFailed,
@@ -783,9 +753,7 @@ const CorpusCase kCorpus[] = {
     {"teapot.stl", 894, stem("teapot")},
     {"torus.STL", 8700, stem("torus")},
     {"tube.obj", 120, {"1"}},  // "g 0" has no faces
-    {"two_objects_mixed_case_names.stl",
-     24,
-     {"CubeExportedFromCAD", "TranslatedCubeExportedFromCAD"}},
+    {"two_objects_mixed_case_names.stl", 24, {"CubeExportedFromCAD", "TranslatedCubeExportedFromCAD"}},
     {"unit_sphere.STL", 1280, stem("unit_sphere")},
 };
 

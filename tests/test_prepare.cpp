@@ -43,8 +43,8 @@ TEST(Weld, CopiesAndClustersWeldLikeTheOrderedGreedyPass) {
     Vec3 p{u(rng), u(rng), u(rng)};
     if (i % 7 == 0) p = {std::round(p[0] * 100) / 100 * 1024 * tol / 10.24, p[1], p[2]};  // on cell boundaries
     pts.push_back(p);
-    if (i % 2 == 0) pts.push_back(p);                                                   // an exact copy
-    if (i % 5 == 0) pts.push_back(p + Vec3{jitter(rng), jitter(rng), jitter(rng)});     // a near one
+    if (i % 2 == 0) pts.push_back(p);                                                // an exact copy
+    if (i % 5 == 0) pts.push_back(p + Vec3{jitter(rng), jitter(rng), jitter(rng)});  // a near one
     if (i % 11 == 0) pts.push_back(p + Vec3{0.9 * tol, 0, 0}), pts.push_back(p + Vec3{1.8 * tol, 0, 0});  // a chain
   }
   pts.push_back({0.0, 0.5, 0.5});
@@ -95,7 +95,8 @@ TEST(SortedPointGrid, FindsEveryPointWithinTheDistance) {
   for (uint32_t i = 0; i < points.size(); ++i) {
     bool expected = false;
     for (uint32_t j = 0; j < points.size(); ++j) expected |= j != i && norm(points[j] - points[i]) <= within;
-    const bool found = grid.any_near(points[i], within, [&](uint32_t j) { return j != i && norm(points[j] - points[i]) <= within; });
+    const bool found =
+        grid.any_near(points[i], within, [&](uint32_t j) { return j != i && norm(points[j] - points[i]) <= within; });
     EXPECT_EQ(found, expected) << "point " << i;
     crowded += found ? 1 : 0;
   }
@@ -165,9 +166,9 @@ TEST(Features, BoxHasTwelveSharpEdgesAndAnOpenSquareFourBoundaryEdges) {
 
 TEST(Prepare, DropsDegenerateAndDuplicateTrianglesAndWeldsCracks) {
   Mesh m = box_mesh({0, 0, 0}, {1, 1, 1});
-  m.triangles.push_back({0, 0, 1});        // repeated vertex
-  m.triangles.push_back(m.triangles[0]);   // duplicate
-  m.points.push_back({0.5, 0, 0});         // collinear with 0 and 1
+  m.triangles.push_back({0, 0, 1});       // repeated vertex
+  m.triangles.push_back(m.triangles[0]);  // duplicate
+  m.points.push_back({0.5, 0, 0});        // collinear with 0 and 1
   m.triangles.push_back({0, 8, 1});
   m.triangle_part.resize(m.triangles.size(), 0);
   auto p = prep::prepare(m, prep::PrepareParams{}, nullptr);
@@ -182,7 +183,9 @@ TEST(Prepare, FindsTheJunctionLineOfTwoInterpenetratingBoxes) {
   auto p = prep::prepare(m, prep::PrepareParams{}, nullptr);
   ASSERT_FALSE(p.intersections.empty());
   double length = 0;
-  for (const auto& s : p.intersections) length += std::sqrt((s.a[0] - s.b[0]) * (s.a[0] - s.b[0]) + (s.a[1] - s.b[1]) * (s.a[1] - s.b[1]) + (s.a[2] - s.b[2]) * (s.a[2] - s.b[2]));
+  for (const auto& s : p.intersections)
+    length += std::sqrt((s.a[0] - s.b[0]) * (s.a[0] - s.b[0]) + (s.a[1] - s.b[1]) * (s.a[1] - s.b[1]) +
+                        (s.a[2] - s.b[2]) * (s.a[2] - s.b[2]));
   // Two unit-offset cubes meet along 6 unit segments; triangle diagonals may split them.
   EXPECT_NEAR(length, 6.0, 1e-9);
 }
@@ -280,13 +283,15 @@ static void expect_pair_search_finds_every_pair_once(int long_ones) {
   }
   const uint32_t centre = uint32_t(m.points.size());  // a flat fan: its spokes all meet at the centre
   m.points.push_back({0.5, 0.5, 0.505});
-  for (int j = 0; j < 40; ++j) m.points.push_back({0.5 + 0.03 * std::cos(2 * M_PI * j / 40), 0.5 + 0.03 * std::sin(2 * M_PI * j / 40), 0.505});
+  for (int j = 0; j < 40; ++j)
+    m.points.push_back({0.5 + 0.03 * std::cos(2 * M_PI * j / 40), 0.5 + 0.03 * std::sin(2 * M_PI * j / 40), 0.505});
   for (uint32_t j = 0; j < 40; ++j) m.triangles.push_back({centre, centre + 1 + j, centre + 1 + (j + 1) % 40});
   std::vector<std::pair<uint32_t, uint32_t>> expected;
   for (uint32_t a = 0; a < m.triangles.size(); ++a) {
     if (check::triangle_is_degenerate(m.points, m.triangles[a])) continue;
     for (uint32_t b = a + 1; b < m.triangles.size(); ++b)
-      if (!check::triangle_is_degenerate(m.points, m.triangles[b]) && check::triangle_pair_intersects(m.points, m.triangles[a], m.triangles[b]))
+      if (!check::triangle_is_degenerate(m.points, m.triangles[b]) &&
+          check::triangle_pair_intersects(m.points, m.triangles[a], m.triangles[b]))
         expected.push_back({a, b});
   }
   ASSERT_GT(expected.size(), 20u);
@@ -296,7 +301,9 @@ static void expect_pair_search_finds_every_pair_once(int long_ones) {
 }
 
 TEST(Intersections, PairSearchFindsEveryPairOnceAmongFewLargeTriangles) { expect_pair_search_finds_every_pair_once(4); }
-TEST(Intersections, PairSearchFindsEveryPairOnceAmongManyLargeTriangles) { expect_pair_search_finds_every_pair_once(200); }
+TEST(Intersections, PairSearchFindsEveryPairOnceAmongManyLargeTriangles) {
+  expect_pair_search_finds_every_pair_once(200);
+}
 
 // Pieces proved closed and star-shaped skip their own pairs, and long triangles are cut into
 // slabs for the search. On tilted CAD cylinders crossing each other (one with two dropped
@@ -325,7 +332,7 @@ TEST(Intersections, StarShapedPiecesSkipTheirOwnPairsAndLoseNone) {
     pieces.push_back({tris, uint32_t(m.triangles.size())});
   }
   std::vector<uint8_t> dropped(m.triangles.size(), 0);
-  dropped[4 * 3] = dropped[4 * 10] = 1;  // two bottom-cap wedges of cylinder 0: holes meeting at its hub
+  dropped[4 * 3] = dropped[4 * 10] = 1;       // two bottom-cap wedges of cylinder 0: holes meeting at its hub
   dropped[pieces[1].first + 4 * 20 + 2] = 1;  // a side triangle of cylinder 1
   auto add_sphere = [&](bool inside_out, bool pushed, const Vec3& at) {
     Mesh s = sphere_mesh(0.5, 12, 24);
@@ -371,14 +378,16 @@ TEST(Intersections, StarShapedPiecesSkipTheirOwnPairsAndLoseNone) {
     }
   }
   for (size_t k = 0; k + 1 < 5; ++k) EXPECT_NE(piece[pieces[k].first], piece[pieces[k + 1].first]);
-  for (uint32_t t = pieces.back().second; t < m.triangles.size(); ++t) EXPECT_EQ(piece[t], UINT32_MAX) << "a lone triangle is open";
+  for (uint32_t t = pieces.back().second; t < m.triangles.size(); ++t)
+    EXPECT_EQ(piece[t], UINT32_MAX) << "a lone triangle is open";
 
   std::vector<std::pair<uint32_t, uint32_t>> expected;
   size_t within_folded = 0;
   for (uint32_t a = 0; a < m.triangles.size(); ++a) {
     if (check::triangle_is_degenerate(m.points, m.triangles[a])) continue;
     for (uint32_t b = a + 1; b < m.triangles.size(); ++b)
-      if (!check::triangle_is_degenerate(m.points, m.triangles[b]) && check::triangle_pair_intersects(m.points, m.triangles[a], m.triangles[b])) {
+      if (!check::triangle_is_degenerate(m.points, m.triangles[b]) &&
+          check::triangle_pair_intersects(m.points, m.triangles[a], m.triangles[b])) {
         expected.push_back({a, b});
         within_folded += a >= pieces[5].first && b < pieces[5].second;
       }
@@ -390,7 +399,8 @@ TEST(Intersections, StarShapedPiecesSkipTheirOwnPairsAndLoseNone) {
   EXPECT_EQ(found, expected);
   // Searched as a wrap, without looking for star-shaped pieces: the same pairs.
   found.clear();
-  for (const auto& p : check::find_intersecting_pairs(m.points, m.triangles, check::SoupKind::kWrap)) found.push_back({p.a, p.b});
+  for (const auto& p : check::find_intersecting_pairs(m.points, m.triangles, check::SoupKind::kWrap))
+    found.push_back({p.a, p.b});
   EXPECT_EQ(found, expected);
 }
 
@@ -411,16 +421,15 @@ TEST(Intersections, FlatFansSkipOnlyPairsProvedApart) {
       const double a = 2 * M_PI * turns * j / spokes, r = 1.0 + 0.3 * j / ring;
       m.points.push_back(centre + e1 * (r * std::cos(a)) + e2 * (r * std::sin(a)) + cross(e1, e2) * lift);
     }
-    for (int j = 0; j < spokes; ++j)
-      m.triangles.push_back({c, c + 1 + uint32_t(j), c + 1 + uint32_t((j + 1) % ring)});
+    for (int j = 0; j < spokes; ++j) m.triangles.push_back({c, c + 1 + uint32_t(j), c + 1 + uint32_t((j + 1) % ring)});
   };
-  fan({0, 0, 0}, 64, 1.0, true, 0.0);     // a flat closed cap
-  fan({5, 0, 0}, 48, 0.75, false, 0.0);   // a flat open fan
-  fan({0, 5, 0}, 40, 1.0, true, 0.4);     // a cone tip: not flat, still unfolded
+  fan({0, 0, 0}, 64, 1.0, true, 0.0);    // a flat closed cap
+  fan({5, 0, 0}, 48, 0.75, false, 0.0);  // a flat open fan
+  fan({0, 5, 0}, 40, 1.0, true, 0.4);    // a cone tip: not flat, still unfolded
   // The folding ones in the plane z = 0, so that overlapping spokes are exactly coplanar.
   const uint32_t fold_start = uint32_t(m.triangles.size());
-  fan({5, 5, 0}, 96, 1.5, false, 0.0, {1, 0, 0}, {0, 1, 0});    // folds: turns one and a half times
-  fan({0, 10, 0}, 128, 2.0, true, 0.0, {1, 0, 0}, {0, 1, 0});   // closed, turning twice
+  fan({5, 5, 0}, 96, 1.5, false, 0.0, {1, 0, 0}, {0, 1, 0});   // folds: turns one and a half times
+  fan({0, 10, 0}, 128, 2.0, true, 0.0, {1, 0, 0}, {0, 1, 0});  // closed, turning twice
   const uint32_t spiral_end = uint32_t(m.triangles.size());
   auto add = [&](const Vec3& a, const Vec3& b, const Vec3& c) {
     const uint32_t n = uint32_t(m.points.size());
@@ -429,7 +438,7 @@ TEST(Intersections, FlatFansSkipOnlyPairsProvedApart) {
   };
   const Vec3 &e1 = tilted1, &e2 = tilted2, up = cross(e1, e2);
   add(up * 0.5 + e1 * 0.1, up * -0.5 + e1 * 0.1, e2 * 0.3 + e1 * 0.05);  // through the cap, near its centre
-  add(e1 * 0.2, e1 * 0.6 + e2 * 0.1, e1 * 0.3 + e2 * 0.5);                // in the cap's plane, over it
+  add(e1 * 0.2, e1 * 0.6 + e2 * 0.1, e1 * 0.3 + e2 * 0.5);               // in the cap's plane, over it
   std::vector<std::pair<uint32_t, uint32_t>> expected;
   size_t folded = 0;
   for (uint32_t a = 0; a < m.triangles.size(); ++a)
@@ -459,20 +468,23 @@ struct TestFan {
     return out;
   }
 };
-static TestFan make_fan(const std::vector<double>& angle, const std::vector<double>& height, bool open, const Vec3& tilt,
-                        const Vec3& shift) {
+static TestFan make_fan(const std::vector<double>& angle, const std::vector<double>& height, bool open,
+                        const Vec3& tilt, const Vec3& shift) {
   const Vec3 up = normalized(tilt), e1 = normalized(cross(up, Vec3{0.3, 0.5, 0.7})), e2 = cross(up, e1);
   TestFan fan;
   fan.points.push_back(shift);
   for (size_t j = 0; j < angle.size(); ++j)
-    fan.points.push_back(shift + e1 * std::cos(angle[j]) * (1 + 0.1 * j) + e2 * std::sin(angle[j]) * (1 + 0.1 * j) + up * height[j]);
+    fan.points.push_back(shift + e1 * std::cos(angle[j]) * (1 + 0.1 * j) + e2 * std::sin(angle[j]) * (1 + 0.1 * j) +
+                         up * height[j]);
   const uint32_t n = uint32_t(angle.size());
   for (uint32_t j = 0; j + (open ? 1 : 0) < n; ++j) fan.corners.push_back({1 + j, 1 + (j + 1) % n});
   return fan;
 }
 
 TEST(Intersections, ClosedUnfoldedFansAreTheOnesWhosePairsMeetOnlyWhereTheyShare) {
-  auto unfolded = [](const TestFan& f) { return check::closed_fan_unfolded(f.points, 0, f.corners.data(), f.corners.size()); };
+  auto unfolded = [](const TestFan& f) {
+    return check::closed_fan_unfolded(f.points, 0, f.corners.data(), f.corners.size());
+  };
   auto regular = [](int n, double turns) {
     std::vector<double> a(size_t(n), 0.0);
     for (int j = 0; j < n; ++j) a[size_t(j)] = 2 * M_PI * turns * j / n;
@@ -503,7 +515,8 @@ TEST(Intersections, ClosedUnfoldedFansAreTheOnesWhosePairsMeetOnlyWhereTheyShare
     for (int j = 0; j < n; ++j) angle[size_t(j)] = 2 * M_PI * turns * (j + 0.8 * u(rng)) / n;
     if (u(rng) < 0.3) std::swap(angle[0], angle[1]);
     const int shape = trial % 4;
-    for (double& h : height) h = shape == 0 ? 0.0 : shape == 1 ? 1e-9 * (u(rng) - 0.5) : shape == 2 ? 0.5 : 4 * (u(rng) - 0.5);
+    for (double& h : height)
+      h = shape == 0 ? 0.0 : shape == 1 ? 1e-9 * (u(rng) - 0.5) : shape == 2 ? 0.5 : 4 * (u(rng) - 0.5);
     const Vec3 axis = trial % 3 == 0 ? Vec3{0, 0, 1} : Vec3{u(rng) - 0.5, u(rng) - 0.5, 1};
     TestFan fan = make_fan(angle, height, u(rng) < 0.1, axis, trial % 5 == 0 ? far : Vec3{});
     if (shape == 0 && trial % 3 == 0)  // exactly on a lattice in the plane z = 0
@@ -513,7 +526,8 @@ TEST(Intersections, ClosedUnfoldedFansAreTheOnesWhosePairsMeetOnlyWhereTheyShare
     for (const Tri& t : tris) degenerate = degenerate || check::triangle_is_degenerate(fan.points, t);
     if (degenerate) continue;
     for (size_t a = 0; a < tris.size(); ++a)
-      for (size_t b = a + 1; b < tris.size(); ++b) crossing = crossing || check::triangle_pair_intersects(fan.points, tris[a], tris[b], false);
+      for (size_t b = a + 1; b < tris.size(); ++b)
+        crossing = crossing || check::triangle_pair_intersects(fan.points, tris[a], tris[b], false);
     const bool called = unfolded(fan);
     ASSERT_FALSE(called && crossing) << "trial " << trial;
     called_unfolded += called;
@@ -537,11 +551,20 @@ TEST(Intersections, TheFastProofsInDoublesNeverChangeTheExactAnswer) {
       for (Vec3& q : p) {
         const double x = lattice(rng), y = lattice(rng);
         switch (kind) {
-          case 0: q = {x, y, 0}; break;                                        // axis plane
-          case 1: q = {x, y, 3 - x - y}; break;                                // tilted plane
-          case 2: q = {x, y, 1e-12 * uni(rng)}; break;                         // nearly coplanar
-          case 3: q = {uni(rng), uni(rng), uni(rng)}; break;                   // general
-          default: q = {1e4 + 1e-3 * x, -2e4 + 1e-3 * y, 5e3 + 1e-3 * (x - y)}; // far away, tilted
+          case 0:
+            q = {x, y, 0};
+            break;  // axis plane
+          case 1:
+            q = {x, y, 3 - x - y};
+            break;  // tilted plane
+          case 2:
+            q = {x, y, 1e-12 * uni(rng)};
+            break;  // nearly coplanar
+          case 3:
+            q = {uni(rng), uni(rng), uni(rng)};
+            break;  // general
+          default:
+            q = {1e4 + 1e-3 * x, -2e4 + 1e-3 * y, 5e3 + 1e-3 * (x - y)};  // far away, tilted
         }
       }
       const int shared = trial % 3;

@@ -369,7 +369,8 @@ TEST(Quality, DeviationMemoAnswersKnownTrianglesAndMeasuresChangedOnes) {
   const Tri& lifted_tri = s.triangles[0];
   s.points[lifted_tri[0]][2] += 0.02;
   const QualityCounts moved_plain = analyse_quality(s.points, s.triangles, s.cell_size, setup->ref);
-  const QualityCounts moved_memo = analyse_quality(s.points, s.triangles, s.cell_size, setup->ref, nullptr, nullptr, &memo);
+  const QualityCounts moved_memo =
+      analyse_quality(s.points, s.triangles, s.cell_size, setup->ref, nullptr, nullptr, &memo);
   EXPECT_GT(moved_plain.max_normal_deviation_deg, plain.max_normal_deviation_deg);
   EXPECT_EQ(moved_memo.normal_deviation, moved_plain.normal_deviation);
   EXPECT_EQ(moved_memo.max_normal_deviation_deg, moved_plain.max_normal_deviation_deg);
@@ -379,7 +380,8 @@ TEST(Quality, DeviationMemoAnswersKnownTrianglesAndMeasuresChangedOnes) {
   const Tri& t = s.triangles[5];
   const double cell = std::min({s.cell_size[t[0]], s.cell_size[t[1]], s.cell_size[t[2]]});
   planted.add(s.points[t[0]], s.points[t[1]], s.points[t[2]], cell, 89.0);
-  const QualityCounts with_planted = analyse_quality(s.points, s.triangles, s.cell_size, setup->ref, nullptr, nullptr, &planted);
+  const QualityCounts with_planted =
+      analyse_quality(s.points, s.triangles, s.cell_size, setup->ref, nullptr, nullptr, &planted);
   EXPECT_EQ(with_planted.max_normal_deviation_deg, 89.0);
   EXPECT_EQ(with_planted.normal_deviation, moved_plain.normal_deviation + 1);
 }
@@ -389,7 +391,8 @@ TEST(Quality, NearestMemoAnswersAsTheIndexDoesWhateverWasAskedBefore) {
   const mesh::SurfaceIndex index(sphere.points, sphere.triangles);
   const NearestMemo memo(index);
   auto same = [](const mesh::SurfaceIndex::Hit& a, const mesh::SurfaceIndex::Hit& b) {
-    return a.triangle == b.triangle && a.squared_distance == b.squared_distance && a.point == b.point && a.normal == b.normal;
+    return a.triangle == b.triangle && a.squared_distance == b.squared_distance && a.point == b.point &&
+           a.normal == b.normal;
   };
   std::vector<Vec3> points;
   for (int i = 0; i < 200; ++i) {
@@ -401,7 +404,8 @@ TEST(Quality, NearestMemoAnswersAsTheIndexDoesWhateverWasAskedBefore) {
       // A radius too small first (a miss is remembered), then larger ones, then all space.
       for (double radius : {1e-4, 0.05, 0.3}) {
         mesh::SurfaceIndex::Hit from_memo, from_index;
-        const bool found_memo = memo.closest_within(q, radius, from_memo), found_index = index.closest_within(q, radius, from_index);
+        const bool found_memo = memo.closest_within(q, radius, from_memo),
+                   found_index = index.closest_within(q, radius, from_index);
         ASSERT_EQ(found_memo, found_index) << "radius " << radius;
         if (found_index) EXPECT_TRUE(same(from_memo, from_index));
       }
@@ -457,7 +461,8 @@ TEST(Remesh, KeepsAnInnerCornerAndRestoresWhatWouldLoseIt) {
     if (norm(q - Vec3{0.1, 0.1, 0}) < 1e-9) q = {0.004, 0.003, 0};
   const PostSurface original = post_surface(m, 0.1);
   std::vector<uint8_t> flags;
-  const QualityCounts before = analyse_quality(original.points, original.triangles, original.cell_size, setup->ref, &flags);
+  const QualityCounts before =
+      analyse_quality(original.points, original.triangles, original.cell_size, setup->ref, &flags);
   ASSERT_GT(before.slivers, 0u);
   ASSERT_EQ(before.lost_feature_samples, 0u);
 
@@ -547,10 +552,11 @@ TEST(QualityWrap, CountsBeforeAndAfterAndTheRebuildsHelp) {
   const QualityReport& q = with.report.quality;
   const QualityCounts& b = q.before;
   const QualityCounts& a = q.after;
-  std::printf("[fandisk 2%%] slivers %zu -> %zu, small %zu -> %zu, poor normals %zu -> %zu, lost features %zu -> %zu; "
-              "%zu regions: %zu on the input, %zu by ear clipping\n",
-              b.slivers, a.slivers, b.small_area, a.small_area, b.normal_deviation, a.normal_deviation, b.lost_feature_samples,
-              a.lost_feature_samples, q.regions, q.remeshed_on_input, q.remeshed_by_ear_clipping);
+  std::printf(
+      "[fandisk 2%%] slivers %zu -> %zu, small %zu -> %zu, poor normals %zu -> %zu, lost features %zu -> %zu; "
+      "%zu regions: %zu on the input, %zu by ear clipping\n",
+      b.slivers, a.slivers, b.small_area, a.small_area, b.normal_deviation, a.normal_deviation, b.lost_feature_samples,
+      a.lost_feature_samples, q.regions, q.remeshed_on_input, q.remeshed_by_ear_clipping);
   EXPECT_EQ(b.triangles, without.surface.triangles.size()) << "before: the wrap the pipeline had";
   EXPECT_EQ(a.triangles, with.surface.triangles.size());
   EXPECT_GT(q.regions, 0u);
@@ -569,7 +575,8 @@ TEST(QualityWrap, CountsBeforeAndAfterAndTheRebuildsHelp) {
   const double slack = 0.02 * with.report.base_size;
   EXPECT_LE(with.report.output_to_input.max, without.report.output_to_input.max + slack);
   EXPECT_LE(with.report.input_to_output.max, without.report.input_to_output.max + slack);
-  EXPECT_LE(with.report.sharp_edges_to_output.mean, without.report.sharp_edges_to_output.mean + 1e-6 * with.report.diagonal);
+  EXPECT_LE(with.report.sharp_edges_to_output.mean,
+            without.report.sharp_edges_to_output.mean + 1e-6 * with.report.diagonal);
 }
 
 // The whole pipeline with the projection's validity loop cut short, so the fitted wrap still
@@ -582,7 +589,8 @@ TEST(QualityWrap, IntersectionsLeftByTheProjectionAreRepairedInThePipeline) {
   // fandisk once more with the raw staircase projected (no presmoothing): nodes land on one
   // another there, and crowded nodes must be separated before the repair (they were not: the
   // output had coincident vertices, non-manifold once welded).
-  const std::vector<std::pair<const char*, int>> cases = {{"fandisk.obj", 16}, {"idler_riser.STL", 16}, {"busted.STL", 16}, {"fandisk.obj", 0}};
+  const std::vector<std::pair<const char*, int>> cases = {
+      {"fandisk.obj", 16}, {"idler_riser.STL", 16}, {"busted.STL", 16}, {"fandisk.obj", 0}};
   for (const auto& [name, presmooth] : cases) {
     SCOPED_TRACE(std::string(name) + " presmooth " + std::to_string(presmooth));
     const Mesh input = io::read_mesh(data_path(name));
@@ -591,8 +599,8 @@ TEST(QualityWrap, IntersectionsLeftByTheProjectionAreRepairedInThePipeline) {
     p.presmooth_iterations = presmooth;
     const WrapResult r = wrap(input, p);
     const QualityReport& q = r.report.quality;
-    std::printf("[%s, no validity rounds] intersecting %zu -> %zu; repair runs %zu: %s\n", name, q.before.self_intersecting,
-                q.after.self_intersecting, q.repair_runs, q.repair_summary.c_str());
+    std::printf("[%s, no validity rounds] intersecting %zu -> %zu; repair runs %zu: %s\n", name,
+                q.before.self_intersecting, q.after.self_intersecting, q.repair_runs, q.repair_summary.c_str());
     EXPECT_GT(q.before.self_intersecting, 0u) << "the test needs a wrap that intersects before stage 4";
     EXPECT_EQ(q.after.self_intersecting, 0u);
     auto v = valid_closed_surface(r.surface);

@@ -40,7 +40,8 @@ TEST(RadixSort, JoinsAndSortsStablyForEveryKeyWidth) {
     std::vector<Item> expected;
     for (const auto& part : parts) expected.insert(expected.end(), part.begin(), part.end());
     std::stable_sort(expected.begin(), expected.end(), [](const Item& a, const Item& b) { return a.key < b.key; });
-    const FillVector<Item> sorted = radix_sort_joined(parts, [](const Item& x) { return x.key; }, bits);
+    const FillVector<Item> sorted = radix_sort_joined(
+        parts, [](const Item& x) { return x.key; }, bits);
     ASSERT_EQ(sorted.size(), expected.size()) << bits << " bits";
     EXPECT_TRUE(std::equal(sorted.begin(), sorted.end(), expected.begin())) << bits << " bits";
     EXPECT_TRUE(parts.empty()) << "the parts are freed";
@@ -49,7 +50,9 @@ TEST(RadixSort, JoinsAndSortsStablyForEveryKeyWidth) {
 
 TEST(RadixSort, NothingToSort) {
   std::vector<std::vector<Item>> parts(3);
-  EXPECT_TRUE(radix_sort_joined(parts, [](const Item& x) { return x.key; }, 20).empty());
+  EXPECT_TRUE(radix_sort_joined(
+                  parts, [](const Item& x) { return x.key; }, 20)
+                  .empty());
   EXPECT_EQ(bits_for(0), 0);
   EXPECT_EQ(bits_for(1), 0);
   EXPECT_EQ(bits_for(2), 1);
@@ -65,7 +68,8 @@ TEST(RadixSort, TopBitsThenBucketsGiveTheFullOrder) {
     std::vector<std::vector<uint64_t>> parts;
     for (size_t size : {size_t(0), size_t(90000), size_t(3), size_t(200000)}) {
       std::vector<uint64_t>& part = parts.emplace_back();
-      for (size_t i = 0; i < size; ++i) part.push_back(random() % 3 == 0 ? (uint64_t(7) << 40) | (random() & 0xFF) : random());
+      for (size_t i = 0; i < size; ++i)
+        part.push_back(random() % 3 == 0 ? (uint64_t(7) << 40) | (random() & 0xFF) : random());
     }
     std::vector<uint64_t> expected;
     for (const auto& part : parts) expected.insert(expected.end(), part.begin(), part.end());

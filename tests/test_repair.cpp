@@ -142,11 +142,12 @@ size_t border_edges(const Mesh& m) { return diagnose(m, false).border_edges; }
 size_t nonmanifold_edges(const Mesh& m) { return diagnose(m, false).nonmanifold_edges; }
 
 void print(const RepairReport& r, const std::string& name) {
-  std::printf("[%s] regions %zu: local %zu, refill %zu, left %zu; pairs %zu -> %zu; deviation %.5f of the diagonal; "
-              "shifts %zu+%zu, refills %zu (refused %zu); %.2fs\n",
-              name.c_str(), r.regions_found, r.fixed_by_local, r.fixed_by_refill, r.left_unfixed,
-              r.before.intersecting_pairs, r.after.intersecting_pairs, r.deviation, r.vertex_shifts, r.triangle_shifts,
-              r.refills, r.refill_failures, r.total_seconds);
+  std::printf(
+      "[%s] regions %zu: local %zu, refill %zu, left %zu; pairs %zu -> %zu; deviation %.5f of the diagonal; "
+      "shifts %zu+%zu, refills %zu (refused %zu); %.2fs\n",
+      name.c_str(), r.regions_found, r.fixed_by_local, r.fixed_by_refill, r.left_unfixed, r.before.intersecting_pairs,
+      r.after.intersecting_pairs, r.deviation, r.vertex_shifts, r.triangle_shifts, r.refills, r.refill_failures,
+      r.total_seconds);
 }
 
 }  // namespace
@@ -155,16 +156,17 @@ void print(const RepairReport& r, const std::string& name) {
 
 TEST(RepairRegions, PairsAndSharedVerticesMakeRegions) {
   Mesh m;
-  add_tetra(m, {0, 0, -0.1}, 0.5, 0.3);   // apex through the sheet below
+  add_tetra(m, {0, 0, -0.1}, 0.5, 0.3);  // apex through the sheet below
   vdbwrap::testing::add_box(m, {-1, -1, -0.01}, {1, 1, 0.0});
-  add_tetra(m, {5, 5, -0.1}, 0.5, 0.3);   // far away: a second, separate region
+  add_tetra(m, {5, 5, -0.1}, 0.5, 0.3);  // far away: a second, separate region
   vdbwrap::testing::add_box(m, {4, 4, -0.01}, {6, 6, 0.0});
   Found f = find(m);
   ASSERT_FALSE(f.pairs.empty());
   ASSERT_EQ(f.regions.size(), 2u);
   for (const auto& region : f.regions)
     for (const auto& p : f.pairs)
-      EXPECT_EQ(std::binary_search(region.begin(), region.end(), p.a), std::binary_search(region.begin(), region.end(), p.b));
+      EXPECT_EQ(std::binary_search(region.begin(), region.end(), p.a),
+                std::binary_search(region.begin(), region.end(), p.b));
 }
 
 TEST(RepairLocal, SegmentTrianglePoints) {
@@ -202,7 +204,7 @@ TEST(RepairLocal, VertexShiftPullsAPiercingApexBack) {
   ASSERT_FALSE(moves.empty());
   const Move& shift = moves.front();
   ASSERT_EQ(shift.positions.size(), 1u);
-  EXPECT_EQ(shift.positions[0].first, 3u);  // the apex: on all three cutting edges
+  EXPECT_EQ(shift.positions[0].first, 3u);       // the apex: on all three cutting edges
   EXPECT_GT(shift.positions[0].second[2], 0.0);  // back above the sheet, short of the base
   EXPECT_LT(shift.positions[0].second[2], 0.5);
   apply(m, shift);
@@ -417,7 +419,8 @@ TEST(RepairRefill, BandAroundACylinderIsFilledLoopByLoop) {
   EXPECT_EQ(d.components, 2u);
   EXPECT_EQ(d.intersecting_pairs, 0u);
   // Each cap lies at its loop's height.
-  for (const Vec3& p : fill.new_points) EXPECT_TRUE(std::fabs(p[2] - 0.4) < 1e-9 || std::fabs(p[2] - 0.6) < 1e-9) << p[2];
+  for (const Vec3& p : fill.new_points)
+    EXPECT_TRUE(std::fabs(p[2] - 0.4) < 1e-9 || std::fabs(p[2] - 0.6) < 1e-9) << p[2];
 }
 
 TEST(RepairRefill, SmallPieceWithinTheBoundGoesWithTheRegion) {
@@ -554,8 +557,8 @@ TEST(Repair, CoplanarOverlapOfAPinOnAPlateIsRepairedAndPartsSurvive) {
 // bottom edge has a vertex at x = 0.5 and lies `dip` below the floor, so the two cross.
 Mesh floor_and_wall(double x0, double x1, double dip) {
   Mesh m;
-  m.points = {{x0, 0, 0}, {x0, 1, 0}, {x1, 1, 0}, {x1, 0, 0},                  // floor
-              {0, 0, -dip}, {0.5, 0, -dip}, {1, 0, -dip}, {0, 0, 1}, {1, 0, 1}};  // wall
+  m.points = {{x0, 0, 0},   {x0, 1, 0},     {x1, 1, 0},   {x1, 0, 0},              // floor
+              {0, 0, -dip}, {0.5, 0, -dip}, {1, 0, -dip}, {0, 0, 1},  {1, 0, 1}};  // wall
   m.triangles = {{0, 1, 2}, {0, 2, 3}, {4, 5, 7}, {5, 6, 8}, {5, 8, 7}};
   return m;
 }
@@ -585,7 +588,8 @@ TEST(RepairStitch, OnlyBorderEdgesAndCloseCornersAreStitched) {
     // The floor's y = 0 edge is on the border: the wall's corners weld to the floor's first.
     const Mesh m = floor_and_wall(0, 1, 1e-12);
     const auto faces = vertex_faces(m.points.size(), m.triangles);
-    const auto st = find_stitches(m.points, m.triangles, faces, check::find_intersecting_pairs(m.points, m.triangles), 1e-9, {});
+    const auto st =
+        find_stitches(m.points, m.triangles, faces, check::find_intersecting_pairs(m.points, m.triangles), 1e-9, {});
     ASSERT_EQ(st.welds.size(), 2u);
     EXPECT_EQ(st.welds[0], (std::pair<uint32_t, uint32_t>{4, 0}));
     EXPECT_EQ(st.welds[1], (std::pair<uint32_t, uint32_t>{6, 3}));
@@ -596,7 +600,8 @@ TEST(RepairStitch, OnlyBorderEdgesAndCloseCornersAreStitched) {
     // floor's border edge (3 -> 0): one split, in order along it.
     const Mesh m = floor_and_wall(-1, 2, 1e-12);
     const auto faces = vertex_faces(m.points.size(), m.triangles);
-    const auto st = find_stitches(m.points, m.triangles, faces, check::find_intersecting_pairs(m.points, m.triangles), 1e-9, {});
+    const auto st =
+        find_stitches(m.points, m.triangles, faces, check::find_intersecting_pairs(m.points, m.triangles), 1e-9, {});
     EXPECT_TRUE(st.welds.empty());
     ASSERT_EQ(st.splits.size(), 1u);
     EXPECT_EQ(st.splits[0].u, 3u);
@@ -607,7 +612,8 @@ TEST(RepairStitch, OnlyBorderEdgesAndCloseCornersAreStitched) {
     // A dip beyond the tolerance is a real crossing, not a crack: nothing to stitch.
     const Mesh m = floor_and_wall(-1, 2, 1e-3);
     const auto faces = vertex_faces(m.points.size(), m.triangles);
-    const auto st = find_stitches(m.points, m.triangles, faces, check::find_intersecting_pairs(m.points, m.triangles), 1e-9, {});
+    const auto st =
+        find_stitches(m.points, m.triangles, faces, check::find_intersecting_pairs(m.points, m.triangles), 1e-9, {});
     EXPECT_TRUE(st.welds.empty());
     EXPECT_TRUE(st.splits.empty());
   }
@@ -620,7 +626,8 @@ TEST(RepairStitch, OnlyBorderEdgesAndCloseCornersAreStitched) {
     m.triangles.push_back({0, 3, 10});
     m.triangles.push_back({0, 10, 9});
     const auto faces = vertex_faces(m.points.size(), m.triangles);
-    const auto st = find_stitches(m.points, m.triangles, faces, check::find_intersecting_pairs(m.points, m.triangles), 1e-9, {});
+    const auto st =
+        find_stitches(m.points, m.triangles, faces, check::find_intersecting_pairs(m.points, m.triangles), 1e-9, {});
     EXPECT_TRUE(st.welds.empty());
     EXPECT_TRUE(st.splits.empty());
   }
@@ -699,8 +706,9 @@ TEST(Repair, PinPushedIntoAPlateIsRepairedAsABandCutFromBoth) {
       }
     }
   EXPECT_GT(pin, 0u);
-  const double z_top = std::max_element(r.mesh.points.begin(), r.mesh.points.end(),
-                                        [](const Vec3& a, const Vec3& b) { return a[2] < b[2]; })->at(2);
+  const double z_top = std::max_element(r.mesh.points.begin(), r.mesh.points.end(), [](const Vec3& a, const Vec3& b) {
+                         return a[2] < b[2];
+                       })->at(2);
   EXPECT_DOUBLE_EQ(z_top, 0.315);  // the pin's top is untouched
 }
 
@@ -910,7 +918,8 @@ TEST(Repair, ReportJsonListsRegionsAndDiagnostics) {
   ASSERT_EQ(r.report.unfixed.size(), 1u);
   EXPECT_NEAR(r.report.unfixed[0].center[0], 0.0, 0.2);
   std::string json = to_json(r.report);
-  for (const char* key : {"\"found\": 1", "\"left_unfixed\": 1", "\"unfixed_regions\"", "\"bbox_min\"", "\"before\"",
-                          "\"after\"", "\"max_deviation_fraction_of_diagonal\"", "\"border_edges\"", "\"intersecting_pairs\""})
+  for (const char* key :
+       {"\"found\": 1", "\"left_unfixed\": 1", "\"unfixed_regions\"", "\"bbox_min\"", "\"before\"", "\"after\"",
+        "\"max_deviation_fraction_of_diagonal\"", "\"border_edges\"", "\"intersecting_pairs\""})
     EXPECT_NE(json.find(key), std::string::npos) << key;
 }

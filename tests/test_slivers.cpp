@@ -84,10 +84,11 @@ TEST_P(SliverRemovalWrap, FewSliversAndNoFartherFromTheInput) {
   const WrapResult a = wrap(input, off), b = wrap(input, on);
   const double share_off = sliver_share(a.surface.points, a.surface.triangles);
   const double share_on = sliver_share(b.surface.points, b.surface.triangles);
-  std::printf("[%s 1%%] under 10 degrees %.2f %% -> %.2f %%; mean %.3g -> %.3g, p95 %.3g -> %.3g, sharp edges %.3g -> %.3g\n",
-              GetParam(), 100 * share_off, 100 * share_on, a.report.output_to_input.mean, b.report.output_to_input.mean,
-              a.report.output_to_input.p95, b.report.output_to_input.p95, a.report.sharp_edges_to_output.mean,
-              b.report.sharp_edges_to_output.mean);
+  std::printf(
+      "[%s 1%%] under 10 degrees %.2f %% -> %.2f %%; mean %.3g -> %.3g, p95 %.3g -> %.3g, sharp edges %.3g -> %.3g\n",
+      GetParam(), 100 * share_off, 100 * share_on, a.report.output_to_input.mean, b.report.output_to_input.mean,
+      a.report.output_to_input.p95, b.report.output_to_input.p95, a.report.sharp_edges_to_output.mean,
+      b.report.sharp_edges_to_output.mean);
   auto v = valid_closed_surface(b.surface);
   EXPECT_TRUE(v.ok) << v.why;
   EXPECT_EQ(b.report.output.intersecting_triangles, 0u);

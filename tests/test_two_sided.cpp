@@ -78,7 +78,8 @@ TEST(TwoSided, RaisingTheOffsetHoldsBackFarFewerNodesThanPullingBack) {
 // outside out.
 TEST(TwoSided, HoleInAClosedBodyIsFoundAndItsGapClosureWrapsTheOutsideOnly) {
   const Vec3 pole{0, 0, -1};
-  const Mesh holed = sphere_part(fine_sphere(), [&](const Vec3& c) { return std::hypot(c[0], c[1]) > 0.3 || c[2] > 0; });
+  const Mesh holed =
+      sphere_part(fine_sphere(), [&](const Vec3& c) { return std::hypot(c[0], c[1]) > 0.3 || c[2] > 0; });
   const WrapResult r = wrap(holed, two_sided(true));
   auto v = valid_closed_surface(r.surface);
   ASSERT_TRUE(v.ok) << v.why;

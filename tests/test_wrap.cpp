@@ -133,7 +133,8 @@ TEST_P(CorpusWrap, ValidSurfaceAtOnePercent) {
   // and 95th percentile at most 0.2 % of the diagonal (alpha wrap at diag/100: 0.03-0.05 %).
   MeshDiagnostics in = r.report.input;
   if (in.border_edges == 0 && in.nonmanifold_edges == 0) {
-    EXPECT_LE(r.report.output_to_input.mean, 0.0005 * diag) << "mean " << 100 * r.report.output_to_input.mean / diag << "%";
+    EXPECT_LE(r.report.output_to_input.mean, 0.0005 * diag)
+        << "mean " << 100 * r.report.output_to_input.mean / diag << "%";
     EXPECT_LE(r.report.output_to_input.p95, 0.002 * diag) << "p95 " << 100 * r.report.output_to_input.p95 / diag << "%";
   }
 }

@@ -28,7 +28,8 @@ bool build_surface_mesh(const std::vector<Vec3>& points, const std::vector<Tri>&
 
 std::vector<uint32_t> mesh_self_intersecting_faces(const std::vector<Vec3>& points, const std::vector<Tri>& triangles) {
   SurfaceMesh mesh;
-  if (!build_surface_mesh(points, triangles, mesh)) throw std::logic_error("mesh_self_intersecting_faces: not a manifold mesh");
+  if (!build_surface_mesh(points, triangles, mesh))
+    throw std::logic_error("mesh_self_intersecting_faces: not a manifold mesh");
   std::vector<std::pair<SurfaceMesh::Face_index, SurfaceMesh::Face_index>> pairs;
   CGAL::Polygon_mesh_processing::self_intersections<CGAL::Parallel_if_available_tag>(mesh, std::back_inserter(pairs));
   std::vector<uint32_t> out;

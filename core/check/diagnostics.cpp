@@ -53,11 +53,12 @@ EdgeCounts count_edges(const std::vector<Tri>& tris, size_t vertices) {
     for (size_t f = k * kChunk; f < end; ++f)
       for (int e = 0; e < 3; ++e) {
         const uint32_t a = tris[f][e], b = tris[f][(e + 1) % 3];
-        if (a != b) parts[k].push_back((uint64_t(std::min(a, b)) << 33) | (uint64_t(std::max(a, b)) << 1) | (a < b ? 1 : 0));
+        if (a != b)
+          parts[k].push_back((uint64_t(std::min(a, b)) << 33) | (uint64_t(std::max(a, b)) << 1) | (a < b ? 1 : 0));
       }
   });
-  const FillVector<uint64_t> uses =
-      radix_then_sort(parts, [](uint64_t u) { return u >> 33; }, bits_for(vertices), std::less<uint64_t>());
+  const FillVector<uint64_t> uses = radix_then_sort(
+      parts, [](uint64_t u) { return u >> 33; }, bits_for(vertices), std::less<uint64_t>());
   EdgeCounts out;
   for (size_t i = 0; i < uses.size();) {
     const uint64_t edge = uses[i] >> 1;

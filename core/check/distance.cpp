@@ -27,7 +27,8 @@ DistanceStats check::sampled_distance_skipping(const Mesh& from, const Mesh& to,
   // points spread by area (a stratified count per triangle), about a million at most: plenty
   // for mean and p95, and multi-million-triangle inputs stay quick.
   double area = 0;
-  for (const Tri& t : from.triangles) area += 0.5 * norm(area_vector(from.points[t[0]], from.points[t[1]], from.points[t[2]]));
+  for (const Tri& t : from.triangles)
+    area += 0.5 * norm(area_vector(from.points[t[0]], from.points[t[1]], from.points[t[2]]));
   const double spacing = std::max(s.diagonal / samples_per_diagonal, std::sqrt(area / 1e6));
   std::vector<Vec3> samples;
   const size_t stride = std::max<size_t>(1, from.points.size() / 500000);

@@ -22,15 +22,16 @@ VertexStars vertex_stars(size_t points, const std::vector<Tri>& triangles, const
   });
 }
 
-std::vector<uint8_t> unfolded_fan_vertices(const std::vector<P3>& p, const std::vector<Tri>& triangles, const VertexStars& stars) {
+std::vector<uint8_t> unfolded_fan_vertices(const std::vector<P3>& p, const std::vector<Tri>& triangles,
+                                           const VertexStars& stars) {
   constexpr uint32_t min_fan = 16;
   const std::vector<uint32_t>& first = stars.first;
   const auto& star = stars.items;
   std::vector<uint8_t> fan(p.size(), 0);
   tbb::parallel_for(tbb::blocked_range<size_t>(0, p.size(), 4096), [&](const tbb::blocked_range<size_t>& r) {
     struct Sector {
-      uint32_t a, b;     // the triangle (c, a, b) in its own order
-      V2 da, db;         // a - c and b - c, projected
+      uint32_t a, b;  // the triangle (c, a, b) in its own order
+      V2 da, db;      // a - c and b - c, projected
       double start, width;
     };
     std::vector<Sector> sectors;
@@ -44,8 +45,10 @@ std::vector<uint8_t> unfolded_fan_vertices(const std::vector<P3>& p, const std::
         int i = 0;
         while (t[i] != c) ++i;
         const P3 &pa = p[t[(i + 1) % 3]], &pb = p[t[(i + 2) % 3]];
-        const double u[3] = {pa.x() - o.x(), pa.y() - o.y(), pa.z() - o.z()}, v[3] = {pb.x() - o.x(), pb.y() - o.y(), pb.z() - o.z()};
-        normal[0] += u[1] * v[2] - u[2] * v[1], normal[1] += u[2] * v[0] - u[0] * v[2], normal[2] += u[0] * v[1] - u[1] * v[0];
+        const double u[3] = {pa.x() - o.x(), pa.y() - o.y(), pa.z() - o.z()},
+                     v[3] = {pb.x() - o.x(), pb.y() - o.y(), pb.z() - o.z()};
+        normal[0] += u[1] * v[2] - u[2] * v[1], normal[1] += u[2] * v[0] - u[0] * v[2],
+            normal[2] += u[0] * v[1] - u[1] * v[0];
         sectors.push_back({t[(i + 1) % 3], t[(i + 2) % 3], {}, {}, 0, 0});
       }
       int drop = 0;
@@ -54,7 +57,9 @@ std::vector<uint8_t> unfolded_fan_vertices(const std::vector<P3>& p, const std::
       const int u = (drop + 1) % 3, v = (drop + 2) % 3;
       const double mirror = normal[drop] > 0 ? 1.0 : -1.0;  // so that the fan turns counter-clockwise
       double magnitude = std::max(std::fabs(o[u]), std::fabs(o[v]));
-      for (const Sector& q : sectors) magnitude = std::max({magnitude, std::fabs(p[q.a][u]), std::fabs(p[q.a][v]), std::fabs(p[q.b][u]), std::fabs(p[q.b][v])});
+      for (const Sector& q : sectors)
+        magnitude = std::max(
+            {magnitude, std::fabs(p[q.a][u]), std::fabs(p[q.a][v]), std::fabs(p[q.b][u]), std::fabs(p[q.b][v])});
       const double err = 8 * std::numeric_limits<double>::epsilon() * magnitude;
       bool ok = true;
       for (Sector& q : sectors) {
@@ -67,8 +72,10 @@ std::vector<uint8_t> unfolded_fan_vertices(const std::vector<P3>& p, const std::
       if (!ok) continue;
       // A repeated triangle covers the same sector twice: it is apart from the others as its
       // first copy is (the copies themselves share all three vertices and are not skipped).
-      std::sort(sectors.begin(), sectors.end(), [](const Sector& x, const Sector& y) { return x.a != y.a ? x.a < y.a : x.b < y.b; });
-      sectors.erase(std::unique(sectors.begin(), sectors.end(), [](const Sector& x, const Sector& y) { return x.a == y.a && x.b == y.b; }),
+      std::sort(sectors.begin(), sectors.end(),
+                [](const Sector& x, const Sector& y) { return x.a != y.a ? x.a < y.a : x.b < y.b; });
+      sectors.erase(std::unique(sectors.begin(), sectors.end(),
+                                [](const Sector& x, const Sector& y) { return x.a == y.a && x.b == y.b; }),
                     sectors.end());
       std::sort(sectors.begin(), sectors.end(), [](const Sector& x, const Sector& y) { return x.start < y.start; });
       // Each sector must end where the next one starts (the same vertex) or clearly before it.
@@ -89,7 +96,8 @@ std::vector<uint8_t> unfolded_fan_vertices(const std::vector<P3>& p, const std::
   return fan;
 }
 
-std::vector<uint8_t> closed_fan_vertices(const std::vector<Vec3>& points, const std::vector<Tri>& triangles, const VertexStars& stars) {
+std::vector<uint8_t> closed_fan_vertices(const std::vector<Vec3>& points, const std::vector<Tri>& triangles,
+                                         const VertexStars& stars) {
   std::vector<uint8_t> fan(points.size(), 0);
   tbb::parallel_for(tbb::blocked_range<size_t>(0, points.size(), 4096), [&](const tbb::blocked_range<size_t>& r) {
     std::vector<std::array<uint32_t, 2>> corners;
@@ -110,7 +118,8 @@ std::vector<uint8_t> closed_fan_vertices(const std::vector<Vec3>& points, const 
 
 namespace vdbwrap::check {
 
-bool closed_fan_unfolded(const std::vector<Vec3>& points, uint32_t c, const std::array<uint32_t, 2>* corners, size_t count) {
+bool closed_fan_unfolded(const std::vector<Vec3>& points, uint32_t c, const std::array<uint32_t, 2>* corners,
+                         size_t count) {
   constexpr size_t kMost = 64;
   if (count < 3 || count > kMost) return false;
   // Closed: each triangle's second corner is the first corner of exactly one triangle, and
@@ -133,8 +142,8 @@ bool closed_fan_unfolded(const std::vector<Vec3>& points, uint32_t c, const std:
   // for that map, so they need not be exactly orthonormal.
   const Vec3 n = normalized(normal);
   const Vec3 least = std::fabs(n[0]) <= std::fabs(n[1]) && std::fabs(n[0]) <= std::fabs(n[2]) ? Vec3{1, 0, 0}
-                     : std::fabs(n[1]) <= std::fabs(n[2])                                   ? Vec3{0, 1, 0}
-                                                                                          : Vec3{0, 0, 1};
+                     : std::fabs(n[1]) <= std::fabs(n[2])                                     ? Vec3{0, 1, 0}
+                                                                                              : Vec3{0, 0, 1};
   const Vec3 e1 = normalized(cross(n, least)), e2 = cross(n, e1);
   // Each spoke projected once, so that a spoke two sectors share is the same numbers in both.
   std::array<std::array<double, 2>, kMost> ray;

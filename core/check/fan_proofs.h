@@ -23,12 +23,14 @@ VertexStars vertex_stars(size_t points, const std::vector<Tri>& triangles, const
 // spokes whose boxes all overlap: without this proof every pair of spokes would go to the
 // exact tests. Gaps between sectors (a missing spoke) are allowed;
 // only vertices with many triangles are looked at.
-std::vector<uint8_t> unfolded_fan_vertices(const std::vector<P3>& p, const std::vector<Tri>& triangles, const VertexStars& stars);
+std::vector<uint8_t> unfolded_fan_vertices(const std::vector<P3>& p, const std::vector<Tri>& triangles,
+                                           const VertexStars& stars);
 
 // Vertices whose triangles close one unfolded fan round them (see closed_fan_unfolded): every
 // vertex of a wrap nearly, where unfolded_fan_vertices looks only at large fans. Two triangles
 // with such a corner meet only where they share, so a wrap's neighbouring pairs, most of its
 // candidate pairs, need no test.
-std::vector<uint8_t> closed_fan_vertices(const std::vector<Vec3>& points, const std::vector<Tri>& triangles, const VertexStars& stars);
+std::vector<uint8_t> closed_fan_vertices(const std::vector<Vec3>& points, const std::vector<Tri>& triangles,
+                                         const VertexStars& stars);
 
 }  // namespace vdbwrap::check::pair_search

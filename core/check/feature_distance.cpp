@@ -33,7 +33,8 @@ DistanceStats sharp_edge_distance(const Mesh& input, const Mesh& surface, double
   // serves both (flips change no triangle's edges), as in prepare.
   const EdgeTriangles listing = edge_triangles(tris);
   mesh::orient_pieces(welded, tris, &listing);
-  for (size_t t = 0; t < tris.size(); ++t) normals[t] = normalized(area_vector(welded[tris[t][0]], welded[tris[t][1]], welded[tris[t][2]]));
+  for (size_t t = 0; t < tris.size(); ++t)
+    normals[t] = normalized(area_vector(welded[tris[t][0]], welded[tris[t][1]], welded[tris[t][2]]));
   auto edges = mesh::find_feature_edges(welded, tris, normals, angle_deg, &listing);
   const double spacing = spacing_fraction * s.diagonal;
   std::vector<Vec3> samples;

@@ -45,8 +45,10 @@ std::vector<Segment> intersection_segments(const std::vector<Vec3>& points, cons
       const auto result = CGAL::intersection(tx, ty);
       const EK::Segment_3* s = result ? boost::get<EK::Segment_3>(&*result) : nullptr;
       if (!s) continue;  // a point
-      const Vec3 a{CGAL::to_double(s->source().x()), CGAL::to_double(s->source().y()), CGAL::to_double(s->source().z())};
-      const Vec3 b{CGAL::to_double(s->target().x()), CGAL::to_double(s->target().y()), CGAL::to_double(s->target().z())};
+      const Vec3 a{CGAL::to_double(s->source().x()), CGAL::to_double(s->source().y()),
+                   CGAL::to_double(s->source().z())};
+      const Vec3 b{CGAL::to_double(s->target().x()), CGAL::to_double(s->target().y()),
+                   CGAL::to_double(s->target().z())};
       if (a == b) continue;  // shorter than the doubles can tell apart
       local.push_back({a, b, pairs[i].a, pairs[i].b});
     }

@@ -22,8 +22,8 @@ namespace vdbwrap::check {
 using namespace pair_search;
 static_assert(kNoPiece == kNoGroup, "the star-shaped pieces are the broad phase's groups");
 
-std::vector<TrianglePair> find_intersecting_pairs(const std::vector<Vec3>& points, const std::vector<Tri>& triangles, SoupKind kind,
-                                                  const EdgeTriangles* edges) {
+std::vector<TrianglePair> find_intersecting_pairs(const std::vector<Vec3>& points, const std::vector<Tri>& triangles,
+                                                  SoupKind kind, const EdgeTriangles* edges) {
   const ExactInput in = exact_input(points, triangles);
   const std::vector<P3>& p = in.p;
   const std::vector<uint8_t>& usable = in.usable;
@@ -52,7 +52,7 @@ std::vector<TrianglePair> find_intersecting_pairs(const std::vector<Vec3>& point
   for (size_t k = 0; k < box_piece.size(); ++k) box_piece[k] = piece[slabs.owner[k]];
   grid_candidate_pairs(slabs.boxes, box_piece, [&](uint32_t box_x, uint32_t box_y) {
     uint32_t x = slabs.owner[box_x], y = slabs.owner[box_y];
-    if (x == y) return;  // two slabs of one triangle
+    if (x == y) return;                                        // two slabs of one triangle
     if (piece[x] != kNoPiece && piece[x] == piece[y]) return;  // see star_shaped_pieces
     if (x > y) std::swap(x, y), std::swap(box_x, box_y);
     const Tri &tx = triangles[x], &ty = triangles[y];
@@ -62,7 +62,7 @@ std::vector<TrianglePair> find_intersecting_pairs(const std::vector<Vec3>& point
     for (uint32_t a : tx)
       for (uint32_t b : ty)
         if (a == b) ++shared, common = a, in_closed_fan = in_closed_fan || (!closed_fan.empty() && closed_fan[a]);
-    if (shared == 1 && fan[common]) return;  // apart: see unfolded_fan_vertices
+    if (shared == 1 && fan[common]) return;   // apart: see unfolded_fan_vertices
     if (in_closed_fan && shared < 3) return;  // they meet only where they share: see closed_fan_vertices
     if (shared <= 1 && (clearly_beside(points, planes[x], tx, ty) || clearly_beside(points, planes[y], ty, tx))) return;
     // The cheap proofs above may run once per pair of slabs that meet; the exact test, once.
@@ -71,11 +71,13 @@ std::vector<TrianglePair> find_intersecting_pairs(const std::vector<Vec3>& point
   });
   std::vector<TrianglePair> out;
   for (const auto& local : found) out.insert(out.end(), local.begin(), local.end());
-  std::sort(out.begin(), out.end(), [](const TrianglePair& u, const TrianglePair& v) { return u.a != v.a ? u.a < v.a : u.b < v.b; });
+  std::sort(out.begin(), out.end(),
+            [](const TrianglePair& u, const TrianglePair& v) { return u.a != v.a ? u.a < v.a : u.b < v.b; });
   return out;
 }
 
-std::vector<uint32_t> intersecting_triangles(const std::vector<Vec3>& points, const std::vector<Tri>& triangles, SoupKind kind) {
+std::vector<uint32_t> intersecting_triangles(const std::vector<Vec3>& points, const std::vector<Tri>& triangles,
+                                             SoupKind kind) {
   std::vector<uint32_t> out;
   for (const TrianglePair& p : find_intersecting_pairs(points, triangles, kind)) out.push_back(p.a), out.push_back(p.b);
   std::vector<uint8_t> degenerate(triangles.size(), 0);
@@ -89,7 +91,8 @@ std::vector<uint32_t> intersecting_triangles(const std::vector<Vec3>& points, co
   return out;
 }
 
-std::vector<TrianglePair> find_intersecting_pairs_with(const std::vector<Vec3>& points, const std::vector<Tri>& triangles,
+std::vector<TrianglePair> find_intersecting_pairs_with(const std::vector<Vec3>& points,
+                                                       const std::vector<Tri>& triangles,
                                                        const std::vector<uint32_t>& subset) {
   std::vector<TrianglePair> out;
   if (subset.empty()) return out;
@@ -112,14 +115,18 @@ std::vector<TrianglePair> find_intersecting_pairs_with(const std::vector<Vec3>& 
     some.emplace_back(box_of(t), t);
   }
   tbb::enumerable_thread_specific<std::vector<TrianglePair>> found;
-  CGAL::box_intersection_d<CGAL::Parallel_if_available_tag>(some.begin(), some.end(), all.begin(), all.end(), [&](const Box& a, const Box& b) {
-    const uint32_t x = uint32_t(a.handle()), y = uint32_t(b.handle());
-    if (x == y || is_degenerate(p, triangles[y])) return;
-    if (triangles_intersect(p, triangles[x], triangles[y])) found.local().push_back({std::min(x, y), std::max(x, y)});
-  });
+  CGAL::box_intersection_d<CGAL::Parallel_if_available_tag>(
+      some.begin(), some.end(), all.begin(), all.end(), [&](const Box& a, const Box& b) {
+        const uint32_t x = uint32_t(a.handle()), y = uint32_t(b.handle());
+        if (x == y || is_degenerate(p, triangles[y])) return;
+        if (triangles_intersect(p, triangles[x], triangles[y]))
+          found.local().push_back({std::min(x, y), std::max(x, y)});
+      });
   for (const auto& local : found) out.insert(out.end(), local.begin(), local.end());
-  std::sort(out.begin(), out.end(), [](const TrianglePair& u, const TrianglePair& v) { return u.a != v.a ? u.a < v.a : u.b < v.b; });
-  out.erase(std::unique(out.begin(), out.end(), [](const TrianglePair& u, const TrianglePair& v) { return u.a == v.a && u.b == v.b; }),
+  std::sort(out.begin(), out.end(),
+            [](const TrianglePair& u, const TrianglePair& v) { return u.a != v.a ? u.a < v.a : u.b < v.b; });
+  out.erase(std::unique(out.begin(), out.end(),
+                        [](const TrianglePair& u, const TrianglePair& v) { return u.a == v.a && u.b == v.b; }),
             out.end());
   return out;
 }

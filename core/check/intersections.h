@@ -27,12 +27,14 @@ enum class SoupKind { kInput, kWrap };
 // repeated or collinear vertices are skipped (count those separately). `edges`: the
 // triangles' edges when known (an input's star-shaped parts are found through them).
 std::vector<TrianglePair> find_intersecting_pairs(const std::vector<Vec3>& points, const std::vector<Tri>& triangles,
-                                                  SoupKind kind = SoupKind::kInput, const EdgeTriangles* edges = nullptr);
+                                                  SoupKind kind = SoupKind::kInput,
+                                                  const EdgeTriangles* edges = nullptr);
 
 // Intersecting pairs with at least one triangle in `subset` (the rest of the mesh is only
 // tested against the subset). Same rules as find_intersecting_pairs; degenerate triangles
 // in the subset are returned as a pair (t, t).
-std::vector<TrianglePair> find_intersecting_pairs_with(const std::vector<Vec3>& points, const std::vector<Tri>& triangles,
+std::vector<TrianglePair> find_intersecting_pairs_with(const std::vector<Vec3>& points,
+                                                       const std::vector<Tri>& triangles,
                                                        const std::vector<uint32_t>& subset);
 
 // Per triangle: the number of the piece it belongs to when that piece is closed (up to holes,
@@ -53,7 +55,8 @@ bool triangle_is_degenerate(const std::vector<Vec3>& points, const Tri& t);
 // The same tests on corners given apart from a point list (a change being weighed before it is
 // made); the indexes still tell which corners two triangles share, and shared ones must be equal.
 using Corners = std::array<Vec3, 3>;
-bool triangle_pair_intersects(const Corners& a_at, const Tri& a, const Corners& b_at, const Tri& b, bool use_proofs_2d = true);
+bool triangle_pair_intersects(const Corners& a_at, const Tri& a, const Corners& b_at, const Tri& b,
+                              bool use_proofs_2d = true);
 bool triangle_is_degenerate(const Corners& at, const Tri& t);
 
 // Triangles (c, a, b) round vertex c, given by their corners after c in each one's own order
@@ -62,7 +65,8 @@ bool triangle_is_degenerate(const Corners& at, const Tri& t);
 // the sectors follow one another once round. Then two of them meet only at c and along the
 // edge they share, if any: a pair of them needs no intersection test. (Doubles with a margin
 // far above their rounding; false whenever that is too close to call.)
-bool closed_fan_unfolded(const std::vector<Vec3>& points, uint32_t c, const std::array<uint32_t, 2>* corners, size_t count);
+bool closed_fan_unfolded(const std::vector<Vec3>& points, uint32_t c, const std::array<uint32_t, 2>* corners,
+                         size_t count);
 
 struct Segment {
   Vec3 a, b;

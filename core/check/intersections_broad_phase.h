@@ -28,7 +28,8 @@ struct Bounds {
   double max_coord(int axis) const { return hi[axis]; }
   CGAL::Bbox_3 bbox() const { return CGAL::Bbox_3(lo[0], lo[1], lo[2], hi[0], hi[1], hi[2]); }
   bool overlaps(const Bounds& o) const {
-    return lo[0] <= o.hi[0] && o.lo[0] <= hi[0] && lo[1] <= o.hi[1] && o.lo[1] <= hi[1] && lo[2] <= o.hi[2] && o.lo[2] <= hi[2];
+    return lo[0] <= o.hi[0] && o.lo[0] <= hi[0] && lo[1] <= o.hi[1] && o.lo[1] <= hi[1] && lo[2] <= o.hi[2] &&
+           o.lo[2] <= hi[2];
   }
   static Bounds of(const CGAL::Bbox_3& b) { return {{b.xmin(), b.ymin(), b.zmin()}, {b.xmax(), b.ymax(), b.zmax()}}; }
 };
@@ -37,8 +38,8 @@ struct Bounds {
 // few sizes, spread over a surface. With cells about twice the typical triangle, a cell holds a
 // handful of triangles, and sorting (cell, box) entries is cheaper than CGAL's box
 // intersection, which sorts and scans all boxes along each axis at each level of its segment
-// tree. A pair is tested only in the cell holding the low corner of the two boxes' overlap, so once. Boxes spanning many cells go
-// to CGAL's box intersection instead.
+// tree. A pair is tested only in the cell holding the low corner of the two boxes' overlap, so once. Boxes spanning
+// many cells go to CGAL's box intersection instead.
 struct GridEntry {
   uint64_t cell;
   uint32_t group;  // boxes of one group are never paired (kNoGroup: paired with all)
@@ -54,7 +55,8 @@ void grid_candidate_pairs(const FillVector<Bounds>& boxes, const std::vector<uin
   extents.reserve(boxes.size());
   CGAL::Bbox_3 all;
   for (const Bounds& b : boxes) {
-    extents.push_back(std::max({b.max_coord(0) - b.min_coord(0), b.max_coord(1) - b.min_coord(1), b.max_coord(2) - b.min_coord(2)}));
+    extents.push_back(
+        std::max({b.max_coord(0) - b.min_coord(0), b.max_coord(1) - b.min_coord(1), b.max_coord(2) - b.min_coord(2)}));
     all += b.bbox();
   }
   std::nth_element(extents.begin(), extents.begin() + extents.size() / 2, extents.end());
@@ -64,9 +66,9 @@ void grid_candidate_pairs(const FillVector<Bounds>& boxes, const std::vector<uin
   if (!(cell > 0) || !std::isfinite(cell)) {
     std::vector<Box> all_boxes;
     for (size_t n = 0; n < boxes.size(); ++n) all_boxes.emplace_back(boxes[n].bbox(), n);
-    CGAL::box_self_intersection_d<CGAL::Parallel_if_available_tag>(all_boxes.begin(), all_boxes.end(), [&](const Box& a, const Box& b) {
-      test(uint32_t(a.handle()), uint32_t(b.handle()));
-    });
+    CGAL::box_self_intersection_d<CGAL::Parallel_if_available_tag>(
+        all_boxes.begin(), all_boxes.end(),
+        [&](const Box& a, const Box& b) { test(uint32_t(a.handle()), uint32_t(b.handle())); });
     return;
   }
   const double inv = 1.0 / cell;
@@ -101,7 +103,8 @@ void grid_candidate_pairs(const FillVector<Bounds>& boxes, const std::vector<uin
       }
       for (int64_t i = lo[0]; i <= hi[0]; ++i)
         for (int64_t j = lo[1]; j <= hi[1]; ++j)
-          for (int64_t k = lo[2]; k <= hi[2]; ++k) chunk_entries[chunk].push_back({key(i, j, k), group[n], uint32_t(n)});
+          for (int64_t k = lo[2]; k <= hi[2]; ++k)
+            chunk_entries[chunk].push_back({key(i, j, k), group[n], uint32_t(n)});
     }
   });
   std::vector<Box> large;
@@ -113,7 +116,10 @@ void grid_candidate_pairs(const FillVector<Bounds>& boxes, const std::vector<uin
   FillVector<GridEntry> entries;
   if (group_bits + cell_bits <= 64) {
     entries = radix_sort_joined(
-        chunk_entries, [&](const GridEntry& e) { return (e.cell << group_bits) | (e.group == kNoGroup ? no_group : uint64_t(e.group)); },
+        chunk_entries,
+        [&](const GridEntry& e) {
+          return (e.cell << group_bits) | (e.group == kNoGroup ? no_group : uint64_t(e.group));
+        },
         group_bits + cell_bits);
   } else {  // a key too wide for one word
     size_t total = 0;
@@ -180,7 +186,8 @@ void grid_candidate_pairs(const FillVector<Bounds>& boxes, const std::vector<uin
   // still cheap (far larger cutoffs scan too much).
   constexpr std::ptrdiff_t cutoff = 300;
   CGAL::box_self_intersection_d<CGAL::Parallel_if_available_tag>(large.begin(), large.end(), report, cutoff);
-  CGAL::box_intersection_d<CGAL::Parallel_if_available_tag>(large.begin(), large.end(), small.begin(), small.end(), report, cutoff);
+  CGAL::box_intersection_d<CGAL::Parallel_if_available_tag>(large.begin(), large.end(), small.begin(), small.end(),
+                                                            report, cutoff);
 }
 
 }  // namespace vdbwrap::check::pair_search

@@ -42,8 +42,9 @@ bool clearly_beside(const std::vector<Vec3>& points, const PlaneBound& plane, co
     const Vec3 d = points[v] - a;
     const double distance = dot(plane.normal, d);
     const double error = plane.slope * (std::fabs(d[0]) + std::fabs(d[1]) + std::fabs(d[2])) +
-                         16 * std::numeric_limits<double>::epsilon() * (std::fabs(points[v][0]) + std::fabs(points[v][1]) + std::fabs(points[v][2]) +
-                                                                         std::fabs(a[0]) + std::fabs(a[1]) + std::fabs(a[2]));
+                         16 * std::numeric_limits<double>::epsilon() *
+                             (std::fabs(points[v][0]) + std::fabs(points[v][1]) + std::fabs(points[v][2]) +
+                              std::fabs(a[0]) + std::fabs(a[1]) + std::fabs(a[2]));
     const int s = distance > error ? 1 : distance < -error ? -1 : 0;
     if (s == 0 || (side != 0 && s != side)) return false;
     side = s;

@@ -53,7 +53,8 @@ bool apart_at_shared_vertex_2d(const P3& c, const P3& a, const P3& b, const P3& 
     const int inside = side(side_dir, other, pl.err);
     return inside != 0 && side(side_dir, p, pl.err) == -inside && side(side_dir, q, pl.err) == -inside;
   };
-  return separates(va, vb, vd, ve) || separates(vb, va, vd, ve) || separates(vd, ve, va, vb) || separates(ve, vd, va, vb);
+  return separates(va, vb, vd, ve) || separates(vb, va, vd, ve) || separates(vd, ve, va, vb) ||
+         separates(ve, vd, va, vb);
 }
 
 }  // namespace

@@ -11,7 +11,9 @@
 namespace vdbwrap::check::pair_search {
 namespace {
 
-CGAL::Bbox_3 triangle_box(const std::vector<P3>& p, const Tri& t) { return p[t[0]].bbox() + p[t[1]].bbox() + p[t[2]].bbox(); }
+CGAL::Bbox_3 triangle_box(const std::vector<P3>& p, const Tri& t) {
+  return p[t[0]].bbox() + p[t[1]].bbox() + p[t[2]].bbox();
+}
 int longest_axis(const CGAL::Bbox_3& b) {
   int axis = 0;
   for (int k = 1; k < 3; ++k)
@@ -72,7 +74,9 @@ SlabBoxes slab_boxes(const std::vector<P3>& p, const std::vector<Tri>& triangles
   constexpr double most_slabs = 16;
   for (size_t t = 0; t < n; ++t) {
     const double length = extents[t];
-    const uint32_t slabs = length < 0 ? 0 : slab > 0 && length > 4 * slab ? uint32_t(std::min(most_slabs, std::ceil(length / slab))) : 1;
+    const uint32_t slabs = length < 0                      ? 0
+                           : slab > 0 && length > 4 * slab ? uint32_t(std::min(most_slabs, std::ceil(length / slab)))
+                                                           : 1;
     out.first[t + 1] = out.first[t] + slabs;
   }
   out.boxes.resize(out.first[n]);  // filled below, in parallel
@@ -91,8 +95,8 @@ SlabBoxes slab_boxes(const std::vector<P3>& p, const std::vector<Tri>& triangles
       const Tri& tri = triangles[t];
       const std::array<const P3*, 3> v{&p[tri[0]], &p[tri[1]], &p[tri[2]]};
       const int axis = longest_axis(b);
-      const double magnitude = std::max({std::fabs(b.xmin()), std::fabs(b.xmax()), std::fabs(b.ymin()), std::fabs(b.ymax()),
-                                         std::fabs(b.zmin()), std::fabs(b.zmax())});
+      const double magnitude = std::max({std::fabs(b.xmin()), std::fabs(b.xmax()), std::fabs(b.ymin()),
+                                         std::fabs(b.ymax()), std::fabs(b.zmin()), std::fabs(b.zmax())});
       const double pad = 1e-9 * (b.max(axis) - b.min(axis)) + 64 * eps * magnitude;
       for (uint32_t k = 0; k < count; ++k) {
         const auto [s0, s1] = slab_range(b, axis, k, count);
@@ -103,8 +107,8 @@ SlabBoxes slab_boxes(const std::vector<P3>& p, const std::vector<Tri>& triangles
   return out;
 }
 
-bool met_earlier(const SlabBoxes& s, const std::vector<P3>& p, const std::vector<Tri>& triangles, uint32_t x, uint32_t a,
-                 uint32_t y, uint32_t b) {
+bool met_earlier(const SlabBoxes& s, const std::vector<P3>& p, const std::vector<Tri>& triangles, uint32_t x,
+                 uint32_t a, uint32_t y, uint32_t b) {
   if (s.count(x) == 1 && s.count(y) == 1) return false;
   const CGAL::Bbox_3 bx = triangle_box(p, triangles[x]), by = triangle_box(p, triangles[y]);
   auto reaching = [&](uint32_t t, const CGAL::Bbox_3& own, const CGAL::Bbox_3& other) -> std::pair<uint32_t, uint32_t> {
@@ -112,8 +116,10 @@ bool met_earlier(const SlabBoxes& s, const std::vector<P3>& p, const std::vector
     if (count == 1) return {s.first[t], s.first[t] + 1};
     const int axis = longest_axis(own);
     const double width = (own.max(axis) - own.min(axis)) / count;
-    const double lo = std::floor((other.min(axis) - own.min(axis)) / width) - 1, hi = std::floor((other.max(axis) - own.min(axis)) / width) + 2;
-    return {s.first[t] + uint32_t(std::clamp(lo, 0.0, double(count))), s.first[t] + uint32_t(std::clamp(hi, 0.0, double(count)))};
+    const double lo = std::floor((other.min(axis) - own.min(axis)) / width) - 1,
+                 hi = std::floor((other.max(axis) - own.min(axis)) / width) + 2;
+    return {s.first[t] + uint32_t(std::clamp(lo, 0.0, double(count))),
+            s.first[t] + uint32_t(std::clamp(hi, 0.0, double(count)))};
   };
   const auto [x0, x1] = reaching(x, bx, by);
   const auto [y0, y1] = reaching(y, by, bx);

@@ -28,7 +28,7 @@ SlabBoxes slab_boxes(const std::vector<P3>& p, const std::vector<Tri>& triangles
 // Boxes a of triangle x and b of triangle y overlap: did an earlier pair of their boxes (in the
 // order of (a, b)) overlap too? Then that pair was the one to test. Only boxes that can reach
 // the other triangle along the cut axis are looked at.
-bool met_earlier(const SlabBoxes& s, const std::vector<P3>& p, const std::vector<Tri>& triangles, uint32_t x, uint32_t a,
-                 uint32_t y, uint32_t b);
+bool met_earlier(const SlabBoxes& s, const std::vector<P3>& p, const std::vector<Tri>& triangles, uint32_t x,
+                 uint32_t a, uint32_t y, uint32_t b);
 
 }  // namespace vdbwrap::check::pair_search

@@ -43,7 +43,8 @@ struct SideLinks {
 };
 
 // `known`: the edges of all the triangles, used when all are usable (the same listing).
-SideLinks side_links(const std::vector<Tri>& triangles, const std::vector<uint8_t>& usable, const EdgeTriangles* known) {
+SideLinks side_links(const std::vector<Tri>& triangles, const std::vector<uint8_t>& usable,
+                     const EdgeTriangles* known) {
   EdgeTriangles made;
   const bool all_usable = std::all_of(usable.begin(), usable.end(), [](uint8_t u) { return u != 0; });
   const EdgeTriangles& edges = known && all_usable ? *known : (made = edge_triangles(triangles, &usable));
@@ -115,7 +116,8 @@ ClosedUp close_holes(const std::vector<P3>& p, const std::vector<Tri>& triangles
     out.points.emplace_back(m[0], m[1], m[2]);
     const uint32_t first = uint32_t(out.triangles.size());
     for (size_t k = 0; k < count; ++k) {
-      const uint32_t f = first + uint32_t(k), next = first + uint32_t((k + 1) % count), prev = first + uint32_t((k + count - 1) % count);
+      const uint32_t f = first + uint32_t(k), next = first + uint32_t((k + 1) % count),
+                     prev = first + uint32_t((k + count - 1) % count);
       out.triangles.push_back({sides[k].corner, sides[(k + 1) % count].corner, centre});
       out.usable.push_back(1);
       across.insert(across.end(), {sides[k].open_side / 3, next, prev});
@@ -162,7 +164,8 @@ ClosedUp close_holes(const std::vector<P3>& p, const std::vector<Tri>& triangles
 // towards o is checked exactly elsewhere; here only the number of turns.) Each angle must be
 // well clear of 0 and of a half turn, so that its rounding cannot matter; a nearly edge-on
 // view (a flat piece seen from its own plane) gives no answer.
-bool turns_once(const std::vector<P3>& p, const std::vector<Tri>& triangles, const VertexStars& stars, uint32_t c, const P3& o) {
+bool turns_once(const std::vector<P3>& p, const std::vector<Tri>& triangles, const VertexStars& stars, uint32_t c,
+                const P3& o) {
   const Vec3 w = normalized(Vec3{p[c].x() - o.x(), p[c].y() - o.y(), p[c].z() - o.z()});
   auto flat = [&](const P3& q) {  // q - c, with its part along the ray from o taken out
     const Vec3 d{q.x() - p[c].x(), q.y() - p[c].y(), q.z() - p[c].z()};
@@ -246,7 +249,8 @@ std::vector<uint32_t> star_shaped_pieces(const std::vector<P3>& given_points, co
       const uint32_t id = piece[stars.items[stars.first[c]]];
       if (!ok[id]) continue;
       bool one_piece = true;
-      for (uint32_t k = stars.first[c]; k < stars.first[c + 1] && one_piece; ++k) one_piece = piece[stars.items[k]] == id;
+      for (uint32_t k = stars.first[c]; k < stars.first[c + 1] && one_piece; ++k)
+        one_piece = piece[stars.items[k]] == id;
       vertex_ok[c] = one_piece && turns_once(p, triangles, stars, uint32_t(c), centre[id]);
     }
   });

@@ -20,6 +20,7 @@ constexpr uint32_t kNoPiece = UINT32_MAX;
 // Per triangle: the number of its piece when that piece is star-shaped, else kNoPiece.
 // `usable`: the triangles that take part (not degenerate); `edges`: their edges when known.
 std::vector<uint32_t> star_shaped_pieces(const std::vector<P3>& given_points, const std::vector<Tri>& given_triangles,
-                                         const std::vector<uint8_t>& given_usable, const EdgeTriangles* edges = nullptr);
+                                         const std::vector<uint8_t>& given_usable,
+                                         const EdgeTriangles* edges = nullptr);
 
 }  // namespace vdbwrap::check::pair_search

@@ -22,7 +22,8 @@ bool triangles_intersect(const Points& p, const Tri& x, const Tri& y, bool use_p
         ++shared;
       }
   if (shared == 0) {
-    const bool flat = nearly_coplanar(p[x[0]], p[x[1]], p[x[2]], p[y[0]]) && nearly_coplanar(p[x[0]], p[x[1]], p[x[2]], p[y[1]]) &&
+    const bool flat = nearly_coplanar(p[x[0]], p[x[1]], p[x[2]], p[y[0]]) &&
+                      nearly_coplanar(p[x[0]], p[x[1]], p[x[2]], p[y[1]]) &&
                       nearly_coplanar(p[x[0]], p[x[1]], p[x[2]], p[y[2]]);
     if (use_proofs_2d && flat && apart_2d({p[x[0]], p[x[1]], p[x[2]]}, {p[y[0]], p[y[1]], p[y[2]]})) return false;
     return CGAL::do_intersect(T3(p[x[0]], p[x[1]], p[x[2]]), T3(p[y[0]], p[y[1]], p[y[2]]));
@@ -30,7 +31,8 @@ bool triangles_intersect(const Points& p, const Tri& x, const Tri& y, bool use_p
   if (shared == 3) return true;  // the same triangle twice
   if (shared == 1) {
     int i = xi[0], j = yi[0];
-    const P3 &c = p[x[i]], &a = p[x[(i + 1) % 3]], &b = p[x[(i + 2) % 3]], &d = p[y[(j + 1) % 3]], &e = p[y[(j + 2) % 3]];
+    const P3 &c = p[x[i]], &a = p[x[(i + 1) % 3]], &b = p[x[(i + 2) % 3]], &d = p[y[(j + 1) % 3]],
+             &e = p[y[(j + 2) % 3]];
     if (use_proofs_2d && apart_at_shared_vertex(c, a, b, d, e)) return false;
     // A crossing that starts at the common vertex leaves one triangle through its opposite edge.
     S3 opp_x(a, b);
@@ -83,11 +85,14 @@ bool pair_intersects(const Tri& a, const Tri& b, Corner&& corner, bool use_proof
 }  // namespace
 
 bool triangle_pair_intersects(const std::vector<Vec3>& points, const Tri& a, const Tri& b, bool use_proofs_2d) {
-  return pair_intersects(a, b, [&](int t, int k) -> const Vec3& { return points[(t == 0 ? a : b)[k]]; }, use_proofs_2d);
+  return pair_intersects(
+      a, b, [&](int t, int k) -> const Vec3& { return points[(t == 0 ? a : b)[k]]; }, use_proofs_2d);
 }
 
-bool triangle_pair_intersects(const Corners& a_at, const Tri& a, const Corners& b_at, const Tri& b, bool use_proofs_2d) {
-  return pair_intersects(a, b, [&](int t, int k) -> const Vec3& { return (t == 0 ? a_at : b_at)[k]; }, use_proofs_2d);
+bool triangle_pair_intersects(const Corners& a_at, const Tri& a, const Corners& b_at, const Tri& b,
+                              bool use_proofs_2d) {
+  return pair_intersects(
+      a, b, [&](int t, int k) -> const Vec3& { return (t == 0 ? a_at : b_at)[k]; }, use_proofs_2d);
 }
 
 bool triangle_is_degenerate(const std::vector<Vec3>& points, const Tri& t) {
@@ -95,7 +100,8 @@ bool triangle_is_degenerate(const std::vector<Vec3>& points, const Tri& t) {
 }
 
 bool triangle_is_degenerate(const Corners& at, const Tri& t) {
-  return t[0] == t[1] || t[1] == t[2] || t[0] == t[2] || CGAL::collinear(to_point(at[0]), to_point(at[1]), to_point(at[2]));
+  return t[0] == t[1] || t[1] == t[2] || t[0] == t[2] ||
+         CGAL::collinear(to_point(at[0]), to_point(at[1]), to_point(at[2]));
 }
 
 }  // namespace vdbwrap::check

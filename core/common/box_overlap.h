@@ -48,7 +48,8 @@ class TriangleBoxTester {
  public:
   TriangleBoxTester(const Vec3& a, const Vec3& b, const Vec3& c) : ref_(a) {
     const Vec3 v[3] = {Vec3{0, 0, 0}, b - a, c - a};
-    for (int k = 0; k < 3; ++k) lo_[k] = std::min({v[0][k], v[1][k], v[2][k]}), hi_[k] = std::max({v[0][k], v[1][k], v[2][k]});
+    for (int k = 0; k < 3; ++k)
+      lo_[k] = std::min({v[0][k], v[1][k], v[2][k]}), hi_[k] = std::max({v[0][k], v[1][k], v[2][k]});
     const Vec3 e[3] = {v[1] - v[0], v[2] - v[1], v[0] - v[2]};
     // The normal first: a box beside the triangle's plane is the usual miss. (The answer is the
     // same in any order: every axis is tested in full.)
@@ -110,8 +111,8 @@ class TriangleBoxTester {
 // projects to the cell centre's projection plus its offset, and all share the radius.
 // Refinement splits its cells with it (asking only about the children no triangle met yet:
 // see build_refined_grid), and the nearest-point index its crowded cells.
-inline uint8_t octants_overlapped(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& centre, double quarter, double half,
-                                  uint8_t among = 0xff) {
+inline uint8_t octants_overlapped(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& centre, double quarter,
+                                  double half, uint8_t among = 0xff) {
   const Vec3 v[3] = {a - centre, b - centre, c - centre};
   // The box axes: along axis j the triangle's extent against the octants below and above.
   static constexpr uint8_t below[3] = {0x55, 0x33, 0x0f}, above[3] = {0xaa, 0xcc, 0xf0};
@@ -135,7 +136,7 @@ inline uint8_t octants_overlapped(const Vec3& a, const Vec3& b, const Vec3& c, c
   };
   const Vec3 e[3] = {v[1] - v[0], v[2] - v[1], v[0] - v[2]};
   if (mask) separate(cross(e[0], e[1]));  // the normal first (see TriangleBoxTester)
-  for (int i = 0; i < 3 && mask; ++i) {  // the edges crossed with the box axes
+  for (int i = 0; i < 3 && mask; ++i) {   // the edges crossed with the box axes
     separate(Vec3{0, -e[i][2], e[i][1]});
     if (mask) separate(Vec3{e[i][2], 0, -e[i][0]});
     if (mask) separate(Vec3{-e[i][1], e[i][0], 0});
@@ -150,8 +151,8 @@ inline uint8_t octants_overlapped(const Vec3& a, const Vec3& b, const Vec3& c, c
 // of cells for each one it passes through.) A block is grown a little beyond its cells, so
 // that rounding never drops a cell the cell's own test would keep.
 template <typename F>
-void for_cells_overlapping(const TriangleBoxTester& triangle, const Vec3& origin, double cell, double half_cell, const int lo[3],
-                           const int hi[3], F&& fn) {
+void for_cells_overlapping(const TriangleBoxTester& triangle, const Vec3& origin, double cell, double half_cell,
+                           const int lo[3], const int hi[3], F&& fn) {
   const int64_t count = int64_t(hi[0] - lo[0] + 1) * (hi[1] - lo[1] + 1) * (hi[2] - lo[2] + 1);
   if (count <= 0) return;
   if (count <= 8) {
@@ -180,8 +181,8 @@ void for_cells_overlapping(const TriangleBoxTester& triangle, const Vec3& origin
   for_cells_overlapping(triangle, origin, cell, half_cell, lo2, hi, fn);
 }
 template <typename F>
-void for_cells_overlapping(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& origin, double cell, double half_cell,
-                           const int lo[3], const int hi[3], F&& fn) {
+void for_cells_overlapping(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& origin, double cell,
+                           double half_cell, const int lo[3], const int hi[3], F&& fn) {
   for_cells_overlapping(TriangleBoxTester(a, b, c), origin, cell, half_cell, lo, hi, fn);
 }
 

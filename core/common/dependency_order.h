@@ -16,7 +16,8 @@ namespace vdbwrap {
 // released meanwhile is already running, and starting it again from the first list ran some
 // twice (the feature tracing of 20mm-xyz-cube.stl, about one wrap in forty).
 template <typename Run>
-void run_in_dependency_order(const std::vector<std::vector<uint32_t>>& successors, const std::vector<uint32_t>& waits, Run&& run) {
+void run_in_dependency_order(const std::vector<std::vector<uint32_t>>& successors, const std::vector<uint32_t>& waits,
+                             Run&& run) {
   const size_t n = successors.size();
   std::unique_ptr<std::atomic<uint32_t>[]> waiting(new std::atomic<uint32_t>[n]);
   std::vector<uint32_t> ready;

@@ -39,8 +39,9 @@ inline EdgeTriangles edge_triangles(const std::vector<Tri>& triangles, const std
   tbb::parallel_for(tbb::blocked_range<size_t>(0, triangles.size(), 4096), [&](const tbb::blocked_range<size_t>& r) {
     for (size_t t = r.begin(); t != r.end(); ++t)
       for (int e = 0; e < 3; ++e)
-        uses[3 * t + e] = usable && !(*usable)[t] ? Use{UINT64_MAX, 0}  // sorted last, cut off below
-                                                 : Use{edge_key(triangles[t][e], triangles[t][(e + 1) % 3]), uint32_t(t)};
+        uses[3 * t + e] = usable && !(*usable)[t]
+                              ? Use{UINT64_MAX, 0}  // sorted last, cut off below
+                              : Use{edge_key(triangles[t][e], triangles[t][(e + 1) % 3]), uint32_t(t)};
   });
   tbb::parallel_sort(uses.begin(), uses.end());  // (key, triangle): a total order, deterministic
   if (usable)

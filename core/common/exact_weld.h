@@ -48,7 +48,8 @@ inline std::vector<uint32_t> exact_weld(const std::vector<Vec3>& points, std::ve
     parts[k].reserve(end - k * kChunk);
     for (size_t i = k * kChunk; i < end; ++i) parts[k].push_back({point_hash(points[i]), uint32_t(i)});
   });
-  const FillVector<Key> keys = radix_then_sort(parts, [](const Key& k) { return k.hash >> 40; }, 24, std::less<Key>());
+  const FillVector<Key> keys = radix_then_sort(
+      parts, [](const Key& k) { return k.hash >> 40; }, 24, std::less<Key>());
   // first[i]: the first point equal to point i (itself when none is before it). Within a run
   // of one hash the points come in input order; runs are short (a point's copies, and the rare
   // collision), so each is compared with the earlier firsts of its run. Runs are independent:

@@ -25,7 +25,8 @@ struct GridKeyHash {
 
 // The cell of p on a grid of cells 1/inv_cell wide.
 inline GridKey grid_key(const Vec3& p, double inv_cell) {
-  return {int64_t(std::floor(p[0] * inv_cell)), int64_t(std::floor(p[1] * inv_cell)), int64_t(std::floor(p[2] * inv_cell))};
+  return {int64_t(std::floor(p[0] * inv_cell)), int64_t(std::floor(p[1] * inv_cell)),
+          int64_t(std::floor(p[2] * inv_cell))};
 }
 
 }  // namespace vdbwrap

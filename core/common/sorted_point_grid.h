@@ -50,7 +50,8 @@ class SortedPointGrid {
   template <typename Visit>
   bool any_near(const Vec3& q, double reach, Visit&& visit) const {
     return any_cell_near(q, reach, inv_, [&](const GridKey& k) {
-      for (auto it = std::lower_bound(entries_.begin(), entries_.end(), Entry{k, 0}); it != entries_.end() && it->key == k; ++it)
+      for (auto it = std::lower_bound(entries_.begin(), entries_.end(), Entry{k, 0});
+           it != entries_.end() && it->key == k; ++it)
         if (visit(it->point)) return true;
       return false;
     });

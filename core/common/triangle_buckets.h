@@ -24,7 +24,8 @@ namespace vdbwrap {
 // (a triangle that moved away); bounding boxes are compared before any exact test.
 class TriangleBuckets {
  public:
-  TriangleBuckets(const std::vector<Vec3>& p, const std::vector<Tri>& tris, double cell) : p_(p), tris_(tris), inv_(1.0 / cell) {
+  TriangleBuckets(const std::vector<Vec3>& p, const std::vector<Tri>& tris, double cell)
+      : p_(p), tris_(tris), inv_(1.0 / cell) {
     // Room for the triangles feature insertion appends (tens of thousands on a large wrap),
     // reserved, not touched: each growth had copied every box into fresh pages.
     boxes_.reserve(tris.size() + tris.size() / 8 + 64);
@@ -106,7 +107,8 @@ class TriangleBuckets {
  private:
   using Key = GridKey;
   void cell_range(const Box3& b, int64_t lo[3], int64_t hi[3]) const {
-    for (int k = 0; k < 3; ++k) lo[k] = int64_t(std::floor(b.lo[k] * inv_)), hi[k] = int64_t(std::floor(b.hi[k] * inv_));
+    for (int k = 0; k < 3; ++k)
+      lo[k] = int64_t(std::floor(b.lo[k] * inv_)), hi[k] = int64_t(std::floor(b.hi[k] * inv_));
   }
   template <typename F>
   void for_cells(const Box3& b, F&& fn) const {
@@ -176,7 +178,8 @@ class TriangleBuckets {
         if (!boxes_[f].empty())
           for_cells(boxes_[f], [&](const Key& k) { parts[c].push_back({numbers.number(k.x, k.y, k.z), uint32_t(f)}); });
     });
-    const FillVector<Entry> sorted = radix_sort_joined(parts, [](const Entry& e) { return e.cell; }, bits_for(numbers.count));
+    const FillVector<Entry> sorted = radix_sort_joined(
+        parts, [](const Entry& e) { return e.cell; }, bits_for(numbers.count));
     std::vector<size_t> runs;  // where each cell's entries start
     for (size_t i = 0; i < sorted.size(); ++i)
       if (i == 0 || sorted[i].cell != sorted[i - 1].cell) runs.push_back(i);

@@ -14,8 +14,8 @@ namespace vdbwrap::extract {
 
 using grid::AdaptiveGrid;
 
-bool drop_cut_off_pockets(AdaptiveGrid& g, int32_t label, const std::vector<std::pair<int, Coord>>& taken_out, double pocket_share,
-                          size_t& dropped, std::vector<std::pair<int, Coord>>* dropped_cells) {
+bool drop_cut_off_pockets(AdaptiveGrid& g, int32_t label, const std::vector<std::pair<int, Coord>>& taken_out,
+                          double pocket_share, size_t& dropped, std::vector<std::pair<int, Coord>>* dropped_cells) {
   // Why looking near the taken-out cells is enough: the volume was one piece before. A path
   // through it that crossed taken-out cells entered and left a cluster of them through
   // volume cells next to it; when those are joined without the taken-out cells, the path
@@ -53,7 +53,9 @@ bool drop_cut_off_pockets(AdaptiveGrid& g, int32_t label, const std::vector<std:
   std::map<uint32_t, std::vector<uint32_t>> clusters;  // ordered: the same drops on every run
   for (uint32_t i = 0; i < taken_out.size(); ++i) clusters[find(parent, i)].push_back(i);
 
-  auto cell_key = [](int level, const Coord& c) { return GridKey{int64_t(c.x()) + (int64_t(level) << 32), c.y(), c.z()}; };
+  auto cell_key = [](int level, const Coord& c) {
+    return GridKey{int64_t(c.x()) + (int64_t(level) << 32), c.y(), c.z()};
+  };
   constexpr size_t budget_base = 50000, budget_per_seed = 200;  // per cluster, before leaving it to a full labelling
   std::vector<std::vector<std::pair<int, Coord>>> pockets;
   double pocket_limit = -1;  // pocket_share of the volume, measured when a first pocket is found
@@ -61,8 +63,9 @@ bool drop_cut_off_pockets(AdaptiveGrid& g, int32_t label, const std::vector<std:
     if (pocket_limit < 0) {
       double volume = 0;
       const double side0 = g.fine_units(0), cell0 = side0 * side0 * side0;
-      g.for_each_level0_block([&](const AdaptiveGrid::Block& b, int32_t v) { volume += v == label ? double(b.cells()) * cell0 : 0.0; },
-                              [&](const Coord&, int32_t v) { volume += v == label ? cell0 : 0.0; });
+      g.for_each_level0_block(
+          [&](const AdaptiveGrid::Block& b, int32_t v) { volume += v == label ? double(b.cells()) * cell0 : 0.0; },
+          [&](const Coord&, int32_t v) { volume += v == label ? cell0 : 0.0; });
       g.for_each_fine_leaf([&](int level, const Coord&, int32_t v) {
         const double side = g.fine_units(level);
         if (v == label) volume += side * side * side;

@@ -41,7 +41,8 @@ Quad make_quad(int axis, int32_t plane, int32_t u0, int32_t v0, int32_t s, int n
 }
 
 // The level-0 cells of plane z = `plane` that may have a face, in the order of for_each_leaf.
-void level0_cells_with_faces(const AdaptiveGrid& g, int32_t label, int plane, std::vector<std::pair<int, Coord>>& cells) {
+void level0_cells_with_faces(const AdaptiveGrid& g, int32_t label, int plane,
+                             std::vector<std::pair<int, Coord>>& cells) {
   AdaptiveGrid::Reader reader(g);
   auto closed = [&](const AdaptiveGrid::Block& b, int axis, int dir) {
     const int across = dir < 0 ? b.lo[axis] - 1 : b.hi[axis];
@@ -151,11 +152,13 @@ FacesAndNodes faces_and_nodes(const AdaptiveGrid& g, int32_t label, VolumeChoice
     for (size_t i = k * kQuadChunk; i < end; ++i)
       for (int c = 0; c < 4; ++c) parts[k].push_back({number(quads[i].corner[c]), uint32_t(4 * i + size_t(c))});
   });
-  const FillVector<CornerRef> sorted = radix_sort_joined(parts, [](const CornerRef& r) { return r.point; }, bits_for(lattice.count));
+  const FillVector<CornerRef> sorted = radix_sort_joined(
+      parts, [](const CornerRef& r) { return r.point; }, bits_for(lattice.count));
   std::vector<uint64_t>& group_point = out.group_point;
   std::vector<size_t> group_start;
   for (size_t i = 0; i < sorted.size(); ++i)
-    if (i == 0 || sorted[i].point != sorted[i - 1].point) group_point.push_back(sorted[i].point), group_start.push_back(i);
+    if (i == 0 || sorted[i].point != sorted[i - 1].point)
+      group_point.push_back(sorted[i].point), group_start.push_back(i);
   const size_t groups = group_point.size();
   group_start.push_back(sorted.size());
   std::vector<uint32_t>& group_of_corner = out.group_of_corner;
@@ -208,7 +211,8 @@ LatticeSurface with_polygons(FacesAndNodes&& fn) {
           for (int32_t k = 1; k < q.size; ++k) {
             const uint64_t point = number(Coord(a.x() + step.x() * k, a.y() + step.y() * k, a.z() + step.z() * k));
             const auto it = std::lower_bound(group_point.begin(), group_point.end(), point);
-            if (it != group_point.end() && *it == point) poly.push_back(node_of_group[size_t(it - group_point.begin())]);
+            if (it != group_point.end() && *it == point)
+              poly.push_back(node_of_group[size_t(it - group_point.begin())]);
           }
         }
       }

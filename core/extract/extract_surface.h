@@ -13,9 +13,9 @@ namespace vdbwrap::extract {
 using grid::Coord;
 
 struct LatticeSurface {
-  std::vector<Coord> nodes;                      // positions on the finest node lattice
-  std::vector<int32_t> node_size;                // smallest incident face edge, in fine units
-  std::vector<std::vector<uint32_t>> polygons;   // counter-clockwise seen from outside the wrap
+  std::vector<Coord> nodes;                     // positions on the finest node lattice
+  std::vector<int32_t> node_size;               // smallest incident face edge, in fine units
+  std::vector<std::vector<uint32_t>> polygons;  // counter-clockwise seen from outside the wrap
 };
 
 // Faces between leaves with value `label` (the chosen volume; outside the box counts as
@@ -29,7 +29,8 @@ LatticeSurface extract_faces(const grid::AdaptiveGrid& grid, int32_t label, Volu
 // tell within their budget, or a piece is not below `pocket_share` of the volume left: a
 // full labelling must decide.
 bool drop_cut_off_pockets(grid::AdaptiveGrid& grid, int32_t label, const std::vector<std::pair<int, Coord>>& taken_out,
-                          double pocket_share, size_t& dropped, std::vector<std::pair<int, Coord>>* dropped_cells = nullptr);
+                          double pocket_share, size_t& dropped,
+                          std::vector<std::pair<int, Coord>>* dropped_cells = nullptr);
 
 struct ExtractStats {
   size_t excluded_cells = 0, rounds = 0, dropped_pieces = 0;
@@ -41,8 +42,9 @@ struct ExtractStats {
 // min_exclude_level (the depth of the refinement criteria) may be taken out of the volume.
 // After the first round, a round looks only near the cells the last one changed, unless
 // `whole_rounds` (every round over the whole surface: the reference the tests compare with).
-LatticeSurface extract_manifold_surface(grid::AdaptiveGrid& grid, int32_t& label, VolumeChoice choice, ExtractStats& stats,
-                                        ProgressSink* progress, const std::vector<Coord>& anchors = {},
-                                        int min_exclude_level = -1, bool whole_rounds = false);
+LatticeSurface extract_manifold_surface(grid::AdaptiveGrid& grid, int32_t& label, VolumeChoice choice,
+                                        ExtractStats& stats, ProgressSink* progress,
+                                        const std::vector<Coord>& anchors = {}, int min_exclude_level = -1,
+                                        bool whole_rounds = false);
 
 }  // namespace vdbwrap::extract

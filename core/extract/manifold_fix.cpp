@@ -54,7 +54,9 @@ Coord lattice_point(const DenseNumbers& lattice, uint64_t number) {
   return Coord(int32_t(q[0]), int32_t(q[1]), int32_t(q[2]));
 }
 
-Coord octant_cell(const Coord& p, int o) { return Coord(p.x() - 1 + (o & 1), p.y() - 1 + ((o >> 1) & 1), p.z() - 1 + ((o >> 2) & 1)); }
+Coord octant_cell(const Coord& p, int o) {
+  return Coord(p.x() - 1 + (o & 1), p.y() - 1 + ((o >> 1) & 1), p.z() - 1 + ((o >> 2) & 1));
+}
 
 // Are the chosen finest cells around lattice point p, or the others, not face-connected?
 bool nonmanifold_at(AdaptiveGrid::Reader& reader, int L, const Coord& p, int32_t label, VolumeChoice choice) {
@@ -67,7 +69,8 @@ bool nonmanifold_at(AdaptiveGrid::Reader& reader, int L, const Coord& p, int32_t
 
 // Is lattice point p a corner of one of the quads faces_and_nodes makes (a surface node)?
 // The quads with a corner at p lie on the faces of the volume's leaves around p.
-bool is_surface_node(AdaptiveGrid::Reader& reader, const AdaptiveGrid& g, const Coord& p, int32_t label, VolumeChoice choice) {
+bool is_surface_node(AdaptiveGrid::Reader& reader, const AdaptiveGrid& g, const Coord& p, int32_t label,
+                     VolumeChoice choice) {
   const int L = g.max_level();
   LeafRef around[8];
   int count = 0;
@@ -91,7 +94,8 @@ bool is_surface_node(AdaptiveGrid::Reader& reader, const AdaptiveGrid& g, const 
         reader.for_each_face_neighbour(level, c, axis, dir, [&](const LeafRef& n) {
           if (corner || in_volume(n, label, choice)) return;
           int32_t u0 = C[b], v0 = C[cc], size = s;
-          if (!n.outside_box && n.level > level) size = g.fine_units(n.level), u0 = n.ijk[b] * size, v0 = n.ijk[cc] * size;
+          if (!n.outside_box && n.level > level)
+            size = g.fine_units(n.level), u0 = n.ijk[b] * size, v0 = n.ijk[cc] * size;
           corner = (p[b] == u0 || p[b] == u0 + size) && (p[cc] == v0 || p[cc] == v0 + size);
         });
         if (corner) return true;
@@ -101,7 +105,8 @@ bool is_surface_node(AdaptiveGrid::Reader& reader, const AdaptiveGrid& g, const 
 }
 
 // The finest lattice points on the closed boundary of cell (level, c), by number.
-void boundary_points(const AdaptiveGrid& g, const DenseNumbers& lattice, int level, const Coord& c, std::vector<uint64_t>& out) {
+void boundary_points(const AdaptiveGrid& g, const DenseNumbers& lattice, int level, const Coord& c,
+                     std::vector<uint64_t>& out) {
   const int64_t s = g.fine_units(level);
   const int64_t x0 = int64_t(c.x()) * s, y0 = int64_t(c.y()) * s, z0 = int64_t(c.z()) * s;
   for (int64_t x = x0; x <= x0 + s; ++x)
@@ -128,8 +133,9 @@ struct RoundRepairs {
 // A key orders the nodes: `point_of(key)` is its lattice point, and `key_of(point, number)`
 // the key of a lattice point and its number (UINT64_MAX: not a surface node).
 template <typename PointOf, typename KeyOf>
-RoundRepairs repair_nodes(AdaptiveGrid& g, int32_t label, VolumeChoice choice, int min_exclude_level, const DenseNumbers& lattice,
-                          const std::vector<uint64_t>& flagged, PointOf&& point_of, KeyOf&& key_of) {
+RoundRepairs repair_nodes(AdaptiveGrid& g, int32_t label, VolumeChoice choice, int min_exclude_level,
+                          const DenseNumbers& lattice, const std::vector<uint64_t>& flagged, PointOf&& point_of,
+                          KeyOf&& key_of) {
   const int L = g.max_level();
   const int exclude_from = min_exclude_level < 0 ? L : std::min(min_exclude_level, L);
   struct LeafKey {
@@ -148,7 +154,7 @@ RoundRepairs repair_nodes(AdaptiveGrid& g, int32_t label, VolumeChoice choice, i
   };
   RoundRepairs out;
   std::priority_queue<uint64_t, std::vector<uint64_t>, std::greater<uint64_t>> pending;  // later nodes at taken cells
-  uint64_t current = 0;  // the key of the node visited
+  uint64_t current = 0;                                                                  // the key of the node visited
   std::vector<uint64_t> around;
   auto queue_nodes_at = [&](const LeafKey& key) {  // the surface nodes on the cell's boundary after `current`
     around.clear();
@@ -238,7 +244,8 @@ RoundRepairs repair_nodes(AdaptiveGrid& g, int32_t label, VolumeChoice choice, i
     if (to_exclude.count(k)) continue;
     g.set(k.level, k.c, grid::kRefined);
     for (int j = 0; j < 8; ++j)
-      g.set(k.level + 1, Coord(2 * k.c.x() + (j & 1), 2 * k.c.y() + ((j >> 1) & 1), 2 * k.c.z() + ((j >> 2) & 1)), label);
+      g.set(k.level + 1, Coord(2 * k.c.x() + (j & 1), 2 * k.c.y() + ((j >> 1) & 1), 2 * k.c.z() + ((j >> 2) & 1)),
+            label);
     out.split.emplace_back(k.level, k.c);
   }
   out.changed = to_exclude.size() + to_split.size();
@@ -247,8 +254,8 @@ RoundRepairs repair_nodes(AdaptiveGrid& g, int32_t label, VolumeChoice choice, i
 
 // A round over the whole surface: every node that is not manifold as the grid stands, in the
 // order of `surf.nodes` (their first appearance among the faces), or by lattice point.
-RoundRepairs repair_surface(AdaptiveGrid& g, int32_t label, VolumeChoice choice, const LatticeSurface& surf, int min_exclude_level,
-                            bool in_lattice_order) {
+RoundRepairs repair_surface(AdaptiveGrid& g, int32_t label, VolumeChoice choice, const LatticeSurface& surf,
+                            int min_exclude_level, bool in_lattice_order) {
   const int L = g.max_level();
   const DenseNumbers lattice = lattice_numbers(g);
   const size_t n = surf.nodes.size();
@@ -277,7 +284,8 @@ RoundRepairs repair_surface(AdaptiveGrid& g, int32_t label, VolumeChoice choice,
     for (const auto& [number, i] : by_point)
       if (flag[i]) flagged.push_back(number);
     return repair_nodes(
-        g, label, choice, min_exclude_level, lattice, flagged, [&](uint64_t number) { return lattice_point(lattice, number); },
+        g, label, choice, min_exclude_level, lattice, flagged,
+        [&](uint64_t number) { return lattice_point(lattice, number); },
         [&](const Coord&, uint64_t number) { return index_of(number) == UINT64_MAX ? UINT64_MAX : number; });
   }
   for (size_t i = 0; i < n; ++i)
@@ -291,7 +299,8 @@ RoundRepairs repair_surface(AdaptiveGrid& g, int32_t label, VolumeChoice choice,
 // on the cells it changed, can be surface nodes that are not manifold now (a node's octants
 // change only with the cells holding them, and a new node is the corner of a new quad, on a
 // changed cell). It visits what a round over the whole surface would, by lattice point.
-RoundRepairs repair_near(AdaptiveGrid& g, int32_t label, VolumeChoice choice, std::vector<uint64_t>&& candidates, int min_exclude_level) {
+RoundRepairs repair_near(AdaptiveGrid& g, int32_t label, VolumeChoice choice, std::vector<uint64_t>&& candidates,
+                         int min_exclude_level) {
   const int L = g.max_level();
   const DenseNumbers lattice = lattice_numbers(g);
   tbb::parallel_sort(candidates.begin(), candidates.end());
@@ -309,22 +318,26 @@ RoundRepairs repair_near(AdaptiveGrid& g, int32_t label, VolumeChoice choice, st
     if (flag[i]) flagged.push_back(candidates[i]);
   AdaptiveGrid::Reader reader(g);
   return repair_nodes(
-      g, label, choice, min_exclude_level, lattice, flagged, [&](uint64_t number) { return lattice_point(lattice, number); },
-      [&](const Coord& p, uint64_t number) { return is_surface_node(reader, g, p, label, choice) ? number : UINT64_MAX; });
+      g, label, choice, min_exclude_level, lattice, flagged,
+      [&](uint64_t number) { return lattice_point(lattice, number); },
+      [&](const Coord& p, uint64_t number) {
+        return is_surface_node(reader, g, p, label, choice) ? number : UINT64_MAX;
+      });
 }
 
 }  // namespace
 
 LatticeSurface extract_manifold_surface(AdaptiveGrid& g, int32_t& label, VolumeChoice choice, ExtractStats& stats,
-                                        ProgressSink* progress, const std::vector<Coord>& anchors, int min_exclude_level,
-                                        bool whole_rounds) {
+                                        ProgressSink* progress, const std::vector<Coord>& anchors,
+                                        int min_exclude_level, bool whole_rounds) {
   for (int k = 0; k < 3; ++k)
     if (int64_t(g.dims0()[k]) * g.fine_units(0) >= (1 << 21) - 2)
       throw Error(ErrorKind::InvalidArgument, "too many cells across the model at this base size and number of levels");
   // New labels must not collide with the labels of other free components.
   int32_t next_label = label + 1;
   auto higher = [&](int32_t v) { next_label = std::max(next_label, v + 1); };
-  g.for_each_level0_block([&](const AdaptiveGrid::Block&, int32_t v) { higher(v); }, [&](const Coord&, int32_t v) { higher(v); });
+  g.for_each_level0_block([&](const AdaptiveGrid::Block&, int32_t v) { higher(v); },
+                          [&](const Coord&, int32_t v) { higher(v); });
   g.for_each_fine_leaf([&](int, const Coord&, int32_t v) { higher(v); });
   const int max_rounds = 64;
   // A round over the whole surface first; later rounds look only near the cells the last one
@@ -337,13 +350,15 @@ LatticeSurface extract_manifold_surface(AdaptiveGrid& g, int32_t& label, VolumeC
       if (progress->cancelled()) throw Error(ErrorKind::Cancelled, "cancelled");
       progress->progress("extract", std::min(0.9, round * 0.1),
                          whole ? "extracting cell faces, round " + std::to_string(round + 1)
-                               : "repairing " + std::to_string(candidates.size()) + " lattice points, round " + std::to_string(round + 1));
+                               : "repairing " + std::to_string(candidates.size()) + " lattice points, round " +
+                                     std::to_string(round + 1));
     }
     std::optional<FacesAndNodes> faces;
     RoundRepairs rep;
     if (whole || whole_rounds) {
       faces = faces_and_nodes(g, label, choice);
-      if (faces->quads.empty()) throw Error(ErrorKind::WrapFailed, "the chosen volume has no boundary: nothing to wrap");
+      if (faces->quads.empty())
+        throw Error(ErrorKind::WrapFailed, "the chosen volume has no boundary: nothing to wrap");
       rep = repair_surface(g, label, choice, faces->surf, min_exclude_level, !whole);
     } else {
       rep = repair_near(g, label, choice, std::move(candidates), min_exclude_level);
@@ -352,9 +367,12 @@ LatticeSurface extract_manifold_surface(AdaptiveGrid& g, int32_t& label, VolumeC
     stats.rounds = round + 1;
     if (rep.changed == 0) {
       LatticeSurface surf = faces ? with_polygons(std::move(*faces)) : extract_faces(g, label, choice);
-      if (surf.polygons.empty()) throw Error(ErrorKind::WrapFailed, "the chosen volume has no boundary: nothing to wrap");
+      if (surf.polygons.empty())
+        throw Error(ErrorKind::WrapFailed, "the chosen volume has no boundary: nothing to wrap");
       if (progress)
-        progress->progress("extract", 1.0, std::to_string(surf.polygons.size()) + " faces, " + std::to_string(surf.nodes.size()) + " nodes");
+        progress->progress(
+            "extract", 1.0,
+            std::to_string(surf.polygons.size()) + " faces, " + std::to_string(surf.nodes.size()) + " nodes");
       return surf;
     }
     stats.excluded_cells += rep.changed;
@@ -377,7 +395,8 @@ LatticeSurface extract_manifold_surface(AdaptiveGrid& g, int32_t& label, VolumeC
     whole = true;
     // Taking cells out may cut small pockets off the volume: keep its main piece only.
     const int32_t old = label;
-    grid::Components comps = grid::label_components(g, [old](int32_t v) { return v == old; }, next_label, progress);
+    grid::Components comps = grid::label_components(
+        g, [old](int32_t v) { return v == old; }, next_label, progress);
     next_label += int32_t(comps.count());
     int32_t keep = -1;
     double best = -1;
@@ -409,7 +428,8 @@ LatticeSurface extract_manifold_surface(AdaptiveGrid& g, int32_t& label, VolumeC
     }
     label = kept.front();
   }
-  throw Error(ErrorKind::WrapFailed, "could not make the voxel surface manifold after " + std::to_string(max_rounds) + " rounds");
+  throw Error(ErrorKind::WrapFailed,
+              "could not make the voxel surface manifold after " + std::to_string(max_rounds) + " rounds");
 }
 
 }  // namespace vdbwrap::extract

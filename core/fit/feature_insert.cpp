@@ -103,7 +103,12 @@ Box3 box_of(const Corners& c) {
 class Inserter {
  public:
   Inserter(FittedSurface& s, const mesh::SurfaceIndex& input, const Vec3& origin, const FeatureInsertParams& prm)
-      : s_(s), p_(s.points), t_(s.triangles), input_(input), origin_(origin), prm_(prm),
+      : s_(s),
+        p_(s.points),
+        t_(s.triangles),
+        input_(input),
+        origin_(origin),
+        prm_(prm),
         buckets_(s.points, s.triangles, std::max(prm.max_move, 1e-300)),
         inv_change_cell_(1.0 / std::max(prm.max_move, 1e-300)) {
     vf_ = to_vectors(vertex_triangle_lists(p_.size(), t_));
@@ -117,7 +122,8 @@ class Inserter {
       for (size_t i = 0; i + 1 < c.points.size(); ++i) {
         const Vec3 &a = c.points[i], &b = c.points[i + 1];
         const size_t k = std::max<size_t>(1, size_t(std::ceil(norm(b - a) / prm_.spacing)));
-        for (size_t j = (i == 0 ? 0 : 1); j <= k; ++j) samples_.push_back({world(lerp(a, b, double(j) / double(k))), ci});
+        for (size_t j = (i == 0 ? 0 : 1); j <= k; ++j)
+          samples_.push_back({world(lerp(a, b, double(j) / double(k))), ci});
       }
     }
     seen_.assign(samples_.size(), 0);
@@ -168,7 +174,8 @@ class Inserter {
           }
           c->steps.clear();
         }
-        active.erase(std::remove_if(active.begin(), active.end(), [](const Cell* c) { return c->next == c->end; }), active.end());
+        active.erase(std::remove_if(active.begin(), active.end(), [](const Cell* c) { return c->next == c->end; }),
+                     active.end());
       }
     }
     link_along_curves(visited, result);
@@ -245,7 +252,8 @@ class Inserter {
     order_.resize(entries.size());
     for (uint32_t k = 0; k < entries.size(); ++k) {
       order_[k] = entries[k].sample;
-      if (k == 0 || !(entries[k].cell == entries[k - 1].cell)) classes_[size_t(entries[k].parity)].push_back({k, k, k, {}, Box3{}});
+      if (k == 0 || !(entries[k].cell == entries[k - 1].cell))
+        classes_[size_t(entries[k].parity)].push_back({k, k, k, {}, Box3{}});
       classes_[size_t(entries[k].parity)].back().end = k + 1;
     }
   }
@@ -269,7 +277,9 @@ class Inserter {
   // Has any triangle within reach of q changed after time `since`? Reach: the farthest a
   // change can be from q and still alter the checks of a change at q (the move radius plus
   // two edges: the changed triangles and the ones they are tested against).
-  bool changed_near(const Vec3& q, uint64_t since) const { return changed_in(box_around(q, 1.5 * prm_.max_move), since); }
+  bool changed_near(const Vec3& q, uint64_t since) const {
+    return changed_in(box_around(q, 1.5 * prm_.max_move), since);
+  }
   // Change times are kept per cell of the move radius's size (for every cell a changed
   // triangle's box covers): a handful of look-ups, where scanning the triangles in reach was
   // most of the stage on large inputs. A cell may report a change a little beyond the box: a
@@ -297,7 +307,9 @@ class Inserter {
   template <typename Faces>
   void mark_changed(const Faces& faces, const std::vector<Box3>& before = {}) {
     ++clock_;
-    auto mark = [&](const Box3& box) { for_change_cells(box.lo, box.hi, [&](const GridKey& k) { changed_cells_[k] = clock_; }); };
+    auto mark = [&](const Box3& box) {
+      for_change_cells(box.lo, box.hi, [&](const GridKey& k) { changed_cells_[k] = clock_; });
+    };
     for (uint32_t f : faces) mark(box_of(corners(t_[f])));
     for (const Box3& box : before) mark(box);
   }
@@ -315,7 +327,8 @@ class Inserter {
     scratch.edges.clear();
     buckets_.for_each_in_box(box_around(q, r), scratch.seen, scratch.stamp, [&](uint32_t f) {
       const Tri& tri = t_[f];
-      if (nearest_wanted) nearest = std::min(nearest, norm(closest_on_triangle(q, p_[tri[0]], p_[tri[1]], p_[tri[2]]) - q));
+      if (nearest_wanted)
+        nearest = std::min(nearest, norm(closest_on_triangle(q, p_[tri[0]], p_[tri[1]], p_[tri[2]]) - q));
       for (int e = 0; e < 3; ++e) {
         const uint32_t u = tri[e], w = tri[(e + 1) % 3];
         if (u > w) continue;  // each interior edge once (from the face that has it as u < w)
@@ -443,7 +456,9 @@ class Inserter {
       changes.push_back({t_[f], at(t_[f]), area_vector(old[0], old[1], old[2])});
     }
     if (crowded(v, to, read, scratch)) return false;
-    if (!acceptable(changes, [&](uint32_t g) { return std::find(faces.begin(), faces.end(), g) != faces.end(); }, read, scratch))
+    if (!acceptable(
+            changes, [&](uint32_t g) { return std::find(faces.begin(), faces.end(), g) != faces.end(); }, read,
+            scratch))
       return false;
     return near_enough(changes, [&] {
       double d = 0;
@@ -455,7 +470,7 @@ class Inserter {
   // Would splitting edge ab at a new node placed at `at` keep the wrap valid and near the input?
   bool can_split(uint32_t a, uint32_t b, const Vec3& at, Box3& read, Scratch& scratch) const {
     const std::vector<uint32_t> faces = faces_on(a, b);
-    if (faces.size() != 2) return false;  // a border or non-manifold edge: leave it
+    if (faces.size() != 2) return false;     // a border or non-manifold edge: leave it
     const uint32_t m = uint32_t(p_.size());  // the index the new node would get
     auto place = [&](const Tri& tri) {
       Corners c;
@@ -472,8 +487,11 @@ class Inserter {
       changes.push_back({h1, place(h1), was});
     }
     if (crowded(m, at, read, scratch)) return false;
-    if (!acceptable(changes, [&](uint32_t g) { return g == faces[0] || g == faces[1]; }, read, scratch)) return false;
-    return near_enough(changes, [&] { return std::max(deviation(corners(t_[faces[0]])), deviation(corners(t_[faces[1]]))); });
+    if (!acceptable(
+            changes, [&](uint32_t g) { return g == faces[0] || g == faces[1]; }, read, scratch))
+      return false;
+    return near_enough(changes,
+                       [&] { return std::max(deviation(corners(t_[faces[0]])), deviation(corners(t_[faces[1]]))); });
   }
 
   // How far a triangle strays from the input: the largest distance of its centroid and edge
@@ -496,7 +514,8 @@ class Inserter {
                       [&] { return input_.in_view(from - origin_, q - origin_, prm_.offset); });
   }
   bool touches_input(const Corners& c) const {
-    return remembered(touches_known_, corners_key(c), [&] { return input_.touches(c[0] - origin_, c[1] - origin_, c[2] - origin_); });
+    return remembered(touches_known_, corners_key(c),
+                      [&] { return input_.touches(c[0] - origin_, c[1] - origin_, c[2] - origin_); });
   }
   // New triangles within max_deviation of the input (cheap sphere tests), or else no farther
   // than the ones they replace (exact distances, only then: they cost most of the stage).
@@ -615,8 +634,9 @@ class Inserter {
 
 }  // namespace
 
-FeatureInsertStats insert_feature_nodes(FittedSurface& surface, const std::vector<FeatureCurve>& curves, const mesh::SurfaceIndex& input,
-                                        const Vec3& origin, const FeatureInsertParams& params) {
+FeatureInsertStats insert_feature_nodes(FittedSurface& surface, const std::vector<FeatureCurve>& curves,
+                                        const mesh::SurfaceIndex& input, const Vec3& origin,
+                                        const FeatureInsertParams& params) {
   FeatureInsertStats stats;
   if (curves.empty() || surface.triangles.empty() || !(params.spacing > 0)) return stats;
   Inserter inserter(surface, input, origin, params);

@@ -232,11 +232,10 @@ std::vector<FeatureCurve> build_feature_curves(const prep::PreparedInput& in, do
   return curves;
 }
 
-std::vector<std::pair<uint32_t, uint32_t>> snap_to_curves(const std::vector<FeatureCurve>& curves, const WrapGraph& graph,
-                                                          const std::vector<Vec3>& lattice, std::vector<Vec3>& target,
-                                                          std::vector<uint8_t>& snapped, double radius, double piece_length,
-                                                          double offset, SnapStats& stats,
-                                                          const std::function<bool(const Vec3&, const Vec3&)>& reachable) {
+std::vector<std::pair<uint32_t, uint32_t>> snap_to_curves(
+    const std::vector<FeatureCurve>& curves, const WrapGraph& graph, const std::vector<Vec3>& lattice,
+    std::vector<Vec3>& target, std::vector<uint8_t>& snapped, double radius, double piece_length, double offset,
+    SnapStats& stats, const std::function<bool(const Vec3&, const Vec3&)>& reachable) {
   const size_t n = target.size();
   // Nodes bucketed by target position, cells of the radius.
   const double inv = 1.0 / radius;
@@ -249,7 +248,8 @@ std::vector<std::pair<uint32_t, uint32_t>> snap_to_curves(const std::vector<Feat
   tbb::concurrent_unordered_map<Key, uint32_t, KeyHash> corner_node;
   const double ctol = radius * 1e-6;
   auto corner_key = [&](const Vec3& p) {
-    return Key{int64_t(std::llround(p[0] / ctol)), int64_t(std::llround(p[1] / ctol)), int64_t(std::llround(p[2] / ctol))};
+    return Key{int64_t(std::llround(p[0] / ctol)), int64_t(std::llround(p[1] / ctol)),
+               int64_t(std::llround(p[2] / ctol))};
   };
   std::vector<uint8_t> is_corner_node(n, 0);
 
@@ -343,7 +343,8 @@ std::vector<std::pair<uint32_t, uint32_t>> snap_to_curves(const std::vector<Feat
     return out;
   };
 
-  auto find_path = [&](const Piece& piece, double r, uint32_t carry, const std::vector<Candidate>* before, TraceScratch& sc) {
+  auto find_path = [&](const Piece& piece, double r, uint32_t carry, const std::vector<Candidate>* before,
+                       TraceScratch& sc) {
     std::vector<double>& dist = sc.dist;
     std::vector<double>& curve_distance = sc.curve_distance;
     std::vector<uint32_t>& prev = sc.prev;
@@ -374,7 +375,8 @@ std::vector<std::pair<uint32_t, uint32_t>> snap_to_curves(const std::vector<Feat
           stack.pop_back();
           members.push_back(u);
           for (uint32_t w : graph.neighbours[u])
-            if (curve_distance[w] >= 0 && component_of[w] == UINT32_MAX && passable(w)) component_of[w] = ncomp, stack.push_back(w);
+            if (curve_distance[w] >= 0 && component_of[w] == UINT32_MAX && passable(w))
+              component_of[w] = ncomp, stack.push_back(w);
         }
         ++ncomp;
       }
@@ -418,7 +420,9 @@ std::vector<std::pair<uint32_t, uint32_t>> snap_to_curves(const std::vector<Feat
       }
       return best;
     };
-    const uint32_t s = (carry != UINT32_MAX && curve_distance[carry] >= 0) ? carry : nearest_to(piece.points.front(), piece.start_corner);
+    const uint32_t s = (carry != UINT32_MAX && curve_distance[carry] >= 0)
+                           ? carry
+                           : nearest_to(piece.points.front(), piece.start_corner);
     const uint32_t e = nearest_to(piece.points.back(), piece.end_corner);
     if (s != UINT32_MAX && e != UINT32_MAX && s != e) {
       // Shortest path hugging the piece; other curves' snapped nodes are not crossed.
@@ -474,7 +478,8 @@ std::vector<std::pair<uint32_t, uint32_t>> snap_to_curves(const std::vector<Feat
   for (size_t c = 0; c < curves.size(); ++c) first_piece[c + 1] = first_piece[c] + pieces_of[c].size();
 
   // One curve, piece by piece: its stats and traced edges.
-  auto trace_curve = [&](size_t ci, TraceScratch& sc, SnapStats& stats, std::vector<std::pair<uint32_t, uint32_t>>& traced) {
+  auto trace_curve = [&](size_t ci, TraceScratch& sc, SnapStats& stats,
+                         std::vector<std::pair<uint32_t, uint32_t>>& traced) {
     const FeatureCurve& c = curves[ci];
     stats.corners += (c.start_corner ? 1 : 0) + (c.end_corner ? 1 : 0);
     const std::vector<Piece>& pieces = pieces_of[ci];
@@ -526,8 +531,10 @@ std::vector<std::pair<uint32_t, uint32_t>> snap_to_curves(const std::vector<Feat
       }
       for (size_t k = 0; k + 1 < path.size(); ++k)
         if (on[k] && on[k + 1]) traced.emplace_back(path[k], path[k + 1]);
-      if (piece.start_corner && on[0]) corner_node[corner_key(piece.points.front())] = path.front(), mark_corner_node(path.front());
-      if (piece.end_corner && on.back()) corner_node[corner_key(piece.points.back())] = path.back(), mark_corner_node(path.back());
+      if (piece.start_corner && on[0])
+        corner_node[corner_key(piece.points.front())] = path.front(), mark_corner_node(path.front());
+      if (piece.end_corner && on.back())
+        corner_node[corner_key(piece.points.back())] = path.back(), mark_corner_node(path.back());
       ++stats.pieces_traced;
       ++captured;
       carry = path.back();
@@ -578,7 +585,8 @@ std::vector<std::pair<uint32_t, uint32_t>> snap_to_curves(const std::vector<Feat
   }
   std::vector<SnapStats> curve_stats(curves.size());
   std::vector<std::vector<std::pair<uint32_t, uint32_t>>> curve_traced(curves.size());
-  run_in_dependency_order(successors, waits, [&](uint32_t ci) { trace_curve(ci, scratch_of.local(), curve_stats[ci], curve_traced[ci]); });
+  run_in_dependency_order(successors, waits,
+                          [&](uint32_t ci) { trace_curve(ci, scratch_of.local(), curve_stats[ci], curve_traced[ci]); });
   std::vector<std::pair<uint32_t, uint32_t>> traced;
   stats.curves = curves.size();
   for (size_t ci = 0; ci < curves.size(); ++ci) {

@@ -26,7 +26,7 @@ struct FeatureCurve {
 std::vector<FeatureCurve> build_feature_curves(const prep::PreparedInput& input, double corner_angle_deg);
 
 struct SnapStats {
-  size_t curves = 0, corners = 0;             // found
+  size_t curves = 0, corners = 0;  // found
   size_t curves_captured = 0, corners_captured = 0;
   size_t pieces = 0, pieces_traced = 0, nodes_snapped = 0;
 };
@@ -44,10 +44,9 @@ struct WrapGraph {
 // A node moves only where reachable(from, to) says the straight way there is clear of the
 // input: curves inside the input (intersection lines of parts buried in the assembly)
 // never pull the wrap in.
-std::vector<std::pair<uint32_t, uint32_t>> snap_to_curves(const std::vector<FeatureCurve>& curves, const WrapGraph& graph,
-                                                          const std::vector<Vec3>& lattice, std::vector<Vec3>& target,
-                                                          std::vector<uint8_t>& snapped, double radius, double piece_length,
-                                                          double offset, SnapStats& stats,
-                                                          const std::function<bool(const Vec3&, const Vec3&)>& reachable);
+std::vector<std::pair<uint32_t, uint32_t>> snap_to_curves(
+    const std::vector<FeatureCurve>& curves, const WrapGraph& graph, const std::vector<Vec3>& lattice,
+    std::vector<Vec3>& target, std::vector<uint8_t>& snapped, double radius, double piece_length, double offset,
+    SnapStats& stats, const std::function<bool(const Vec3&, const Vec3&)>& reachable);
 
 }  // namespace vdbwrap::fit

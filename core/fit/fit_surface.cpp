@@ -20,8 +20,8 @@
 namespace vdbwrap::fit {
 using grid::Coord;
 
-std::vector<uint32_t> invalid_triangles(const std::vector<Vec3>& points, const std::vector<Tri>& triangles, double min_area2,
-                                        bool* complete) {
+std::vector<uint32_t> invalid_triangles(const std::vector<Vec3>& points, const std::vector<Tri>& triangles,
+                                        double min_area2, bool* complete) {
   std::vector<uint32_t> bad;
   for (uint32_t t = 0; t < triangles.size(); ++t) {
     const Tri& tri = triangles[t];
@@ -71,8 +71,8 @@ class NodeProximity {
 // Diagonal (0-2 or 1-3) of a quad whose midpoint lies nearer the input: the split that
 // deviates least from it. A split that makes a degenerate triangle is never chosen.
 // `foot`: each node's nearest input triangle when it was projected (a hint: see closest()).
-bool split_along_02(const std::array<uint32_t, 4>& q, const std::vector<Vec3>& p, const mesh::SurfaceIndex& input, double min_area2,
-                    const std::vector<uint32_t>& foot) {
+bool split_along_02(const std::array<uint32_t, 4>& q, const std::vector<Vec3>& p, const mesh::SurfaceIndex& input,
+                    double min_area2, const std::vector<uint32_t>& foot) {
   auto area2 = [&](uint32_t a, uint32_t b, uint32_t c) { return norm(area_vector(p[a], p[b], p[c])); };
   double min02 = std::min(area2(q[0], q[1], q[2]), area2(q[0], q[2], q[3]));
   double min13 = std::min(area2(q[0], q[1], q[3]), area2(q[1], q[2], q[3]));
@@ -91,9 +91,9 @@ bool split_along_02(const std::array<uint32_t, 4>& q, const std::vector<Vec3>& p
 
 }  // namespace
 
-FittedSurface fit_to_input(const extract::LatticeSurface& surf, const grid::AdaptiveGrid& g, const mesh::SurfaceIndex& input,
-                           const std::vector<FeatureCurve>& curves, const Vec3& origin, const FitParams& params,
-                           ProgressSink* progress) {
+FittedSurface fit_to_input(const extract::LatticeSurface& surf, const grid::AdaptiveGrid& g,
+                           const mesh::SurfaceIndex& input, const std::vector<FeatureCurve>& curves, const Vec3& origin,
+                           const FitParams& params, ProgressSink* progress) {
   const double hf = g.fine_size();
   // Nodes: lattice nodes, then one centre node per polygon with more than four nodes.
   std::vector<Vec3> lattice;
@@ -210,7 +210,8 @@ FittedSurface fit_to_input(const extract::LatticeSurface& surf, const grid::Adap
       if (!c.boundary || !sheets.two_sided_along(c.points)) one_sided_curves.push_back(c);
   const std::vector<FeatureCurve>& traced_curves = params.two_sided_sheets ? one_sided_curves : curves;
   if (!traced_curves.empty()) {
-    if (progress) progress->progress("project", 0.05, "snapping to " + std::to_string(curves.size()) + " feature curves");
+    if (progress)
+      progress->progress("project", 0.05, "snapping to " + std::to_string(curves.size()) + " feature curves");
     // The chosen volume next to a concave crease is often coarse (only cells the input
     // passes through are refined), so nodes along it can be a base cell apart: the trace
     // radius covers that.
@@ -222,7 +223,8 @@ FittedSurface fit_to_input(const extract::LatticeSurface& surf, const grid::Adap
       for (const auto& q : quads) emit(q[0], q[2]), emit(q[2], q[0]), emit(q[1], q[3]), emit(q[3], q[1]);
     });
     auto reachable = [&](const Vec3& from, const Vec3& to) { return input.in_view(from, to, offset); };
-    for (const auto& [a, b] : snap_to_curves(traced_curves, graph, lattice, target, snapped, trace_radius, std::max(8.0 * hf, 2.0 * trace_radius), offset, out.snap, reachable))
+    for (const auto& [a, b] : snap_to_curves(traced_curves, graph, lattice, target, snapped, trace_radius,
+                                             std::max(8.0 * hf, 2.0 * trace_radius), offset, out.snap, reachable))
       traced.insert({std::min(a, b), std::max(a, b)});
     // Relax the unsnapped nodes within three rings of a snapped one.
     std::vector<uint8_t> relax(n, 0);
@@ -352,7 +354,8 @@ FittedSurface fit_to_input(const extract::LatticeSurface& surf, const grid::Adap
 
   // A node flagged again and again sits in a tangle that halving resolves only slowly:
   // after a few strikes it goes straight back to its lattice position.
-  const int max_rounds = params.validity_rounds, give_up_halving = std::min(200, max_rounds / 2), strikes_to_lattice = 4;
+  const int max_rounds = params.validity_rounds, give_up_halving = std::min(200, max_rounds / 2),
+            strikes_to_lattice = 4;
   std::vector<uint8_t> flag(n, 0);
   full_check(flag);
   int round = 0;
@@ -369,8 +372,9 @@ FittedSurface fit_to_input(const extract::LatticeSurface& surf, const grid::Adap
       break;
     }
     if (progress && (round < 10 || round % 10 == 0))
-      progress->progress("project", std::min(0.95, 0.1 + round * 0.01),
-                         "untangling round " + std::to_string(round + 1) + ": " + std::to_string(flagged) + " nodes to pull back");
+      progress->progress(
+          "project", std::min(0.95, 0.1 + round * 0.01),
+          "untangling round " + std::to_string(round + 1) + ": " + std::to_string(flagged) + " nodes to pull back");
     std::vector<uint32_t> moved;
     for (uint32_t i = 0; i < n; ++i) {
       if (!flag[i]) continue;

@@ -15,27 +15,26 @@
 namespace vdbwrap::fit {
 
 struct FittedSurface {
-  std::vector<Vec3> points;   // output (world) frame: local + origin
+  std::vector<Vec3> points;  // output (world) frame: local + origin
   std::vector<Tri> triangles;
-  std::vector<uint8_t> snapped;  // per point: on a feature curve (kept by later stages)
-  std::vector<double> cell_size; // per point: edge of the smallest lattice face at it (the local target size)
+  std::vector<uint8_t> snapped;   // per point: on a feature curve (kept by later stages)
+  std::vector<double> cell_size;  // per point: edge of the smallest lattice face at it (the local target size)
   std::vector<std::pair<uint32_t, uint32_t>> feature_edges;  // edges traced along the feature curves
-  size_t held_back = 0;       // nodes that could not go all the way to the input
+  size_t held_back = 0;                                      // nodes that could not go all the way to the input
   std::vector<Vec3> held_back_points;  // where they are (output frame): flagged on the wrap's triangles
   size_t validity_rounds = 0;
-  TwoSidedStats two_sided;    // where the wrap's sheets project onto the input from both sides
+  TwoSidedStats two_sided;  // where the wrap's sheets project onto the input from both sides
   // False when the validity loop ran out of rounds: intersecting or degenerate triangles are
   // left for the post-processing (remeshing, then intersection repair) to fix.
   bool valid = true;
   SnapStats snap;
 };
 
-
 // Offending triangles: those whose doubled area is below min_area2 when there are any (the
 // intersection test, the costly part, then waits for the next call: `complete` is false);
 // else self-intersecting ones and degenerate faces (`complete` true).
-std::vector<uint32_t> invalid_triangles(const std::vector<Vec3>& points, const std::vector<Tri>& triangles, double min_area2,
-                                        bool* complete = nullptr);
+std::vector<uint32_t> invalid_triangles(const std::vector<Vec3>& points, const std::vector<Tri>& triangles,
+                                        double min_area2, bool* complete = nullptr);
 
 // What the projection needs of the wrap's parameters (WrapParams has the same fields).
 struct FitParams {
@@ -48,8 +47,8 @@ struct FitParams {
 
 // `origin` turns the local frame of the grid and the index into output coordinates.
 // `curves`: feature curves to snap to (empty: no snapping).
-FittedSurface fit_to_input(const extract::LatticeSurface& surface, const grid::AdaptiveGrid& grid, const mesh::SurfaceIndex& input,
-                           const std::vector<FeatureCurve>& curves, const Vec3& origin, const FitParams& params,
-                           ProgressSink* progress);
+FittedSurface fit_to_input(const extract::LatticeSurface& surface, const grid::AdaptiveGrid& grid,
+                           const mesh::SurfaceIndex& input, const std::vector<FeatureCurve>& curves, const Vec3& origin,
+                           const FitParams& params, ProgressSink* progress);
 
 }  // namespace vdbwrap::fit

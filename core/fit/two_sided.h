@@ -39,7 +39,13 @@ struct TwoSidedStats {
 class TwoSidedSheets {
  public:
   TwoSidedSheets(size_t nodes, const TwoSidedParams& p)
-      : p_(p), foot_(nodes), away_(nodes), triangle_(nodes, UINT32_MAX), side_(nodes, 0), raises_(nodes, 0), two_(nodes, 0) {}
+      : p_(p),
+        foot_(nodes),
+        away_(nodes),
+        triangle_(nodes, UINT32_MAX),
+        side_(nodes, 0),
+        raises_(nodes, 0),
+        two_(nodes, 0) {}
 
   // Node i projects to `foot` on input triangle `triangle` (unit normal `normal`), its target
   // `away` (unit, on the side of its lattice position) times the offset off it. Per node: thread safe.
@@ -113,7 +119,8 @@ class TwoSidedSheets {
 
 // The share of the input's area wrapped from both sides: triangles that nodes of both sides
 // project to, or whose centroid has feet of both sides within a cell.
-inline double two_sided_area_fraction(const TwoSidedStats& s, const std::vector<Vec3>& points, const std::vector<Tri>& triangles) {
+inline double two_sided_area_fraction(const TwoSidedStats& s, const std::vector<Vec3>& points,
+                                      const std::vector<Tri>& triangles) {
   double both = 0, all = 0;
   for (size_t t = 0; t < triangles.size(); ++t) {
     const Vec3 &a = points[triangles[t][0]], &b = points[triangles[t][1]], &c = points[triangles[t][2]];

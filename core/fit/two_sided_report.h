@@ -38,13 +38,15 @@ inline std::string describe_two_sided(const TwoSidedStats& s, const prep::Prepar
   }
   if (r.area_fraction < kTwoSidedWorthSaying) return {};
   char text[400];
-  int n = std::snprintf(text, sizeof text, "%.1f %% of the input's area is wrapped from both sides", 100 * r.area_fraction);
+  int n =
+      std::snprintf(text, sizeof text, "%.1f %% of the input's area is wrapped from both sides", 100 * r.area_fraction);
   if (!widest) {
     std::snprintf(text + n, sizeof text - n, " (the input has no openings: its pieces overlap or are inside out)");
     return text;
   }
   const Vec3& c = r.largest_opening_centre;
-  n += std::snprintf(text + n, sizeof text - n, "; the volume gets in through %zu opening%s, the widest %.4g wide at (%.6g, %.6g, %.6g)",
+  n += std::snprintf(text + n, sizeof text - n,
+                     "; the volume gets in through %zu opening%s, the widest %.4g wide at (%.6g, %.6g, %.6g)",
                      openings.size(), openings.size() == 1 ? "" : "s", widest->width, c[0], c[1], c[2]);
   if (r.suggested_gap_closure > 0) {
     // Rounded up to two significant digits, in percent of the diagonal.

@@ -86,7 +86,8 @@ Components label_components(AdaptiveGrid& g, const std::function<bool(int32_t)>&
     take(level, seed);
     for (size_t q = 0; q < queue.size(); ++q) {
       const Piece cur = queue[q];
-      if (progress && (++visited & 0xFFFFF) == 0 && progress->cancelled()) throw Error(ErrorKind::Cancelled, "cancelled");
+      if (progress && (++visited & 0xFFFFF) == 0 && progress->cancelled())
+        throw Error(ErrorKind::Cancelled, "cancelled");
       for (int axis = 0; axis < 3; ++axis)
         for (int dir = -1; dir <= 1; dir += 2)
           if (cur.block)
@@ -133,14 +134,15 @@ int32_t largest_enclosed_label(const Components& comps) {
 
 int32_t choose_volume(AdaptiveGrid& g, VolumeChoice choice, Components& comps, ProgressSink* progress) {
   if (progress) progress->progress("flood fill", 0.0, "labelling free cells");
-  comps = label_components(g, [](int32_t v) { return v == kFree; }, 1, progress);
-  if (progress)
-    progress->progress("flood fill", 1.0, std::to_string(comps.count()) + " free volume(s) found");
+  comps = label_components(
+      g, [](int32_t v) { return v == kFree; }, 1, progress);
+  if (progress) progress->progress("flood fill", 1.0, std::to_string(comps.count()) + " free volume(s) found");
   if (choice == VolumeChoice::Outside) return 1;
   const int32_t best = largest_enclosed_label(comps);
   if (best < 0)
-    throw Error(ErrorKind::WrapFailed,
-                "the input encloses no volume at this base size: nothing to wrap from inside (try a smaller --base-size)");
+    throw Error(
+        ErrorKind::WrapFailed,
+        "the input encloses no volume at this base size: nothing to wrap from inside (try a smaller --base-size)");
   return best;
 }
 

@@ -12,9 +12,9 @@ namespace vdbwrap::grid {
 
 struct Components {
   int32_t first_label = 1;
-  std::vector<double> volume;           // per component (index label - first_label), in fine cells
-  std::vector<uint8_t> touches_outside; // reaches the padded box's boundary
-  std::vector<uint8_t> holds_level0;    // has a level-0 (base size) cell
+  std::vector<double> volume;            // per component (index label - first_label), in fine cells
+  std::vector<uint8_t> touches_outside;  // reaches the padded box's boundary
+  std::vector<uint8_t> holds_level0;     // has a level-0 (base size) cell
   size_t count() const { return volume.size(); }
 };
 

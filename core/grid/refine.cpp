@@ -163,8 +163,8 @@ std::vector<CellTris> level0_cells(const prep::PreparedInput& in, const Vec3& or
       for_cells_overlapping(a, b, c, block_origin, kBlock * h0, block_half, blo, bhi, add);
     }
   });
-  const FillVector<Entry> entries =
-      radix_sort_joined(chunk_entries, [](const Entry& e) { return e.block; }, bits_for(blocks.count));
+  const FillVector<Entry> entries = radix_sort_joined(
+      chunk_entries, [](const Entry& e) { return e.block; }, bits_for(blocks.count));
   std::vector<size_t> runs;  // where each block's triangles start
   for (size_t i = 0; i < entries.size(); ++i)
     if (i == 0 || entries[i].block != entries[i - 1].block) runs.push_back(i);
@@ -203,7 +203,8 @@ std::vector<CellTris> level0_cells(const prep::PreparedInput& in, const Vec3& or
       std::vector<CellTris>& cells = block_cells[k];
       for (int c = 0; c < kCells; ++c) {
         if (s.count[c] == 0) continue;
-        cells.push_back({Coord(first[0] + c / (kBlock * kBlock), first[1] + c / kBlock % kBlock, first[2] + c % kBlock), {}});
+        cells.push_back(
+            {Coord(first[0] + c / (kBlock * kBlock), first[1] + c / kBlock % kBlock, first[2] + c % kBlock), {}});
         cells.back().tris.reserve(s.count[c]);
       }
       s.cell_index.resize(kCells);
@@ -239,7 +240,8 @@ RefineResult build_refined_grid(const prep::PreparedInput& in, const RefineCrite
   Coord dims0;
   for (int k = 0; k < 3; ++k) {
     double cells = std::ceil((box.hi[k] - box.lo[k]) / base) + 2 * padding;
-    if (cells > 1 << 20) throw Error(ErrorKind::InvalidArgument, "base size too small for the model: over a million cells per axis");
+    if (cells > 1 << 20)
+      throw Error(ErrorKind::InvalidArgument, "base size too small for the model: over a million cells per axis");
     dims0[k] = int(cells);
   }
   RefineResult result;
@@ -258,7 +260,8 @@ RefineResult build_refined_grid(const prep::PreparedInput& in, const RefineCrite
   const double cos_spread = std::cos(params.normal_spread_deg * M_PI / 180.0);
   // Proximity: the 26 points of the cell's boundary on its 3x3x3 lattice, each within the bound
   // of one of the cell's triangles (the nearest input may be nearer: this refines more, never less).
-  const double far2 = params.far_point_cells > 0 ? (params.far_point_cells * base) * (params.far_point_cells * base) : 0.0;
+  const double far2 =
+      params.far_point_cells > 0 ? (params.far_point_cells * base) * (params.far_point_cells * base) : 0.0;
   auto has_far_point = [&](const std::vector<uint32_t>& cell_tris, const Vec3& lo, double h) {
     for (int a = 0; a < 3; ++a)
       for (int b = 0; b < 3; ++b)
@@ -281,8 +284,9 @@ RefineResult build_refined_grid(const prep::PreparedInput& in, const RefineCrite
   for (int level = 0; level <= levels; ++level) {
     if (progress) {
       if (progress->cancelled()) throw Error(ErrorKind::Cancelled, "cancelled");
-      progress->progress("refine", double(level) / (levels + 1),
-                         "level " + std::to_string(level) + ": " + std::to_string(level_cells.size()) + " cells on the input");
+      progress->progress(
+          "refine", double(level) / (levels + 1),
+          "level " + std::to_string(level) + ": " + std::to_string(level_cells.size()) + " cells on the input");
     }
     result.touched_per_level.push_back(level_cells.size());
     const double h = g.cell_size(level);
@@ -316,7 +320,8 @@ RefineResult build_refined_grid(const prep::PreparedInput& in, const RefineCrite
         // The user's sizes first (control volumes, parts), then the criteria (down to
         // --levels), then contact prevention (down to its floor).
         bool split = level < region_level(sc, lo, h);
-        for (size_t k = 0; !split && k < ct.tris.size(); ++k) split = level < sc.part_level[size_t(in.mesh.part_of(ct.tris[k]))];
+        for (size_t k = 0; !split && k < ct.tris.size(); ++k)
+          split = level < sc.part_level[size_t(in.mesh.part_of(ct.tris[k]))];
         const bool criteria = level < sc.criteria_levels;
         if (!split && criteria) split = int(ct.tris.size()) > params.max_triangles;
         if (!split && criteria) {

@@ -21,9 +21,9 @@ struct RefineResult {
 
 // The spec's criteria for refining a cell the input passes through.
 struct RefineCriteria {
-  int max_triangles = 64;          // more triangles than this in a cell: refine
-  double normal_spread_deg = 20;   // normals spread more than this: refine
-  bool at_features = true;         // sharp, boundary or intersection edges: refine
+  int max_triangles = 64;         // more triangles than this in a cell: refine
+  double normal_spread_deg = 20;  // normals spread more than this: refine
+  bool at_features = true;        // sharp, boundary or intersection edges: refine
   // A point of the cell's boundary (corners, edge midpoints, face centres) farther than this many
   // base cells from the cell's own triangles: refine (0: off). The wrap's held-back nodes sit on
   // such points, up to a cell diagonal off the input.

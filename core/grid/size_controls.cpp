@@ -46,7 +46,8 @@ double control_volume_distance(const ControlVolume& cv, const Vec3& p) {
       }
       return outside2 > 0 ? std::sqrt(outside2) : inside;
     }
-    case ControlVolume::Shape::Sphere: return norm(p - cv.a) - cv.radius;
+    case ControlVolume::Shape::Sphere:
+      return norm(p - cv.a) - cv.radius;
     case ControlVolume::Shape::Cylinder:
     case ControlVolume::Shape::Cone: {
       // A solid of revolution: the distance is the one in the meridian half-plane (x along
@@ -115,8 +116,9 @@ SizeControls make_size_controls(const SizeRequests& params, const Mesh& mesh, co
     if (it == part_index.end()) {
       std::string known;
       for (size_t i = 0; i < mesh.part_names.size() && i < 20; ++i) known += (i ? ", " : "") + mesh.part_names[i];
-      throw Error(ErrorKind::InvalidArgument, context + ": the input has no part named '" + name + "'" +
-                                                  (known.empty() ? " (it has no named parts)" : " (parts: " + known + ")"));
+      throw Error(ErrorKind::InvalidArgument,
+                  context + ": the input has no part named '" + name + "'" +
+                      (known.empty() ? " (it has no named parts)" : " (parts: " + known + ")"));
     }
     return it->second;
   };

@@ -49,7 +49,9 @@ class FreeLeaves {
 
   const std::vector<float>& clearance(const DistanceToInput& distance, ProgressSink* progress) {
     if (!clearance_.empty() || leaves_.empty()) return clearance_;
-    if (progress) progress->progress("flood fill", 0.2, "measuring the clearance of " + std::to_string(leaves_.size()) + " free cells");
+    if (progress)
+      progress->progress("flood fill", 0.2,
+                         "measuring the clearance of " + std::to_string(leaves_.size()) + " free cells");
     clearance_.resize(leaves_.size());
     tbb::parallel_for(tbb::blocked_range<size_t>(0, leaves_.size(), 1024), [&](const tbb::blocked_range<size_t>& r) {
       if (progress && progress->cancelled()) return;
@@ -65,8 +67,8 @@ class FreeLeaves {
     Coord c;
   };
   static uint64_t key(int level, const Coord& c) {
-    return (uint64_t(level) << 60) | (uint64_t(uint32_t(c.x()) & 0xFFFFF) << 40) | (uint64_t(uint32_t(c.y()) & 0xFFFFF) << 20) |
-           uint64_t(uint32_t(c.z()) & 0xFFFFF);
+    return (uint64_t(level) << 60) | (uint64_t(uint32_t(c.x()) & 0xFFFFF) << 40) |
+           (uint64_t(uint32_t(c.y()) & 0xFFFFF) << 20) | uint64_t(uint32_t(c.z()) & 0xFFFFF);
   }
   const AdaptiveGrid& g_;
   std::vector<Leaf> leaves_;
@@ -164,7 +166,8 @@ VolumeSelection select_volume(AdaptiveGrid& g, const VolumeRequest& req, const D
     for (uint32_t i = 0; i < leaves().size(); ++i)
       if (clearance[i] < r && !leaves().on_box_boundary(i)) g.set(leaves().level(i), leaves().coord(i), kNarrow);
   }
-  Components comps = label_components(g, [](int32_t v) { return v == kFree; }, 1, progress);
+  Components comps = label_components(
+      g, [](int32_t v) { return v == kFree; }, 1, progress);
 
   const double hf = g.fine_size();
   const double fine_volume = hf * hf * hf;
@@ -180,8 +183,8 @@ VolumeSelection select_volume(AdaptiveGrid& g, const VolumeRequest& req, const D
   sel.report.encloses_volume = sel.report.enclosed_volumes > 0;
   if (progress)
     progress->progress("flood fill", 0.5,
-                       std::to_string(comps.count()) + " free volume(s), " + std::to_string(sel.report.enclosed_volumes) +
-                           " enclosed by the input");
+                       std::to_string(comps.count()) + " free volume(s), " +
+                           std::to_string(sel.report.enclosed_volumes) + " enclosed by the input");
 
   std::vector<int32_t> chosen;
   const std::string gap_note = r > 0 ? " with this gap closure" : "";
@@ -190,9 +193,10 @@ VolumeSelection select_volume(AdaptiveGrid& g, const VolumeRequest& req, const D
   } else if (req.choice == VolumeChoice::Inside) {
     const int32_t best = largest_enclosed_label(comps);
     if (best < 0)
-      throw Error(ErrorKind::WrapFailed, "the input encloses no volume at this base size" + gap_note +
-                                             ": nothing to wrap from inside (try a smaller --base-size, a --gap-closure "
-                                             "larger than the holes, or a seed point to find the leak)");
+      throw Error(ErrorKind::WrapFailed,
+                  "the input encloses no volume at this base size" + gap_note +
+                      ": nothing to wrap from inside (try a smaller --base-size, a --gap-closure "
+                      "larger than the holes, or a seed point to find the leak)");
     chosen.push_back(best);
   } else {
     if (req.seeds.empty()) throw Error(ErrorKind::InvalidArgument, "volume by seed points, but no seed point given");
@@ -206,7 +210,8 @@ VolumeSelection select_volume(AdaptiveGrid& g, const VolumeRequest& req, const D
       bool inside_box = true;
       for (int k = 0; k < 3; ++k) inside_box = inside_box && q[k] >= 0 && q[k] < double(g.dims0()[k]) * fu0;
       if (!inside_box)
-        throw Error(ErrorKind::InvalidArgument, name + " lies outside the model's bounding box: use --volume outside to wrap the outside");
+        throw Error(ErrorKind::InvalidArgument,
+                    name + " lies outside the model's bounding box: use --volume outside to wrap the outside");
       sel.anchors.push_back(cell);
       LeafRef leaf = g.leaf_at(L, cell);
       if (leaf.value == kTouched)
@@ -214,7 +219,8 @@ VolumeSelection select_volume(AdaptiveGrid& g, const VolumeRequest& req, const D
                                                     std::to_string(g.cell_size(leaf.level)) +
                                                     " wide): move it farther into the volume");
       if (leaf.value == kNarrow)
-        throw Error(ErrorKind::InvalidArgument, name + " lies closer to the input than half the gap closure: move it farther into the volume");
+        throw Error(ErrorKind::InvalidArgument,
+                    name + " lies closer to the input than half the gap closure: move it farther into the volume");
       if (leaf.value < 1) throw Error(ErrorKind::Internal, name + ": its cell is not a free cell");
       seed_leaf.push_back(leaf);
       const int32_t label = leaf.value;
@@ -258,7 +264,8 @@ VolumeSelection select_volume(AdaptiveGrid& g, const VolumeRequest& req, const D
     };
     std::vector<Front> queue;
     for (uint32_t i = 0; i < leaves.size(); ++i)
-      if (g.get(leaves.level(i), leaves.coord(i)) == sel.label) queue.push_back({i, leaves.centre(i), leaves.half_diagonal(i)});
+      if (g.get(leaves.level(i), leaves.coord(i)) == sel.label)
+        queue.push_back({i, leaves.centre(i), leaves.half_diagonal(i)});
     for (size_t q = 0; q < queue.size(); ++q) {
       const Front f = queue[q];
       for (int axis = 0; axis < 3; ++axis)
@@ -267,7 +274,9 @@ VolumeSelection select_volume(AdaptiveGrid& g, const VolumeRequest& req, const D
             if (n.outside_box || n.value != kNarrow) return;
             int64_t j = leaves.find(n.level, n.ijk);
             if (j < 0) return;
-            if (norm(leaves.centre(uint32_t(j)) - f.source) > r + f.source_half_diagonal + leaves.half_diagonal(uint32_t(j))) return;
+            if (norm(leaves.centre(uint32_t(j)) - f.source) >
+                r + f.source_half_diagonal + leaves.half_diagonal(uint32_t(j)))
+              return;
             g.set(n.level, n.ijk, sel.label);
             queue.push_back({uint32_t(j), f.source, f.source_half_diagonal});
           });

@@ -17,16 +17,16 @@ namespace vdbwrap::grid {
 
 struct VolumeRequest {
   VolumeChoice choice = VolumeChoice::Outside;
-  std::vector<Vec3> seeds;  // local frame
-  double gap_closure = 0;   // model units; 0: off
+  std::vector<Vec3> seeds;     // local frame
+  double gap_closure = 0;      // model units; 0: off
   Vec3 world_offset{0, 0, 0};  // local -> world, for messages
 };
 
 struct VolumeSelection {
-  int32_t label = 0;             // cells of the chosen volume carry this value
-  VolumeReport report;           // gap_closure and closedness filled in
-  LeakReport leak;               // local frame
-  std::vector<Coord> anchors;    // finest-level cells of the seed points: the pieces to keep
+  int32_t label = 0;           // cells of the chosen volume carry this value
+  VolumeReport report;         // gap_closure and closedness filled in
+  LeakReport leak;             // local frame
+  std::vector<Coord> anchors;  // finest-level cells of the seed points: the pieces to keep
 };
 
 // Distance from a point (local frame) to the input.

@@ -16,15 +16,18 @@ void write_deviation(const std::string& path, const Mesh& surface, const Deviati
   if (!is_deviation_path(path))
     throw Error(ErrorKind::InvalidArgument, path + ": a deviation field is written as .vtp or .ply");
   if (field.distance.size() != surface.points.size())
-    throw Error(ErrorKind::InvalidArgument, path + ": the deviation field has " + std::to_string(field.distance.size()) +
-                                                " distances for " + std::to_string(surface.points.size()) + " vertices");
+    throw Error(ErrorKind::InvalidArgument, path + ": the deviation field has " +
+                                                std::to_string(field.distance.size()) + " distances for " +
+                                                std::to_string(surface.points.size()) + " vertices");
   if (!field.triangle_flags.empty() && field.triangle_flags.size() != surface.triangles.size())
-    throw Error(ErrorKind::InvalidArgument, path + ": the deviation field has " + std::to_string(field.triangle_flags.size()) +
-                                                " defect flags for " + std::to_string(surface.triangles.size()) + " triangles");
+    throw Error(ErrorKind::InvalidArgument, path + ": the deviation field has " +
+                                                std::to_string(field.triangle_flags.size()) + " defect flags for " +
+                                                std::to_string(surface.triangles.size()) + " triangles");
   using Type = io::DataArray::Type;
   io::MeshData data;
   data.point_data.push_back({"distance", Type::Float64, field.distance});
-  io::DataArray& percent = data.point_data.emplace_back(io::DataArray{"distance_percent_of_diagonal", Type::Float64, {}});
+  io::DataArray& percent =
+      data.point_data.emplace_back(io::DataArray{"distance_percent_of_diagonal", Type::Float64, {}});
   percent.values.reserve(field.distance.size());
   for (double d : field.distance) percent.values.push_back(field.percent_of_diagonal(d));
   // PLY writes the parts itself as the face property "part" when the surface has part names.

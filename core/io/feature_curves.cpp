@@ -78,7 +78,8 @@ std::string feature_curves_to_text(const std::vector<std::vector<Vec3>>& curves,
   for (const Vec3& p : g.points) append(out, "(%.17g %.17g %.17g)\n", p[0], p[1], p[2]);
   out += ")\n\n" + std::to_string(edges) + "\n(\n";
   for (const auto& c : g.curves)
-    for (size_t i = 0; i + 1 < c.size(); ++i) out += '(' + std::to_string(c[i]) + ' ' + std::to_string(c[i + 1]) + ")\n";
+    for (size_t i = 0; i + 1 < c.size(); ++i)
+      out += '(' + std::to_string(c[i]) + ' ' + std::to_string(c[i + 1]) + ")\n";
   out += ")\n";
   return out;
 }

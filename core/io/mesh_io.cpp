@@ -87,8 +87,7 @@ Format sniff_format(std::string_view bytes) {
   // Before the NUL test: appended raw VTP data is binary.
   if (detail::looks_like_vtp(bytes)) return Format::Vtp;
   std::string_view head = detail::trim(bytes.substr(0, 4096));
-  if (head.substr(0, 3) == "ply" && head.size() > 3 && (head[3] == '\n' || head[3] == '\r'))
-    return Format::Ply;
+  if (head.substr(0, 3) == "ply" && head.size() > 3 && (head[3] == '\n' || head[3] == '\r')) return Format::Ply;
   if (detail::is_binary_stl_size(bytes) || detail::looks_like_ascii_stl(bytes)) return Format::Stl;
   if (std::memchr(head.data(), '\0', head.size())) return Format::Unknown;
   detail::LineReader lines(head);
@@ -101,8 +100,7 @@ Format sniff_format(std::string_view bytes) {
     static const char* const kNastranCards[] = {"BEGIN", "GRID", "CTRIA", "CQUAD", "PSHELL"};
     for (const char* k : kNastranCards)
       if (detail::iequals(first.substr(0, std::strlen(k)), k)) return Format::Nastran;
-    static const char* const kObjKeywords[] = {"v", "vt",     "vn",     "f", "o",
-                                               "g", "mtllib", "usemtl", "s"};
+    static const char* const kObjKeywords[] = {"v", "vt", "vn", "f", "o", "g", "mtllib", "usemtl", "s"};
     for (const char* k : kObjKeywords)
       if (first == k) return Format::Obj;
     return Format::Unknown;
@@ -116,21 +114,28 @@ void reject_binary_text(std::string_view bytes, const std::string& name, const c
   const void* nul = std::memchr(bytes.data(), '\0', bytes.size());
   if (nul)
     fail(name, std::string("contains binary data (a NUL byte at offset ") +
-                   std::to_string(static_cast<const char*>(nul) - bytes.data()) + "), not " +
-                   format + " text");
+                   std::to_string(static_cast<const char*>(nul) - bytes.data()) + "), not " + format + " text");
 }
 
 Mesh parse(std::string_view bytes, Format format, const std::string& name, MeshData* data) {
   switch (format) {
-    case Format::Stl: return detail::read_stl(bytes, name);
-    case Format::Obj: reject_binary_text(bytes, name, "OBJ"); return detail::read_obj(bytes, name);
-    case Format::Off: reject_binary_text(bytes, name, "OFF"); return detail::read_off(bytes, name);
-    case Format::Ply: return detail::read_ply(bytes, name, data);
-    case Format::Vtp: return detail::read_vtp(bytes, name, data);
+    case Format::Stl:
+      return detail::read_stl(bytes, name);
+    case Format::Obj:
+      reject_binary_text(bytes, name, "OBJ");
+      return detail::read_obj(bytes, name);
+    case Format::Off:
+      reject_binary_text(bytes, name, "OFF");
+      return detail::read_off(bytes, name);
+    case Format::Ply:
+      return detail::read_ply(bytes, name, data);
+    case Format::Vtp:
+      return detail::read_vtp(bytes, name, data);
     case Format::Nastran:
       reject_binary_text(bytes, name, "Nastran");
       return detail::read_nastran(bytes, name);
-    case Format::Unknown: break;
+    case Format::Unknown:
+      break;
   }
   fail(name, "unknown format (expected STL, OBJ, OFF, PLY or VTP)");
 }
@@ -174,20 +179,17 @@ FileBytes read_whole_file(const std::string& path) {
 // Writers index points and parts blindly; an inconsistent mesh must not make them read
 // out of bounds.
 void check_writable(const Mesh& mesh, Format format, const std::string& path) {
-  auto bad = [&](const std::string& what) {
-    throw Error(ErrorKind::OutputFailed, path + ": cannot write: " + what);
-  };
+  auto bad = [&](const std::string& what) { throw Error(ErrorKind::OutputFailed, path + ": cannot write: " + what); };
   if (mesh.triangles.size() > UINT32_MAX) bad("more than 2^32-1 triangles");
-  if (format == Format::Nastran &&
-      std::max(mesh.points.size(), mesh.triangles.size()) > detail::kNastranMaxId)
+  if (format == Format::Nastran && std::max(mesh.points.size(), mesh.triangles.size()) > detail::kNastranMaxId)
     bad("Nastran IDs have 8 digits: at most " + std::to_string(detail::kNastranMaxId) +
         " grid points and triangles (the mesh has " + std::to_string(mesh.points.size()) + " and " +
         std::to_string(mesh.triangles.size()) + ")");
   for (size_t t = 0; t < mesh.triangles.size(); ++t)
     for (uint32_t v : mesh.triangles[t])
       if (v >= mesh.points.size())
-        bad("triangle " + std::to_string(t) + " refers to vertex " + std::to_string(v) +
-            " but the mesh has " + std::to_string(mesh.points.size()));
+        bad("triangle " + std::to_string(t) + " refers to vertex " + std::to_string(v) + " but the mesh has " +
+            std::to_string(mesh.points.size()));
   if (!mesh.triangle_part.empty() && mesh.triangle_part.size() != mesh.triangles.size())
     bad("triangle_part has " + std::to_string(mesh.triangle_part.size()) + " entries for " +
         std::to_string(mesh.triangles.size()) + " triangles");
@@ -201,9 +203,7 @@ void check_writable(const Mesh& mesh, Format format, const std::string& path) {
 // Arrays beside the mesh: one value per point or triangle, names the formats can carry and
 // the writers do not use themselves.
 void check_data(const Mesh& mesh, Format format, const MeshData& data, const std::string& path) {
-  auto bad = [&](const std::string& what) {
-    throw Error(ErrorKind::OutputFailed, path + ": cannot write: " + what);
-  };
+  auto bad = [&](const std::string& what) { throw Error(ErrorKind::OutputFailed, path + ": cannot write: " + what); };
   if (format != Format::Vtp && format != Format::Ply) bad("only .vtp and .ply carry point and cell data");
   const bool ply = format == Format::Ply;
   auto check = [&](const std::vector<DataArray>& arrays, size_t count, const char* what,
@@ -221,7 +221,8 @@ void check_data(const Mesh& mesh, Format format, const MeshData& data, const std
             std::to_string(count) + (std::string(what) == "point" ? " points" : " triangles"));
     }
   };
-  check(data.point_data, mesh.points.size(), "point", ply ? std::vector<std::string>{"x", "y", "z"} : std::vector<std::string>{});
+  check(data.point_data, mesh.points.size(), "point",
+        ply ? std::vector<std::string>{"x", "y", "z"} : std::vector<std::string>{});
   std::vector<std::string> cell_names;
   if (ply) cell_names = {"vertex_indices", "vertex_index"};
   if (ply && !mesh.part_names.empty()) cell_names.push_back("part");
@@ -231,22 +232,32 @@ void check_data(const Mesh& mesh, Format format, const MeshData& data, const std
 
 bool stl_is_ascii(const Mesh& mesh, StlEncoding encoding) {
   switch (encoding) {
-    case StlEncoding::Ascii: return true;
-    case StlEncoding::Binary: return false;
-    case StlEncoding::Auto: break;
+    case StlEncoding::Ascii:
+      return true;
+    case StlEncoding::Binary:
+      return false;
+    case StlEncoding::Auto:
+      break;
   }
   return mesh.part_names.size() > 1;
 }
 
 void write_to(const Mesh& mesh, Format format, const WriteOptions& options, detail::Sink& out) {
   switch (format) {
-    case Format::Stl: return detail::write_stl(mesh, out, stl_is_ascii(mesh, options.stl));
-    case Format::Obj: return detail::write_obj(mesh, out);
-    case Format::Off: return detail::write_off(mesh, out);
-    case Format::Ply: return detail::write_ply(mesh, out, options.data);
-    case Format::Vtp: return detail::write_vtp(mesh, out, options.data);
-    case Format::Nastran: return detail::write_nastran(mesh, out);
-    case Format::Unknown: break;
+    case Format::Stl:
+      return detail::write_stl(mesh, out, stl_is_ascii(mesh, options.stl));
+    case Format::Obj:
+      return detail::write_obj(mesh, out);
+    case Format::Off:
+      return detail::write_off(mesh, out);
+    case Format::Ply:
+      return detail::write_ply(mesh, out, options.data);
+    case Format::Vtp:
+      return detail::write_vtp(mesh, out, options.data);
+    case Format::Nastran:
+      return detail::write_nastran(mesh, out);
+    case Format::Unknown:
+      break;
   }
 }
 
@@ -255,8 +266,7 @@ void write_to(const Mesh& mesh, Format format, const WriteOptions& options, deta
 Format format_from_extension(std::string_view path) {
   size_t dot = path.rfind('.');
   size_t slash = path.find_last_of("/\\");
-  if (dot == std::string_view::npos || (slash != std::string_view::npos && dot < slash))
-    return Format::Unknown;
+  if (dot == std::string_view::npos || (slash != std::string_view::npos && dot < slash)) return Format::Unknown;
   std::string_view ext = path.substr(dot + 1);
   if (detail::iequals(ext, "stl")) return Format::Stl;
   if (detail::iequals(ext, "obj")) return Format::Obj;
@@ -325,12 +335,9 @@ std::string write_mesh_to_bytes(const Mesh& mesh, Format format, const WriteOpti
 }
 
 void write_mesh(const Mesh& mesh, const std::string& path, const WriteOptions& options) {
-  auto failed = [&](const std::string& what) {
-    throw Error(ErrorKind::OutputFailed, path + ": " + what);
-  };
+  auto failed = [&](const std::string& what) { throw Error(ErrorKind::OutputFailed, path + ": " + what); };
   Format format = format_from_extension(path);
-  if (format == Format::Unknown)
-    failed("unknown output format (use .stl, .obj, .off, .ply, .vtp, .nas or .bdf)");
+  if (format == Format::Unknown) failed("unknown output format (use .stl, .obj, .off, .ply, .vtp, .nas or .bdf)");
   check_writable(mesh, format, path);
   if (options.data) check_data(mesh, format, *options.data, path);
 
@@ -361,8 +368,7 @@ void write_mesh(const Mesh& mesh, const std::string& path, const WriteOptions& o
   if (std::rename(tmp.c_str(), path.c_str()) != 0) {
     saved_errno = errno;
     std::remove(tmp.c_str());
-    failed(std::string("cannot rename ") + tmp + " to the target (" + std::strerror(saved_errno) +
-           ")");
+    failed(std::string("cannot rename ") + tmp + " to the target (" + std::strerror(saved_errno) + ")");
   }
 }
 

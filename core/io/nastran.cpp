@@ -243,7 +243,8 @@ class NastranReader {
       e.id = integer(field(0), "element ID", 0);
       e.pid = integer(field(1), "PID", e.id);  // a blank PID is the element ID
       for (size_t k = 0; k < corners; ++k) {
-        if (field(2 + k).empty()) error(card_line_, n + " " + std::to_string(e.id) + " lacks grid " + std::to_string(k + 1));
+        if (field(2 + k).empty())
+          error(card_line_, n + " " + std::to_string(e.id) + " lacks grid " + std::to_string(k + 1));
         e.grids.push_back(integer(field(2 + k), "grid ID", 0));
       }
       e.line = card_line_;
@@ -264,7 +265,9 @@ class NastranReader {
     } else if (rest.substr(0, 18) == "ANSA_NAME_COMMENT;") {  // "$ANSA_NAME_COMMENT;3;PSHELL;name;..."
       rest = rest.substr(18);
       size_t a = rest.find(';'), b = a == std::string_view::npos ? a : rest.find(';', a + 1);
-      if (b == std::string_view::npos || rest.substr(a + 1, b - a - 1) != "PSHELL" || !parse_int(rest.substr(0, a), pid)) return;
+      if (b == std::string_view::npos || rest.substr(a + 1, b - a - 1) != "PSHELL" ||
+          !parse_int(rest.substr(0, a), pid))
+        return;
       part = rest.substr(b + 1);
       part = part.substr(0, part.find(';'));
     } else if (rest.substr(0, 12) == "HMNAME PROP ") {  // "$HMNAME PROP       3"name""

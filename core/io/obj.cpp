@@ -66,8 +66,7 @@ class ObjReader {
       if (!parse_double(token, p[c])) error("malformed number " + quoted(token));
     }
     // Extra values (w, or r g b vertex colours) are ignored.
-    if (!is_finite(p))
-      error("vertex " + std::to_string(mesh_.points.size() + 1) + " has a non-finite coordinate");
+    if (!is_finite(p)) error("vertex " + std::to_string(mesh_.points.size() + 1) + " has a non-finite coordinate");
     check_point_count(name_, mesh_.points.size() + 1);
     mesh_.points.push_back(p);
   }
@@ -89,8 +88,7 @@ class ObjReader {
     polygon_.clear();
     std::string_view token;
     while (tokens.next(token)) polygon_.push_back(face_index(token));
-    if (polygon_.size() < 3)
-      error("face has " + std::to_string(polygon_.size()) + " vertices (needs at least 3)");
+    if (polygon_.size() < 3) error("face has " + std::to_string(polygon_.size()) + " vertices (needs at least 3)");
     if (part_ < 0) part_ = part_for(group_);
     triangulator_.run(mesh_.points, polygon_.data(), polygon_.size(), mesh_.triangles);
     mesh_.triangle_part.resize(mesh_.triangles.size(), part_);
@@ -122,9 +120,7 @@ class ObjReader {
 
 }  // namespace
 
-Mesh read_obj(std::string_view bytes, const std::string& name) {
-  return ObjReader(bytes, name).read();
-}
+Mesh read_obj(std::string_view bytes, const std::string& name) { return ObjReader(bytes, name).read(); }
 
 // Vertices, then faces grouped by part: each part's "g" line appears once (readers that make
 // one group per "g" line would otherwise split a part), in part order; within a part the

@@ -9,8 +9,7 @@ namespace {
 
 class OffReader {
  public:
-  OffReader(std::string_view text, const std::string& name)
-      : lines_(text), name_(name), total_(text.size()) {}
+  OffReader(std::string_view text, const std::string& name) : lines_(text), name_(name), total_(text.size()) {}
 
   Mesh read() {
     read_header();
@@ -18,8 +17,8 @@ class OffReader {
     read_faces();
     std::string_view extra;
     if (next_data_line(extra))
-      error("more data than the " + std::to_string(vertex_count_) + " vertices and " +
-            std::to_string(face_count_) + " faces the counts line declares");
+      error("more data than the " + std::to_string(vertex_count_) + " vertices and " + std::to_string(face_count_) +
+            " faces the counts line declares");
     return std::move(mesh_);
   }
 
@@ -57,8 +56,7 @@ class OffReader {
     std::string_view prefix = token.substr(0, token.size() - 3);
     if (prefix.find_first_of("4n") != std::string_view::npos)
       error(quoted(token) + " (4D or n-dimensional OFF) is not supported");
-    if (prefix.find_first_not_of("STCN") != std::string_view::npos)
-      error("unknown OFF keyword " + quoted(token));
+    if (prefix.find_first_not_of("STCN") != std::string_view::npos) error("unknown OFF keyword " + quoted(token));
     return true;
   }
 
@@ -66,8 +64,7 @@ class OffReader {
     Tokens tokens(line);
     std::string_view v, f;
     int64_t nv = -1, nf = -1;
-    if (!tokens.next(v) || !tokens.next(f) || !parse_int(v, nv) || !parse_int(f, nf) || nv < 0 ||
-        nf < 0)
+    if (!tokens.next(v) || !tokens.next(f) || !parse_int(v, nv) || !parse_int(f, nf) || nv < 0 || nf < 0)
       error("expected the counts line \"VERTICES FACES [EDGES]\", got " + quoted(line));
     vertex_count_ = uint64_t(nv);
     face_count_ = uint64_t(nf);
@@ -98,8 +95,8 @@ class OffReader {
     std::string_view line;
     for (uint64_t i = 0; i < face_count_; ++i) {
       if (!next_data_line(line))
-        fail(name_, "truncated: the counts line declares " + std::to_string(face_count_) +
-                        " faces, the file has " + std::to_string(i));
+        fail(name_, "truncated: the counts line declares " + std::to_string(face_count_) + " faces, the file has " +
+                        std::to_string(i));
       read_face(i, line);
     }
   }
@@ -109,8 +106,7 @@ class OffReader {
     Tokens tokens(line);
     std::string_view token;
     int64_t n = 0;
-    if (!tokens.next(token) || !parse_int(token, n))
-      error(label + ": malformed vertex count " + quoted(token));
+    if (!tokens.next(token) || !parse_int(token, n)) error(label + ": malformed vertex count " + quoted(token));
     if (n < 3) error(label + " has " + std::to_string(n) + " vertices (needs at least 3)");
     polygon_.clear();
     for (int64_t k = 0; k < n; ++k) {
@@ -119,8 +115,8 @@ class OffReader {
         error(label + " lists " + std::to_string(k) + " of its " + std::to_string(n) + " vertices");
       if (!parse_int(token, index)) error(label + ": malformed vertex index " + quoted(token));
       if (index < 0 || uint64_t(index) >= vertex_count_)
-        error(label + " has out-of-range vertex index " + std::to_string(index) +
-              " (the file has " + std::to_string(vertex_count_) + " vertices)");
+        error(label + " has out-of-range vertex index " + std::to_string(index) + " (the file has " +
+              std::to_string(vertex_count_) + " vertices)");
       polygon_.push_back(uint32_t(index));
     }
     triangulator_.run(mesh_.points, polygon_.data(), polygon_.size(), mesh_.triangles);
@@ -137,9 +133,7 @@ class OffReader {
 
 }  // namespace
 
-Mesh read_off(std::string_view bytes, const std::string& name) {
-  return OffReader(bytes, name).read();
-}
+Mesh read_off(std::string_view bytes, const std::string& name) { return OffReader(bytes, name).read(); }
 
 void write_off(const Mesh& mesh, Sink& out) {
   out.put("OFF\n");

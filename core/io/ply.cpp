@@ -41,11 +41,10 @@ struct Header {
 
 bool parse_type(std::string_view s, Type& t) {
   static const std::pair<const char*, Type> kNames[] = {
-      {"char", Type::I8},    {"int8", Type::I8},    {"uchar", Type::U8},   {"uint8", Type::U8},
-      {"short", Type::I16},  {"int16", Type::I16},  {"ushort", Type::U16}, {"uint16", Type::U16},
-      {"int", Type::I32},    {"int32", Type::I32},  {"uint", Type::U32},   {"uint32", Type::U32},
-      {"int64", Type::I64},  {"uint64", Type::U64}, {"float", Type::F32},  {"float32", Type::F32},
-      {"double", Type::F64}, {"float64", Type::F64}};
+      {"char", Type::I8},     {"int8", Type::I8},    {"uchar", Type::U8},   {"uint8", Type::U8},   {"short", Type::I16},
+      {"int16", Type::I16},   {"ushort", Type::U16}, {"uint16", Type::U16}, {"int", Type::I32},    {"int32", Type::I32},
+      {"uint", Type::U32},    {"uint32", Type::U32}, {"int64", Type::I64},  {"uint64", Type::U64}, {"float", Type::F32},
+      {"float32", Type::F32}, {"double", Type::F64}, {"float64", Type::F64}};
   for (const auto& [n, type] : kNames)
     if (s == n) {
       t = type;
@@ -62,8 +61,7 @@ class HeaderParser {
 
   Header parse() {
     std::string_view line;
-    if (!lines_.next(line) || trim(line) != "ply")
-      fail(name_, "not a PLY file (no 'ply' first line)");
+    if (!lines_.next(line) || trim(line) != "ply") fail(name_, "not a PLY file (no 'ply' first line)");
     while (lines_.next(line)) {
       Tokens tokens(line);
       std::string_view keyword;
@@ -122,8 +120,7 @@ class HeaderParser {
     tokens.next(word);
     if (word == "list") {
       p.is_list = true;
-      if (!tokens.next(word) || !parse_type(word, p.count_type))
-        error("unknown PLY type " + quoted(word));
+      if (!tokens.next(word) || !parse_type(word, p.count_type)) error("unknown PLY type " + quoted(word));
       if (!is_integer(p.count_type)) error("list count type must be an integer type");
       tokens.next(word);
     }
@@ -198,8 +195,7 @@ class BinarySource {
 
  private:
   void need(size_t n) {
-    if (size_t(end_ - p_) < n)
-      fail(name_, "unexpected end of data in " + at.label() + " (truncated)");
+    if (size_t(end_ - p_) < n) fail(name_, "unexpected end of data in " + at.label() + " (truncated)");
   }
 
   const char* p_;
@@ -242,9 +238,7 @@ class AsciiSource {
   Position at;
 
  private:
-  [[noreturn]] void error(const std::string& what) {
-    fail_line(name_, line_, at.label() + ": " + what);
-  }
+  [[noreturn]] void error(const std::string& what) { fail_line(name_, line_, at.label() + ": " + what); }
 
   void skip_space() {
     while (p_ < end_ && (is_space(*p_) || *p_ == '\n')) {
@@ -340,8 +334,7 @@ class BodyReader {
   void skip_property(const Property& p) {
     if (!p.is_list) return src_.skip(p.type);
     int64_t n = src_.integer(p.count_type);
-    if (n < 0 || !src_.can_hold(uint64_t(n), p.type))
-      error(*elem_, src_.at.index, "has a bad list length");
+    if (n < 0 || !src_.can_hold(uint64_t(n), p.type)) error(*elem_, src_.at.index, "has a bad list length");
     for (int64_t k = 0; k < n; ++k) src_.skip(p.type);
   }
 
@@ -351,8 +344,7 @@ class BodyReader {
   }
 
   void read_vertices(const Element& e) {
-    const int axis[3] = {find_property(e, "x", false), find_property(e, "y", false),
-                         find_property(e, "z", false)};
+    const int axis[3] = {find_property(e, "x", false), find_property(e, "y", false), find_property(e, "z", false)};
     if (axis[0] < 0 || axis[1] < 0 || axis[2] < 0)
       fail_line(name_, e.header_line, "vertex element lacks an x, y or z property");
     mesh_.points.resize(size_t(e.count));  // count checked against the data size already
@@ -394,7 +386,8 @@ class BodyReader {
       fail_line(name_, e.header_line, "face element before the vertex element is not supported");
     // A triangle face takes at least 4 bytes in any encoding; a lying count reserves no more.
     mesh_.triangles.reserve(size_t(std::min<uint64_t>(e.count, src_.remaining() / 4)));
-    const std::vector<DataArray*> arrays = scalar_arrays(e, data_ ? &data_->cell_data : nullptr, mesh_.triangles.size());
+    const std::vector<DataArray*> arrays =
+        scalar_arrays(e, data_ ? &data_->cell_data : nullptr, mesh_.triangles.size());
     std::vector<double> values(e.props.size(), 0.0);
     for (uint64_t i = 0; i < e.count; ++i) {
       begin(e, i);
@@ -461,15 +454,14 @@ class BodyReader {
   void read_polygon(const Element& e, uint64_t i, const Property& p) {
     int64_t n = src_.integer(p.count_type);
     if (n < 3) error(e, i, "has " + std::to_string(n) + " vertices (needs at least 3)");
-    if (!src_.can_hold(uint64_t(n), p.type))
-      error(e, i, "has a list longer than the file (truncated)");
+    if (!src_.can_hold(uint64_t(n), p.type)) error(e, i, "has a list longer than the file (truncated)");
     polygon_.resize(size_t(n));
     for (int64_t k = 0; k < n; ++k) {
       int64_t v = src_.integer(p.type);
       if (v < 0 || uint64_t(v) >= vertex_count_)
         error(e, i,
-              "has out-of-range vertex index " + std::to_string(v) + " (the file has " +
-                  std::to_string(vertex_count_) + " vertices)");
+              "has out-of-range vertex index " + std::to_string(v) + " (the file has " + std::to_string(vertex_count_) +
+                  " vertices)");
       polygon_[size_t(k)] = uint32_t(v);
     }
   }
@@ -490,8 +482,7 @@ class BodyReader {
   void name_parts() {
     for (int64_t value : part_values_) {
       auto it = h_.part_names.find(value);
-      mesh_.part_names.push_back(it != h_.part_names.end() ? it->second
-                                                           : "part" + std::to_string(value));
+      mesh_.part_names.push_back(it != h_.part_names.end() ? it->second : "part" + std::to_string(value));
     }
   }
 
@@ -527,9 +518,8 @@ void check_counts(const Header& h, uint64_t body_bytes, const std::string& name)
     uint64_t each = min_element_bytes(e, binary);
     if (each == 0) continue;
     if (e.count > left / each)
-      fail(name, "header declares " + std::to_string(e.count) + " " + e.name +
-                     " elements but the data has only " + std::to_string(body_bytes) +
-                     " bytes (truncated or wrong count)");
+      fail(name, "header declares " + std::to_string(e.count) + " " + e.name + " elements but the data has only " +
+                     std::to_string(body_bytes) + " bytes (truncated or wrong count)");
     left -= e.count * each;
   }
 }
@@ -554,9 +544,14 @@ namespace {
 size_t store_value(char* p, DataArray::Type t, double v) {
   v = storable(t, v);
   switch (t) {
-    case DataArray::Type::Int32: store_le<int32_t>(p, int32_t(v)); return 4;
-    case DataArray::Type::UInt8: *p = char(uint8_t(v)); return 1;
-    case DataArray::Type::Float64: break;
+    case DataArray::Type::Int32:
+      store_le<int32_t>(p, int32_t(v));
+      return 4;
+    case DataArray::Type::UInt8:
+      *p = char(uint8_t(v));
+      return 1;
+    case DataArray::Type::Float64:
+      break;
   }
   store_le<double>(p, v);
   return 8;
@@ -573,16 +568,17 @@ void write_ply(const Mesh& mesh, Sink& out, const MeshData* data) {
   const std::vector<DataArray>& cell_data = data ? data->cell_data : none;
   out.put("ply\nformat binary_little_endian 1.0\ncomment written by vdbwrap\n");
   for (size_t p = 0; parts && p < mesh.part_names.size(); ++p)
-    out.put("comment vdbwrap_part " + std::to_string(p) + " " + one_line(mesh.part_names[p]) +
-            "\n");
+    out.put("comment vdbwrap_part " + std::to_string(p) + " " + one_line(mesh.part_names[p]) + "\n");
   out.put("element vertex " + std::to_string(mesh.points.size()) + "\n");
   out.put("property double x\nproperty double y\nproperty double z\n");
-  for (const DataArray& a : point_data) out.put(std::string("property ") + written_type(a.type).ply + " " + a.name + "\n");
+  for (const DataArray& a : point_data)
+    out.put(std::string("property ") + written_type(a.type).ply + " " + a.name + "\n");
   out.put("element face " + std::to_string(mesh.triangles.size()) + "\n");
   out.put(mesh.points.size() <= uint64_t(INT32_MAX) ? "property list uchar int vertex_indices\n"
                                                     : "property list uchar uint vertex_indices\n");
   if (parts) out.put("property int part\n");
-  for (const DataArray& a : cell_data) out.put(std::string("property ") + written_type(a.type).ply + " " + a.name + "\n");
+  for (const DataArray& a : cell_data)
+    out.put(std::string("property ") + written_type(a.type).ply + " " + a.name + "\n");
   out.put("end_header\n");
 
   std::vector<char> record(24 + 8 * point_data.size());

@@ -34,8 +34,7 @@ void fan(const uint32_t* poly, size_t n, std::vector<Tri>& out) {
 
 }  // namespace
 
-void PolygonTriangulator::run(const std::vector<Vec3>& points, const uint32_t* poly, size_t n,
-                              std::vector<Tri>& out) {
+void PolygonTriangulator::run(const std::vector<Vec3>& points, const uint32_t* poly, size_t n, std::vector<Tri>& out) {
   if (n == 3) {
     out.push_back({poly[0], poly[1], poly[2]});
     return;
@@ -108,8 +107,7 @@ void PolygonTriangulator::ear_clip(const uint32_t* poly, size_t n, std::vector<T
     return;
   }
   // No ear found: fan over what remains.
-  for (size_t k = next_[i]; next_[k] != i; k = next_[k])
-    out.push_back({poly[i], poly[k], poly[next_[k]]});
+  for (size_t k = next_[i]; next_[k] != i; k = next_[k]) out.push_back({poly[i], poly[k], poly[next_[k]]});
 }
 
 // b is an ear when it is a strictly convex corner and no other remaining vertex lies in or on

@@ -30,9 +30,7 @@ std::string file_stem(const std::string& path);
 
 // ---- text scanning ------------------------------------------------------------------------
 
-inline bool is_space(char c) {
-  return c == ' ' || c == '\t' || c == '\r' || c == '\v' || c == '\f';
-}
+inline bool is_space(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\v' || c == '\f'; }
 
 inline std::string_view trim(std::string_view s) {
   while (!s.empty() && (is_space(s.front()) || s.front() == '\n')) s.remove_prefix(1);
@@ -121,9 +119,7 @@ inline bool parse_int(std::string_view token, int64_t& out) {
   return r.ec == std::errc() && r.ptr == e;
 }
 
-inline bool is_finite(const Vec3& p) {
-  return std::isfinite(p[0]) && std::isfinite(p[1]) && std::isfinite(p[2]);
-}
+inline bool is_finite(const Vec3& p) { return std::isfinite(p[0]) && std::isfinite(p[1]) && std::isfinite(p[2]); }
 
 // Triangle indices are 32-bit: a mesh with more points cannot be represented.
 void check_point_count(const std::string& name, uint64_t count);

@@ -17,13 +17,17 @@ inline size_t scalar_size(ScalarType t) {
   switch (t) {
     case ScalarType::I8:
     case ScalarType::U8:
-    case ScalarType::String: return 1;
+    case ScalarType::String:
+      return 1;
     case ScalarType::I16:
-    case ScalarType::U16: return 2;
+    case ScalarType::U16:
+      return 2;
     case ScalarType::I32:
     case ScalarType::U32:
-    case ScalarType::F32: return 4;
-    default: return 8;
+    case ScalarType::F32:
+      return 4;
+    default:
+      return 8;
   }
 }
 
@@ -43,9 +47,12 @@ struct WrittenType {
 };
 inline WrittenType written_type(DataArray::Type t) {
   switch (t) {
-    case DataArray::Type::Int32: return {"int", "Int32", 4};
-    case DataArray::Type::UInt8: return {"uchar", "UInt8", 1};
-    case DataArray::Type::Float64: break;
+    case DataArray::Type::Int32:
+      return {"int", "Int32", 4};
+    case DataArray::Type::UInt8:
+      return {"uchar", "UInt8", 1};
+    case DataArray::Type::Float64:
+      break;
   }
   return {"double", "Float64", 8};
 }
@@ -55,21 +62,31 @@ inline WrittenType written_type(DataArray::Type t) {
 template <class T>
 T load_scalar(const char* p, ScalarType t, bool little_endian) {
   switch (t) {
-    case ScalarType::I8: return T(int8_t(*p));
-    case ScalarType::U8: return T(uint8_t(*p));
-    case ScalarType::I16: return T(load<int16_t>(p, little_endian));
-    case ScalarType::U16: return T(load<uint16_t>(p, little_endian));
-    case ScalarType::I32: return T(load<int32_t>(p, little_endian));
-    case ScalarType::U32: return T(load<uint32_t>(p, little_endian));
-    case ScalarType::I64: return T(load<int64_t>(p, little_endian));
+    case ScalarType::I8:
+      return T(int8_t(*p));
+    case ScalarType::U8:
+      return T(uint8_t(*p));
+    case ScalarType::I16:
+      return T(load<int16_t>(p, little_endian));
+    case ScalarType::U16:
+      return T(load<uint16_t>(p, little_endian));
+    case ScalarType::I32:
+      return T(load<int32_t>(p, little_endian));
+    case ScalarType::U32:
+      return T(load<uint32_t>(p, little_endian));
+    case ScalarType::I64:
+      return T(load<int64_t>(p, little_endian));
     case ScalarType::U64: {
       uint64_t v = load<uint64_t>(p, little_endian);
       if constexpr (std::is_integral_v<T>) v = std::min<uint64_t>(v, uint64_t(INT64_MAX));
       return T(v);
     }
-    case ScalarType::F32: return T(load<float>(p, little_endian));
-    case ScalarType::F64: return T(load<double>(p, little_endian));
-    case ScalarType::String: break;
+    case ScalarType::F32:
+      return T(load<float>(p, little_endian));
+    case ScalarType::F64:
+      return T(load<double>(p, little_endian));
+    case ScalarType::String:
+      break;
   }
   return T(0);
 }

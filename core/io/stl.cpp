@@ -20,13 +20,11 @@ uint64_t declared_count(std::string_view bytes) { return load<uint32_t>(bytes.da
 
 [[noreturn]] void fail_binary_size(std::string_view bytes, const std::string& name) {
   if (bytes.size() < kHeaderBytes)
-    fail(name, "binary STL is truncated: " + std::to_string(bytes.size()) +
-                   " bytes, shorter than the 84-byte header");
+    fail(name, "binary STL is truncated: " + std::to_string(bytes.size()) + " bytes, shorter than the 84-byte header");
   uint64_t count = declared_count(bytes);
   uint64_t needed = kHeaderBytes + kRecordBytes * count;
-  fail(name, "binary STL declares " + std::to_string(count) + " triangles (needs " +
-                 std::to_string(needed) + " bytes) but the file has " +
-                 std::to_string(bytes.size()) + " bytes (" +
+  fail(name, "binary STL declares " + std::to_string(count) + " triangles (needs " + std::to_string(needed) +
+                 " bytes) but the file has " + std::to_string(bytes.size()) + " bytes (" +
                  (bytes.size() < needed ? "truncated" : "too long") + ")");
 }
 
@@ -55,7 +53,8 @@ Mesh read_binary_stl(std::string_view bytes, const std::string& name) {
       mesh.triangles[t] = {base, base + 1, base + 2};
     }
   });
-  if (first_bad.load() != SIZE_MAX) fail(name, "triangle " + std::to_string(first_bad.load()) + " has a non-finite coordinate");
+  if (first_bad.load() != SIZE_MAX)
+    fail(name, "triangle " + std::to_string(first_bad.load()) + " has a non-finite coordinate");
   mesh.part_names.push_back(file_stem(name));
   return mesh;
 }
@@ -73,8 +72,7 @@ class AsciiStlReader {
     while (lines_.next(line)) handle(line);
     if (corners_ >= 0)
       fail_line(name_, lines_.line_number(),
-                "file ends inside the facet that starts at line " + std::to_string(facet_line_) +
-                    " (truncated)");
+                "file ends inside the facet that starts at line " + std::to_string(facet_line_) + " (truncated)");
     return std::move(mesh_);
   }
 
@@ -99,8 +97,7 @@ class AsciiStlReader {
     ++solid_ordinal_;
     in_solid_ = true;
     part_ = -1;  // created on the first facet: empty solids make no part
-    solid_name_ =
-        solid_name.empty() ? "solid" + std::to_string(solid_ordinal_) : std::string(solid_name);
+    solid_name_ = solid_name.empty() ? "solid" + std::to_string(solid_ordinal_) : std::string(solid_name);
   }
 
   void end_solid() {
@@ -110,8 +107,7 @@ class AsciiStlReader {
 
   void begin_facet() {
     if (!in_solid_) error("'facet' outside a solid");
-    if (corners_ >= 0)
-      error("'facet' before the facet of line " + std::to_string(facet_line_) + " ended");
+    if (corners_ >= 0) error("'facet' before the facet of line " + std::to_string(facet_line_) + " ended");
     corners_ = 0;
     facet_line_ = lines_.line_number();
   }
@@ -129,11 +125,10 @@ class AsciiStlReader {
       if (!tokens.next(token)) error("vertex needs 3 coordinates");
       if (!parse_double(token, p[c])) error("malformed number " + quoted(token));
     }
-    if (tokens.next(token))
-      error("unexpected " + quoted(token) + " after the 3 vertex coordinates");
+    if (tokens.next(token)) error("unexpected " + quoted(token) + " after the 3 vertex coordinates");
     if (!is_finite(p))
-      error("vertex " + std::to_string(corners_ + 1) + " of facet " +
-            std::to_string(mesh_.triangles.size()) + " has a non-finite coordinate");
+      error("vertex " + std::to_string(corners_ + 1) + " of facet " + std::to_string(mesh_.triangles.size()) +
+            " has a non-finite coordinate");
     ++corners_;
   }
 
@@ -219,8 +214,7 @@ void write_ascii_facet(const Mesh& mesh, const Tri& t, Sink& out) {
 // A single part keeps its name; a mesh without parts is one unnamed solid.
 void write_ascii_stl(const Mesh& mesh, Sink& out) {
   std::vector<std::vector<uint32_t>> by_part(std::max<size_t>(mesh.part_names.size(), 1));
-  for (size_t t = 0; t < mesh.triangles.size(); ++t)
-    by_part[mesh.part_of(t)].push_back(uint32_t(t));
+  for (size_t t = 0; t < mesh.triangles.size(); ++t) by_part[mesh.part_of(t)].push_back(uint32_t(t));
   for (size_t p = 0; p < by_part.size(); ++p) {
     if (by_part[p].empty()) continue;
     std::string solid = p < mesh.part_names.size() ? one_line(mesh.part_names[p]) : "";
@@ -233,8 +227,7 @@ void write_ascii_stl(const Mesh& mesh, Sink& out) {
 }  // namespace
 
 bool is_binary_stl_size(std::string_view bytes) {
-  return bytes.size() >= kHeaderBytes &&
-         bytes.size() == kHeaderBytes + kRecordBytes * declared_count(bytes);
+  return bytes.size() >= kHeaderBytes && bytes.size() == kHeaderBytes + kRecordBytes * declared_count(bytes);
 }
 
 // "solid" after optional whitespace, and text: no NUL byte anywhere (binary STL nearly always

@@ -33,8 +33,8 @@ struct XmlElement {
 };
 
 bool is_name_char(char c) {
-  return (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '_' ||
-         c == ':' || c == '-' || c == '.';
+  return (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '_' || c == ':' ||
+         c == '-' || c == '.';
 }
 
 bool is_xml_space(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\n'; }
@@ -123,8 +123,7 @@ class XmlParser {
 
   void expect(char c) {
     if (pos_ >= s_.size()) error(pos_, std::string("file ends where '") + c + "' is expected (truncated)");
-    if (s_[pos_] != c)
-      error(pos_, std::string("expected '") + c + "', found " + quoted(s_.substr(pos_, 1)));
+    if (s_[pos_] != c) error(pos_, std::string("expected '") + c + "', found " + quoted(s_.substr(pos_, 1)));
     ++pos_;
   }
 
@@ -184,8 +183,7 @@ class XmlParser {
   // <AppendedData encoding="raw|base64"> then whitespace, '_', and the data to the end.
   void read_appended(const XmlElement& e) {
     skip_space();
-    if (pos_ >= s_.size() || s_[pos_] != '_')
-      error(pos_, "<AppendedData> must start with '_' before its data");
+    if (pos_ >= s_.size() || s_[pos_] != '_') error(pos_, "<AppendedData> must start with '_' before its data");
     appended_ = &e;
     appended_data_ = s_.substr(pos_ + 1);
   }
@@ -250,12 +248,11 @@ struct File {
 
 bool parse_type(std::string_view s, Type& t) {
   static const std::pair<const char*, Type> kNames[] = {
-      {"Int8", Type::I8},       {"UInt8", Type::U8},     {"Int16", Type::I16},
-      {"UInt16", Type::U16},    {"Int32", Type::I32},    {"UInt32", Type::U32},
-      {"Int64", Type::I64},     {"UInt64", Type::U64},   {"Float32", Type::F32},
-      {"Float64", Type::F64},   {"String", Type::String}, {"Char", Type::I8},
-      {"UChar", Type::U8},      {"Short", Type::I16},    {"Int", Type::I32},
-      {"Long", Type::I64},      {"Float", Type::F32},    {"Double", Type::F64}};
+      {"Int8", Type::I8},     {"UInt8", Type::U8},    {"Int16", Type::I16},     {"UInt16", Type::U16},
+      {"Int32", Type::I32},   {"UInt32", Type::U32},  {"Int64", Type::I64},     {"UInt64", Type::U64},
+      {"Float32", Type::F32}, {"Float64", Type::F64}, {"String", Type::String}, {"Char", Type::I8},
+      {"UChar", Type::U8},    {"Short", Type::I16},   {"Int", Type::I32},       {"Long", Type::I64},
+      {"Float", Type::F32},   {"Double", Type::F64}};
   for (const auto& [n, type] : kNames)
     if (s == n) {
       t = type;
@@ -263,7 +260,6 @@ bool parse_type(std::string_view s, Type& t) {
     }
   return false;
 }
-
 
 std::string array_label(const XmlElement& a) {
   const std::string* n = a.attribute("Name");
@@ -275,22 +271,20 @@ uint64_t load_header(const File& f, const char* p) {
 }
 
 // The payload of a binary or appended array (after its byte-count header).
-std::string_view binary_payload(const File& f, const XmlElement& a, const std::string& format,
-                                std::string& storage) {
+std::string_view binary_payload(const File& f, const XmlElement& a, const std::string& format, std::string& storage) {
   auto bad = [&](const std::string& what) { fail(f.name, array_label(a) + ": " + what); };
   if (format == "binary") {
     decode_base64(a.text, std::numeric_limits<size_t>::max(), storage);
     if (storage.size() < f.header_bytes) bad("binary data is shorter than its size header (truncated)");
     uint64_t count = load_header(f, storage.data());
     if (count > storage.size() - f.header_bytes)
-      bad("declares " + std::to_string(count) + " bytes but holds " +
-          std::to_string(storage.size() - f.header_bytes) + " (truncated)");
+      bad("declares " + std::to_string(count) + " bytes but holds " + std::to_string(storage.size() - f.header_bytes) +
+          " (truncated)");
     return std::string_view(storage).substr(f.header_bytes, size_t(count));
   }
   const std::string* offset_text = a.attribute("offset");
   int64_t offset = 0;
-  if (!offset_text || !parse_int(*offset_text, offset) || offset < 0)
-    bad("appended array without a valid offset");
+  if (!offset_text || !parse_int(*offset_text, offset) || offset < 0) bad("appended array without a valid offset");
   if (f.appended.data() == nullptr) bad("format is appended but the file has no <AppendedData>");
   if (uint64_t(offset) > f.appended.size())
     bad("offset " + std::to_string(offset) + " is past the end of the appended data (" +
@@ -310,8 +304,8 @@ std::string_view binary_payload(const File& f, const XmlElement& a, const std::s
   if (rest.size() < f.header_bytes) bad("appended data ends inside its size header (truncated)");
   uint64_t count = load_header(f, rest.data());
   if (count > rest.size() - f.header_bytes)
-    bad("declares " + std::to_string(count) + " bytes but only " +
-        std::to_string(rest.size() - f.header_bytes) + " follow (truncated)");
+    bad("declares " + std::to_string(count) + " bytes but only " + std::to_string(rest.size() - f.header_bytes) +
+        " follow (truncated)");
   return rest.substr(f.header_bytes, size_t(count));
 }
 
@@ -377,7 +371,8 @@ std::vector<std::string> read_strings(const File& f, const XmlElement& a) {
     as_ints.attributes = {{"type", "Int32"}, {"format", "ascii"}};
     if (const std::string* n = a.attribute("Name")) as_ints.attributes.emplace_back("Name", *n);
     for (int64_t c : read_array<int64_t>(f, as_ints)) {
-      if (c < -128 || c > 255) fail(f.name, array_label(a) + ": character code " + std::to_string(c) + " is out of range");
+      if (c < -128 || c > 255)
+        fail(f.name, array_label(a) + ": character code " + std::to_string(c) + " is out of range");
       bytes += char(c);
     }
   } else {
@@ -484,8 +479,8 @@ class VtpReader {
     // Every point or cell takes at least one byte: larger counts are corrupt (and checking
     // here keeps the sums and products of counts below from overflowing).
     if (uint64_t(v) > file_size_)
-      fail(name(), "Piece " + std::to_string(index) + ": " + key + " " + *text +
-                       " is more than a file of " + std::to_string(file_size_) + " bytes can hold");
+      fail(name(), "Piece " + std::to_string(index) + ": " + key + " " + *text + " is more than a file of " +
+                       std::to_string(file_size_) + " bytes can hold");
     return uint64_t(v);
   }
 
@@ -509,8 +504,8 @@ class VtpReader {
       if (!components || *components != "3") bad("<Points> array must have NumberOfComponents=\"3\"");
       std::vector<double> xyz = read_array<double>(file_, *coords);
       if (xyz.size() != 3 * n_points)
-        bad("NumberOfPoints is " + std::to_string(n_points) + " but <Points> holds " +
-            std::to_string(xyz.size()) + " values (needs " + std::to_string(3 * n_points) + ")");
+        bad("NumberOfPoints is " + std::to_string(n_points) + " but <Points> holds " + std::to_string(xyz.size()) +
+            " values (needs " + std::to_string(3 * n_points) + ")");
       mesh_.points.reserve(base + n_points);
       for (size_t i = 0; i < n_points; ++i) {
         Vec3 p{xyz[3 * i], xyz[3 * i + 1], xyz[3 * i + 2]};
@@ -526,8 +521,8 @@ class VtpReader {
     if (part_array) {
       part_id = read_array<int64_t>(file_, *part_array);
       if (part_id.size() != n_cells)
-        bad("cell data 'part_id' has " + std::to_string(part_id.size()) + " values for " +
-            std::to_string(n_cells) + " cells");
+        bad("cell data 'part_id' has " + std::to_string(part_id.size()) + " values for " + std::to_string(n_cells) +
+            " cells");
       has_parts_ = true;
     }
     auto cell_part = [&](uint64_t cell) { return part_id.empty() ? 0 : part_id[cell]; };
@@ -557,7 +552,8 @@ class VtpReader {
     });
     if (data_) {
       read_data(child(piece, "PointData"), data_->point_data, base, n_points, where + ": point data", {});
-      read_data(child(piece, "CellData"), data_->cell_data, first_triangle, n_cells, where + ": cell data", triangle_cell);
+      read_data(child(piece, "CellData"), data_->cell_data, first_triangle, n_cells, where + ": cell data",
+                triangle_cell);
     }
   }
 
@@ -579,8 +575,8 @@ class VtpReader {
         continue;
       const std::vector<double> values = read_array<double>(file_, a);
       if (values.size() != count)
-        fail(name(), where + ": array " + quoted(*array_name) + " has " + std::to_string(values.size()) + " values for " +
-                         std::to_string(count));
+        fail(name(), where + ": array " + quoted(*array_name) + " has " + std::to_string(values.size()) +
+                         " values for " + std::to_string(count));
       const DataArray::Type kind = data_type(type);
       DataArray& out = data_array(arrays, *array_name, kind, first);
       out.values.resize(first, NAN);
@@ -596,8 +592,8 @@ class VtpReader {
   // Calls `cell(points, i)` for each of the `count` cells of <Polys> or <Strips>, with global
   // point indices.
   template <class Cell>
-  void read_cells(const XmlElement& piece, const char* tag, uint64_t count, size_t base,
-                  uint64_t n_points, const std::string& where, Cell&& cell) {
+  void read_cells(const XmlElement& piece, const char* tag, uint64_t count, size_t base, uint64_t n_points,
+                  const std::string& where, Cell&& cell) {
     auto bad = [&](const std::string& what) { fail(name(), where + ": <" + tag + ">: " + what); };
     if (count == 0) return;
     const XmlElement* cells = child(piece, tag);
@@ -615,7 +611,8 @@ class VtpReader {
       const int64_t end = ends[i];
       if (end < start || uint64_t(end) > ids.size())
         bad("offset " + std::to_string(end) + " of cell " + std::to_string(i) +
-            (end < start ? " is smaller than the one before" : " is past the connectivity's " + std::to_string(ids.size()) + " values"));
+            (end < start ? " is smaller than the one before"
+                         : " is past the connectivity's " + std::to_string(ids.size()) + " values"));
       points.clear();
       for (int64_t k = start; k < end; ++k) {
         const int64_t v = ids[size_t(k)];
@@ -639,7 +636,7 @@ class VtpReader {
       auto [it, inserted] = index.emplace(v, int32_t(mesh_.part_names.size()));
       if (inserted)
         mesh_.part_names.push_back(v >= 0 && uint64_t(v) < part_names_.size() ? part_names_[size_t(v)]
-                                                                             : "part" + std::to_string(v));
+                                                                              : "part" + std::to_string(v));
       mesh_.triangle_part[t] = it->second;
     }
   }
@@ -672,8 +669,6 @@ void put_block(Sink& out, size_t count, Values&& value_at) {
   }
   out.put_bytes(buffer, used);
 }
-
-
 
 }  // namespace
 
@@ -757,11 +752,15 @@ void write_vtp(const Mesh& mesh, Sink& out, const MeshData* data) {
     out.put("      </CellData>\n");
   }
   out.put("      <Points>\n");
-  out.put("        <DataArray type=\"Float64\" Name=\"Points\" NumberOfComponents=\"3\" format=\"appended\" offset=\"0\"/>\n");
+  out.put(
+      "        <DataArray type=\"Float64\" Name=\"Points\" NumberOfComponents=\"3\" format=\"appended\" "
+      "offset=\"0\"/>\n");
   out.put("      </Points>\n      <Polys>\n");
-  out.put(std::string("        <DataArray type=\"") + index_type + "\" Name=\"connectivity\" format=\"appended\" offset=\"");
+  out.put(std::string("        <DataArray type=\"") + index_type +
+          "\" Name=\"connectivity\" format=\"appended\" offset=\"");
   out.put_uint(connectivity_offset);
-  out.put(std::string("\"/>\n        <DataArray type=\"") + index_type + "\" Name=\"offsets\" format=\"appended\" offset=\"");
+  out.put(std::string("\"/>\n        <DataArray type=\"") + index_type +
+          "\" Name=\"offsets\" format=\"appended\" offset=\"");
   out.put_uint(offsets_offset);
   out.put("\"/>\n      </Polys>\n    </Piece>\n  </PolyData>\n");
   out.put("  <AppendedData encoding=\"raw\">\n   _");
@@ -778,7 +777,9 @@ void write_vtp(const Mesh& mesh, Sink& out, const MeshData* data) {
     for (const DataArray& a : *arrays) {
       auto value = [&](size_t i) { return storable(a.type, a.values[i]); };
       switch (a.type) {
-        case DataArray::Type::Float64: put_block<double>(out, a.values.size(), value); break;
+        case DataArray::Type::Float64:
+          put_block<double>(out, a.values.size(), value);
+          break;
         case DataArray::Type::Int32:
           put_block<int32_t>(out, a.values.size(), [&](size_t i) { return int32_t(value(i)); });
           break;

@@ -59,11 +59,11 @@ struct Piece {
 // the slivers it looks at are those within about sqrt(best^2 - height^2) beside it, not
 // within its whole distance.
 struct Lane {
-  Vec3 axis, normal;         // unit, perpendicular (to float precision: see triangle_gap2)
-  double centre, level;      // keys and heights are measured from these
-  double reach, low, high;   // the largest half extent along the axis (and the keys' float
-                             // rounding); the piece's extent along the normal
-  double slack;              // rounding of the projections: 1e-10 of the coordinates' size
+  Vec3 axis, normal;        // unit, perpendicular (to float precision: see triangle_gap2)
+  double centre, level;     // keys and heights are measured from these
+  double reach, low, high;  // the largest half extent along the axis (and the keys' float
+                            // rounding); the piece's extent along the normal
+  double slack;             // rounding of the projections: 1e-10 of the coordinates' size
   // The margin for a query's projections onto the axes: the piece's own rounding and that of
   // a query whose coordinates sum (in absolute value) to `coordinates`.
   double slack_at(double coordinates) const { return slack + 1e-10 * coordinates; }
@@ -137,8 +137,8 @@ Frame frame_of(const Vec3& a, const Vec3& b, const Vec3& c) {
 // closest point's own arithmetic), and the sum less 1e-5 for the float axes' orthonormality.
 double triangle_gap2(const Vec3& q, const Triangle& t, const Frame& f) {
   const double dx = q[0] - t.vertex(0).x(), dy = q[1] - t.vertex(0).y(), dz = q[2] - t.vertex(0).z();
-  const double size = std::fabs(q[0]) + std::fabs(q[1]) + std::fabs(q[2]) + std::fabs(dx) + std::fabs(dy) + std::fabs(dz) +
-                      double(f.extent[0][1] - f.extent[0][0]) + double(f.extent[1][1] - f.extent[1][0]);
+  const double size = std::fabs(q[0]) + std::fabs(q[1]) + std::fabs(q[2]) + std::fabs(dx) + std::fabs(dy) +
+                      std::fabs(dz) + double(f.extent[0][1] - f.extent[0][0]) + double(f.extent[1][1] - f.extent[1][0]);
   const double slack = 1e-10 * size;
   double sum = 0;
   for (int k = 0; k < 3; ++k) {
@@ -186,7 +186,8 @@ CGAL::Bbox_3 box_of(const Vec3& a, const Vec3& b, const Vec3& c) {
           std::max({a[0], b[0], c[0]}), std::max({a[1], b[1], c[1]}), std::max({a[2], b[2], c[2]})};
 }
 double diagonal(const CGAL::Bbox_3& b) {
-  return std::sqrt(std::pow(b.xmax() - b.xmin(), 2) + std::pow(b.ymax() - b.ymin(), 2) + std::pow(b.zmax() - b.zmin(), 2));
+  return std::sqrt(std::pow(b.xmax() - b.xmin(), 2) + std::pow(b.ymax() - b.ymin(), 2) +
+                   std::pow(b.zmax() - b.zmin(), 2));
 }
 
 // Calls split(x, y, z) on the two halves of triangle abc cut at the midpoint of its longest edge.
@@ -213,7 +214,8 @@ void add_parts(const Vec3& a, const Vec3& b, const Vec3& c, double size, int dep
     out.push_back(box);
     return;
   }
-  halve_longest_edge(a, b, c, [&](const Vec3& x, const Vec3& y, const Vec3& z) { add_parts(x, y, z, size, depth - 1, out); });
+  halve_longest_edge(a, b, c,
+                     [&](const Vec3& x, const Vec3& y, const Vec3& z) { add_parts(x, y, z, size, depth - 1, out); });
 }
 
 // The cell grid that cuts long triangles: cubes of side `cell` from `origin`, keyed by 21 bits
@@ -270,7 +272,8 @@ constexpr size_t kLaneAbove = 8;
 
 // Appends a piece of triangles `tris`, sorted along a lane when they are many: the direction
 // across the first one in its plane (see Lane). `mid`: about the piece's centre.
-void add_piece(const Store& store, const CGAL::Bbox_3& box, const Vec3& mid, const std::vector<uint32_t>& tris, PieceList& out) {
+void add_piece(const Store& store, const CGAL::Bbox_3& box, const Vec3& mid, const std::vector<uint32_t>& tris,
+               PieceList& out) {
   Piece piece{uint32_t(out.ids.size()), uint32_t(tris.size()), box};
   auto add_unsorted = [&] {
     out.pieces.push_back(piece);
@@ -327,20 +330,22 @@ double spread_across(const Store& store, const std::vector<uint32_t>& tris) {
   double reach = 0;
   for (uint32_t f : tris) {
     const Triangle& t = store.triangles[f];
-    const double a = dot(across, vec(t.vertex(0))), b = dot(across, vec(t.vertex(1))), c = dot(across, vec(t.vertex(2)));
+    const double a = dot(across, vec(t.vertex(0))), b = dot(across, vec(t.vertex(1))),
+                 c = dot(across, vec(t.vertex(2)));
     reach = std::max(reach, 0.5 * (std::max({a, b, c}) - std::min({a, b, c})));
   }
   return reach;
 }
 constexpr double kTightLane = 0.125;
 
-void add_cell_pieces(const Store& store, const Vec3& lo, double side, double pad, const std::vector<uint32_t>& tris, int depth,
-                     PieceList& out) {
+void add_cell_pieces(const Store& store, const Vec3& lo, double side, double pad, const std::vector<uint32_t>& tris,
+                     int depth, PieceList& out) {
   if (tris.size() <= kPieceTriangles || depth == 0 || spread_across(store, tris) < kTightLane * side) {
     CGAL::Bbox_3 box;
     for (uint32_t f : tris) box += store.triangles[f].bbox();
-    box = {std::max(box.xmin(), lo[0] - pad), std::max(box.ymin(), lo[1] - pad), std::max(box.zmin(), lo[2] - pad),
-           std::min(box.xmax(), lo[0] + side + pad), std::min(box.ymax(), lo[1] + side + pad), std::min(box.zmax(), lo[2] + side + pad)};
+    box = {std::max(box.xmin(), lo[0] - pad),        std::max(box.ymin(), lo[1] - pad),
+           std::max(box.zmin(), lo[2] - pad),        std::min(box.xmax(), lo[0] + side + pad),
+           std::min(box.ymax(), lo[1] + side + pad), std::min(box.zmax(), lo[2] + side + pad)};
     add_piece(store, box, lo + Vec3{0.5 * side, 0.5 * side, 0.5 * side}, tris, out);
     return;
   }
@@ -349,7 +354,8 @@ void add_cell_pieces(const Store& store, const Vec3& lo, double side, double pad
   std::array<std::vector<uint32_t>, 8> inside;
   for (uint32_t f : tris) {
     const Triangle& t = store.triangles[f];
-    const uint8_t in = octants_overlapped(vec(t.vertex(0)), vec(t.vertex(1)), vec(t.vertex(2)), centre, 0.5 * half, 0.5 * half + pad);
+    const uint8_t in =
+        octants_overlapped(vec(t.vertex(0)), vec(t.vertex(1)), vec(t.vertex(2)), centre, 0.5 * half, 0.5 * half + pad);
     for (int octant = 0; octant < 8; ++octant)
       if (in & (1 << octant)) inside[octant].push_back(f);
   }
@@ -435,7 +441,9 @@ class NearestTraits {
     });
   }
   // A box as near as the best is still opened: it may hold an equally near, lower triangle.
-  bool do_intersect(const K::Point_3&, const Node& node) const { return squared_distance_to_box(q_, node.bbox()) <= best_d2; }
+  bool do_intersect(const K::Point_3&, const Node& node) const {
+    return squared_distance_to_box(q_, node.bbox()) <= best_d2;
+  }
   std::pair<bool, Priority> do_intersect_with_priority(const K::Point_3&, const Node& node) const {
     const double d2 = squared_distance_to_box(q_, node.bbox());
     return {d2 <= best_d2, -d2};
@@ -465,7 +473,9 @@ class WithinTraits {
       return found;
     });
   }
-  bool do_intersect(const K::Point_3&, const Node& node) const { return squared_distance_to_box(q_, node.bbox()) <= r2_; }
+  bool do_intersect(const K::Point_3&, const Node& node) const {
+    return squared_distance_to_box(q_, node.bbox()) <= r2_;
+  }
   bool found = false;
   uint32_t triangle = UINT32_MAX;
 
@@ -513,14 +523,19 @@ class MeetsTraits {
     double low = INFINITY, high = -INFINITY, below = INFINITY, above = -INFINITY;
     for (int v = 0; v < corners_; ++v) {
       const double at = dot(lane.axis, corner_[v]) - lane.centre, height = dot(lane.normal, corner_[v]) - lane.level;
-      low = std::min(low, at), high = std::max(high, at), below = std::min(below, height), above = std::max(above, height);
+      low = std::min(low, at), high = std::max(high, at), below = std::min(below, height),
+      above = std::max(above, height);
     }
     const double slack = lane.slack_at(size_);
     if (above < lane.low - slack || below > lane.high + slack) return false;
     const double reach = lane.reach + slack;
     const float* keys = store_.keys.data();
-    k = uint32_t(std::lower_bound(keys + k, keys + end, low - reach, [](float key, double x) { return double(key) < x; }) - keys);
-    end = uint32_t(std::upper_bound(keys + k, keys + end, high + reach, [](double x, float key) { return x < double(key); }) - keys);
+    k = uint32_t(
+        std::lower_bound(keys + k, keys + end, low - reach, [](float key, double x) { return double(key) < x; }) -
+        keys);
+    end = uint32_t(
+        std::upper_bound(keys + k, keys + end, high + reach, [](double x, float key) { return x < double(key); }) -
+        keys);
     return k < end;
   }
   CGAL::Bbox_3 box_;
@@ -561,7 +576,8 @@ SurfaceIndex::SurfaceIndex(const std::vector<Vec3>& points, const std::vector<Tr
   std::nth_element(sizes.begin(), sizes.begin() + sizes.size() / 2, sizes.end());
   const double size = 2 * sizes[sizes.size() / 2];
   const double span = std::max({all.xmax() - all.xmin(), all.ymax() - all.ymin(), all.zmax() - all.zmin()});
-  const CellGrid grid({all.xmin(), all.ymin(), all.zmin()}, {all.xmax(), all.ymax(), all.zmax()}, std::max(size, span / double(1 << 20)));
+  const CellGrid grid({all.xmin(), all.ymin(), all.zmin()}, {all.xmax(), all.ymax(), all.zmax()},
+                      std::max(size, span / double(1 << 20)));
   // A triangle over this many cells is cut into at most 16 parts instead (a huge flat triangle
   // among tiny ones would otherwise fill the grid).
   constexpr double max_cells = 4096;
@@ -585,7 +601,8 @@ SurfaceIndex::SurfaceIndex(const std::vector<Vec3>& points, const std::vector<Tr
       const Vec3 &a = points[t[0]], &b = points[t[1]], &c = points[t[2]];
       if (diagonal(box_of(a, b, c)) <= size) continue;
       const double cell = grid.cell;
-      const double estimate = norm(area_vector(a, b, c)) / (cell * cell) + (norm(b - a) + norm(c - b) + norm(a - c)) / cell;
+      const double estimate =
+          norm(area_vector(a, b, c)) / (cell * cell) + (norm(b - a) + norm(c - b) + norm(a - c)) / cell;
       if (estimate > max_cells) {
         boxes.clear();
         add_parts(a, b, c, size, 4, boxes);
@@ -597,7 +614,8 @@ SurfaceIndex::SurfaceIndex(const std::vector<Vec3>& points, const std::vector<Tr
       for (uint64_t key : cells) chunk_entries[chunk].push_back({key, f});
     }
   });
-  const FillVector<Entry> cut = radix_sort_joined(chunk_entries, [](const Entry& e) { return e.cell; }, bits_for(grid.numbers.count));
+  const FillVector<Entry> cut = radix_sort_joined(
+      chunk_entries, [](const Entry& e) { return e.cell; }, bits_for(grid.numbers.count));
   std::vector<std::pair<uint32_t, CGAL::Bbox_3>> large;  // by triangle
   for (const auto& part : chunk_parts) large.insert(large.end(), part.begin(), part.end());
 
@@ -628,7 +646,8 @@ SurfaceIndex::SurfaceIndex(const std::vector<Vec3>& points, const std::vector<Tr
     for (size_t c = run * kCellsPerRun; c < std::min(cells, (run + 1) * kCellsPerRun); ++c) {
       in_cell.clear();
       for (size_t e = cell_starts[c]; e < cell_starts[c + 1]; ++e) in_cell.push_back(cut[e].triangle);
-      add_cell_pieces(store, grid.corner(cut[cell_starts[c]].cell), grid.cell, grid.pad(), in_cell, kCellCuts, run_lists[run]);
+      add_cell_pieces(store, grid.corner(cut[cell_starts[c]].cell), grid.cell, grid.pad(), in_cell, kCellCuts,
+                      run_lists[run]);
     }
   });
   for (PieceList& list : run_lists) {
@@ -661,7 +680,8 @@ thread_local uint32_t last_closest_triangle = UINT32_MAX;
 SurfaceIndex::Hit SurfaceIndex::closest(const Vec3& q, uint32_t hint) const {
   Hit hit;
   if (!closest_within(q, std::numeric_limits<double>::infinity(), hit, hint)) {  // no input triangles
-    hit.point = q, hit.triangle = UINT32_MAX, hit.squared_distance = std::numeric_limits<double>::infinity(), hit.normal = {0, 0, 0};
+    hit.point = q, hit.triangle = UINT32_MAX, hit.squared_distance = std::numeric_limits<double>::infinity(),
+    hit.normal = {0, 0, 0};
   }
   return hit;
 }
@@ -671,7 +691,8 @@ bool SurfaceIndex::closest_within(const Vec3& q, double radius, Hit& hit, uint32
   NearestTraits traits(q, store);
   traits.best_d2 = radius * radius;
   if (hint < store.triangles.size()) traits.consider(hint);
-  if (last_closest_index == impl_.get() && last_closest_triangle < store.triangles.size() && last_closest_triangle != hint)
+  if (last_closest_index == impl_.get() && last_closest_triangle < store.triangles.size() &&
+      last_closest_triangle != hint)
     traits.consider(last_closest_triangle);
   impl_->tree.traversal_with_priority(point(q), traits);
   if (traits.best == UINT32_MAX) return false;
@@ -707,7 +728,9 @@ bool SurfaceIndex::within(const Vec3& q, double radius, const uint32_t* hints, s
   const Store& store = impl_->store;
   Vec3 nearest;
   for (size_t k = 0; k < count; ++k)
-    if (hints[k] < store.triangles.size() && squared_distance_to(q, store.triangles[hints[k]], nearest) <= radius * radius) return true;
+    if (hints[k] < store.triangles.size() &&
+        squared_distance_to(q, store.triangles[hints[k]], nearest) <= radius * radius)
+      return true;
   WithinTraits traits(q, radius, store);
   impl_->tree.traversal(point(q), traits);
   if (traits.found && found) *found = traits.triangle;

@@ -31,7 +31,8 @@ std::vector<uint8_t> crowded_points(const std::vector<Vec3>& points, double tole
   tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 4096), [&](const tbb::blocked_range<size_t>& r) {
     for (size_t i = r.begin(); i != r.end(); ++i) {
       const Vec3& p = points[i];
-      crowded[i] = grid.any_near(p, tolerance, [&](uint32_t j) { return j != i && norm2(points[j] - p) <= tol2; }) ? 1 : 0;
+      crowded[i] =
+          grid.any_near(p, tolerance, [&](uint32_t j) { return j != i && norm2(points[j] - p) <= tol2; }) ? 1 : 0;
     }
   });
   return crowded;

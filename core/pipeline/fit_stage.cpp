@@ -38,8 +38,8 @@ void coarsen(WrapRun& run) {
   StageTimer timer("coarsen", run.report.stages);
   fit::FittedSurface& fitted = run.fitted;
   const post::CoarsenParams cp = coarsen_params(run.params, run.base, run.refined.grid->fine_size());
-  const post::CoarsenStats cs =
-      post::coarsen(fitted.points, fitted.triangles, fitted.snapped, run.index(), run.prepared.origin, cp, run.progress);
+  const post::CoarsenStats cs = post::coarsen(fitted.points, fitted.triangles, fitted.snapped, run.index(),
+                                              run.prepared.origin, cp, run.progress);
   // The per-point data follow their points (snapped nodes are never merged away).
   std::vector<double> cell(fitted.points.size());
   std::vector<uint8_t> snapped(fitted.points.size());
@@ -64,7 +64,8 @@ void fit_surface(WrapRun& run) {
     std::vector<Vec3>& out = run.result.feature_curves.emplace_back();
     for (const Vec3& p : c.points) out.push_back(p + run.prepared.origin);
   }
-  run.fitted = fit::fit_to_input(run.lattice, *run.refined.grid, index, curves, run.prepared.origin, fit_params(run.params), run.progress);
+  run.fitted = fit::fit_to_input(run.lattice, *run.refined.grid, index, curves, run.prepared.origin,
+                                 fit_params(run.params), run.progress);
   report_snapping(report, run.fitted);
   const std::string two_sided = fit::describe_two_sided(run.fitted.two_sided, run.prepared, report.two_sided);
   if (run.progress && !two_sided.empty()) run.progress->progress("project", 1.0, two_sided);

@@ -40,8 +40,8 @@ void prepare_input(WrapRun& run) {
   report.base_size = run.base;
   if (prepared.diagonal / run.base > kMostCellsAcross)
     throw Error(ErrorKind::InvalidArgument, "base size " + run.params.base_size.to_string() +
-                                                " is too small for this model (over " + std::to_string(kMostCellsAcross) +
-                                                " cells across its diagonal)");
+                                                " is too small for this model (over " +
+                                                std::to_string(kMostCellsAcross) + " cells across its diagonal)");
 }
 
 }  // namespace vdbwrap::pipeline

@@ -26,13 +26,15 @@ void remesh(WrapRun& run) {
   post::PostSurface& surface = run.surface;
   StageTimer timer("remesh", report.stages);
   if (run.progress)
-    run.progress->progress("remesh", 0.0, "quality analysis of " + std::to_string(surface.triangles.size()) + " triangles");
+    run.progress->progress("remesh", 0.0,
+                           "quality analysis of " + std::to_string(surface.triangles.size()) + " triangles");
   std::vector<uint8_t> flags;
   report.quality.before = post::analyse_quality(surface.points, surface.triangles, surface.cell_size, run.quality_ref,
                                                 &flags, nullptr, &run.deviation_memo);
   if (run.params.remesh) {
     const post::RemeshParams rp = remesh_params(run.params, run.base, run.refined.grid->fine_size());
-    const post::RemeshStats st = post::remesh_bad_regions(surface, flags, run.quality_ref, run.prepared, rp, run.progress);
+    const post::RemeshStats st =
+        post::remesh_bad_regions(surface, flags, run.quality_ref, run.prepared, rp, run.progress);
     report.quality.regions = st.regions;
     report.quality.remeshed_on_input = st.on_input;
     report.quality.remeshed_by_ear_clipping = st.ear_clipping;
@@ -55,7 +57,8 @@ void post_process(WrapRun& run) {
   if (run.params.remove_slivers) {  // flips, collapses and tangential moves, held to the rebuilds' tolerance
     StageTimer timer("slivers", run.report.stages);
     const post::RemeshParams rp = remesh_params(run.params, run.base, run.refined.grid->fine_size());
-    post::remove_slivers(run.surface, run.quality_ref, post::sliver_removal_params(rp.max_deviation, rp.offset, rp.float_coordinates));
+    post::remove_slivers(run.surface, run.quality_ref,
+                         post::sliver_removal_params(rp.max_deviation, rp.offset, rp.float_coordinates));
   }
 
   run.result.surface = run.labelled_surface();

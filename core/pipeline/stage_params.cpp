@@ -2,7 +2,9 @@
 
 namespace vdbwrap::pipeline {
 
-prep::PrepareParams prepare_params(const WrapParams& params) { return {params.weld_tolerance, params.feature_angle_deg}; }
+prep::PrepareParams prepare_params(const WrapParams& params) {
+  return {params.weld_tolerance, params.feature_angle_deg};
+}
 
 grid::SizeRequests size_requests(const WrapParams& params) {
   return {params.levels, params.control_volumes, params.part_sizes, params.contact_prevention, params.contact_floor};

@@ -21,19 +21,23 @@ namespace {
 std::string why_invalid(const WrapRun& run, const check::CgalVerdict& verdict) {
   const WrapReport& report = run.report;
   std::string why = "the wrap failed validation: closed=" + std::to_string(report.output.closed) +
-                    " manifold=" + std::to_string(report.output.manifold) + " outward=" + std::to_string(verdict.outward);
+                    " manifold=" + std::to_string(report.output.manifold) +
+                    " outward=" + std::to_string(verdict.outward);
   // CGAL's self-intersection test runs on a closed manifold only: otherwise there is no verdict.
   if (verdict.valid_polygon_mesh) why += " self-intersecting=" + std::to_string(verdict.self_intersects);
   if (run.params.float_coordinates) {
     // Far from the origin, single precision cannot hold cells this small: points merge.
     double far = 0, cell = INFINITY;
-    for (const Vec3& p : run.result.surface.points) far = std::max({far, std::fabs(p[0]), std::fabs(p[1]), std::fabs(p[2])});
+    for (const Vec3& p : run.result.surface.points)
+      far = std::max({far, std::fabs(p[0]), std::fabs(p[1]), std::fabs(p[2])});
     for (double c : run.surface.cell_size) cell = std::min(cell, c);
     const double float_step = far * 6e-8;  // a float's spacing at that magnitude, about
     if (float_step > 1e-3 * cell) {
       char text[160];
-      std::snprintf(text, sizeof text, "; the output is rounded to single precision for STL, whose steps (about %.3g at "
-                    "these coordinates) are too coarse for cells of %.3g", float_step, cell);
+      std::snprintf(text, sizeof text,
+                    "; the output is rounded to single precision for STL, whose steps (about %.3g at "
+                    "these coordinates) are too coarse for cells of %.3g",
+                    float_step, cell);
       why += std::string(text) + ": write .ply, .obj or .vtp, which keep doubles, or move the model nearer the origin";
     }
   }
@@ -72,7 +76,8 @@ void validate_surface(WrapRun& run) {
                                                  &final_flags, &none, &run.deviation_memo);
           quality_beside_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
         });
-      checks.run_and_wait([&] { verdict = check::cgal_verdict(run.result.surface.points, run.result.surface.triangles); });
+      checks.run_and_wait(
+          [&] { verdict = check::cgal_verdict(run.result.surface.points, run.result.surface.triangles); });
       run.check_cancel();
       report.output.self_intersecting = verdict.self_intersects;
       crossing.clear();

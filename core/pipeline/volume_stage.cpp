@@ -39,11 +39,11 @@ void report_contacts(WrapRun& run) {
   for (Vec3& p : report.leak.path) p = p + run.prepared.origin;
   const Vec3& at = report.leak.location;
   char where[160];
-  std::snprintf(where, sizeof where, " through a passage about %.4g wide at (%.6g, %.6g, %.6g)", report.leak.width, at[0],
-                at[1], at[2]);
+  std::snprintf(where, sizeof where, " through a passage about %.4g wide at (%.6g, %.6g, %.6g)", report.leak.width,
+                at[0], at[1], at[2]);
   report.total_seconds = run.seconds();
-  throw WrapFailure("leak: " + report.leak.description + where + " (close the hole, or set --gap-closure above its width)",
-                    report);
+  throw WrapFailure(
+      "leak: " + report.leak.description + where + " (close the hole, or set --gap-closure above its width)", report);
 }
 
 void choose_volume(WrapRun& run) {
@@ -57,8 +57,8 @@ void choose_volume(WrapRun& run) {
   // Clearances are measured for gap closure and for a seed's leak only.
   if (request.gap_closure > 0 || !request.seeds.empty()) run.index();
   grid::VolumeSelection sel = grid::select_volume(
-      *run.refined.grid, request, [&](const Vec3& p) { return std::sqrt(run.index_builder->get()->squared_distance(p)); },
-      run.progress);
+      *run.refined.grid, request,
+      [&](const Vec3& p) { return std::sqrt(run.index_builder->get()->squared_distance(p)); }, run.progress);
   run.report.volumes = sel.report;
   if (sel.leak.detected) fail_with_leak(run, sel.leak);
   run.label = sel.label;
@@ -70,7 +70,8 @@ void choose_volume(WrapRun& run) {
 void build_volume(WrapRun& run) {
   WrapReport& report = run.report;
   const prep::PreparedInput& prepared = run.prepared;
-  run.controls = grid::make_size_controls(size_requests(run.params), prepared.mesh, prepared.origin, prepared.diagonal, run.base);
+  run.controls =
+      grid::make_size_controls(size_requests(run.params), prepared.mesh, prepared.origin, prepared.diagonal, run.base);
   report.finest_size = run.base / double(1 << run.controls.max_level);
   report.control_sizes = run.controls.described;
   run.check_cancel();
@@ -99,8 +100,8 @@ void build_volume(WrapRun& run) {
   {
     StageTimer timer("extract", report.stages);
     extract::ExtractStats stats;
-    run.lattice = extract::extract_manifold_surface(*run.refined.grid, run.label, run.params.volume, stats, run.progress,
-                                                    run.anchors, run.params.levels);
+    run.lattice = extract::extract_manifold_surface(*run.refined.grid, run.label, run.params.volume, stats,
+                                                    run.progress, run.anchors, run.params.levels);
     report.manifold_fixes = stats.excluded_cells;
   }
   run.check_cancel();

@@ -12,7 +12,10 @@
 namespace vdbwrap::pipeline {
 
 WrapRun::WrapRun(const Mesh& input_mesh, const WrapParams& wrap_params, ProgressSink* sink)
-    : input(input_mesh), params(wrap_params), progress(sink), started(std::chrono::steady_clock::now()),
+    : input(input_mesh),
+      params(wrap_params),
+      progress(sink),
+      started(std::chrono::steady_clock::now()),
       report(result.report) {
   report.params = params;
 }
@@ -58,13 +61,14 @@ Mesh WrapRun::labelled_surface() const {
     return out;
   }
   out.triangle_part.resize(out.triangles.size());
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, out.triangles.size(), 1024), [&](const tbb::blocked_range<size_t>& r) {
-    for (size_t t = r.begin(); t != r.end(); ++t) {
-      const Tri& tri = out.triangles[t];
-      const Vec3 c = (out.points[tri[0]] + out.points[tri[1]] + out.points[tri[2]]) * (1.0 / 3.0) - prepared.origin;
-      out.triangle_part[t] = prepared.mesh.part_of(quality_ref.closest(c).triangle);
-    }
-  });
+  tbb::parallel_for(
+      tbb::blocked_range<size_t>(0, out.triangles.size(), 1024), [&](const tbb::blocked_range<size_t>& r) {
+        for (size_t t = r.begin(); t != r.end(); ++t) {
+          const Tri& tri = out.triangles[t];
+          const Vec3 c = (out.points[tri[0]] + out.points[tri[1]] + out.points[tri[2]]) * (1.0 / 3.0) - prepared.origin;
+          out.triangle_part[t] = prepared.mesh.part_of(quality_ref.closest(c).triangle);
+        }
+      });
   return out;
 }
 

@@ -37,9 +37,14 @@ double min_angle_cos_max(const Vec3& a, const Vec3& b, const Vec3& c) {
 
 class Coarsener {
  public:
-  Coarsener(std::vector<Vec3>& p, std::vector<Tri>& t, const std::vector<uint8_t>& locked, const mesh::SurfaceIndex& input,
-            const Vec3& origin, const CoarsenParams& params)
-      : p_(p), t_(t), locked_(locked), input_(input), origin_(origin), prm_(params),
+  Coarsener(std::vector<Vec3>& p, std::vector<Tri>& t, const std::vector<uint8_t>& locked,
+            const mesh::SurfaceIndex& input, const Vec3& origin, const CoarsenParams& params)
+      : p_(p),
+        t_(t),
+        locked_(locked),
+        input_(input),
+        origin_(origin),
+        prm_(params),
         buckets_(p, t, std::max(params.max_edge, 1e-300)) {
     alive_.assign(t.size(), 1);
     vertex_alive_.assign(p.size(), 1);
@@ -141,7 +146,8 @@ class Coarsener {
         if (made) apply(plans[i], stamp, queue_, true), ++collapses;
         // A refusal by its own neighbourhood holds until that changes; one by other
         // triangles in the way (checked here or against the batch) may not.
-        else refusals_.push_back({edge_key(batch[i].a, batch[i].b), stamp, !plans[i].ok && !plans[i].hit_other});
+        else
+          refusals_.push_back({edge_key(batch[i].a, batch[i].b), stamp, !plans[i].ok && !plans[i].hit_other});
       }
       queue_.put_back(deferred);
     }
@@ -242,7 +248,8 @@ class Coarsener {
   bool in_reach(const Box3& b, const GridKey& k) const {
     const GridKey lo = cell_of(b.lo), hi = cell_of(b.hi);
     return lo.x >= k.x * kBlock - kReach && lo.y >= k.y * kBlock - kReach && lo.z >= k.z * kBlock - kReach &&
-           hi.x < (k.x + 1) * kBlock + kReach && hi.y < (k.y + 1) * kBlock + kReach && hi.z < (k.z + 1) * kBlock + kReach;
+           hi.x < (k.x + 1) * kBlock + kReach && hi.y < (k.y + 1) * kBlock + kReach &&
+           hi.z < (k.z + 1) * kBlock + kReach;
   }
 
   // One block's edges, shortest first, each collapse checked and applied before the next
@@ -333,7 +340,8 @@ class Coarsener {
         });
     if (edges.empty()) return 0;
     const DenseNumbers numbers({range.lo.x, range.lo.y, range.lo.z},
-                               {uint64_t(range.hi.x - range.lo.x + 1), uint64_t(range.hi.y - range.lo.y + 1), uint64_t(range.hi.z - range.lo.z + 1)});
+                               {uint64_t(range.hi.x - range.lo.x + 1), uint64_t(range.hi.y - range.lo.y + 1),
+                                uint64_t(range.hi.z - range.lo.z + 1)});
     struct Owned {
       uint64_t block;
       Entry e;
@@ -348,7 +356,8 @@ class Coarsener {
         parts[k].push_back({numbers.number(b.x, b.y, b.z), edges[i]});
       }
     });
-    FillVector<Owned> owned = radix_sort_joined(parts, [](const Owned& o) { return o.block; }, bits_for(numbers.count));
+    FillVector<Owned> owned = radix_sort_joined(
+        parts, [](const Owned& o) { return o.block; }, bits_for(numbers.count));
     std::vector<Block> blocks;
     std::vector<size_t> starts;
     for (size_t i = 0; i < owned.size(); ++i)
@@ -496,9 +505,12 @@ class Coarsener {
     neighbours(u, scratch.nu), neighbours(v, scratch.nv);
     size_t common = 0;
     for (size_t i = 0, j = 0; i < scratch.nu.size() && j < scratch.nv.size();) {
-      if (scratch.nu[i] < scratch.nv[j]) ++i;
-      else if (scratch.nv[j] < scratch.nu[i]) ++j;
-      else ++common, ++i, ++j;
+      if (scratch.nu[i] < scratch.nv[j])
+        ++i;
+      else if (scratch.nv[j] < scratch.nu[i])
+        ++j;
+      else
+        ++common, ++i, ++j;
     }
     if (common != 2) return false;
     // Close to the input: the centroid of every new triangle and the midpoint of every new
@@ -529,7 +541,8 @@ class Coarsener {
       if (fan_unfolded_after(w, v, out, scratch.fan)) unfolded.push_back(w);
     auto settled = [&](const Tri& a, const Tri& b) {
       for (uint32_t x : a)
-        if ((b[0] == x || b[1] == x || b[2] == x) && std::find(unfolded.begin(), unfolded.end(), x) != unfolded.end()) return true;
+        if ((b[0] == x || b[1] == x || b[2] == x) && std::find(unfolded.begin(), unfolded.end(), x) != unfolded.end())
+          return true;
       return false;
     };
     std::vector<Box3>& boxes = scratch.boxes;
@@ -538,7 +551,8 @@ class Coarsener {
     for (size_t i = 0; i < out.fresh.size(); ++i) {
       if (check::triangle_is_degenerate(p_, out.fresh[i])) return false;
       for (size_t j = 0; j < i; ++j)
-        if (!settled(out.fresh[i], out.fresh[j]) && check::triangle_pair_intersects(p_, out.fresh[i], out.fresh[j])) return false;
+        if (!settled(out.fresh[i], out.fresh[j]) && check::triangle_pair_intersects(p_, out.fresh[i], out.fresh[j]))
+          return false;
       boxes.push_back(box_of(out.fresh[i]));
       all.add(boxes.back().lo), all.add(boxes.back().hi);
     }
@@ -549,7 +563,8 @@ class Coarsener {
       if (other[0] == u || other[1] == u || other[2] == u) return;  // replaced or removed
       const Box3& box = buckets_.box(g);
       for (size_t i = 0; i < out.fresh.size() && !hit; ++i)
-        hit = boxes[i].overlaps(box) && !settled(out.fresh[i], other) && check::triangle_pair_intersects(p_, out.fresh[i], other);
+        hit = boxes[i].overlaps(box) && !settled(out.fresh[i], other) &&
+              check::triangle_pair_intersects(p_, out.fresh[i], other);
     });
     if (hit) {
       out.hit_other = true;
@@ -723,19 +738,19 @@ class Coarsener {
   // block's own steps in the low half. Events of different blocks in one phase are never
   // compared: they concern nodes in different reaches.
   uint64_t phase_ = 0, pass_start_ = 0;  // the first event of the pass
-  std::vector<uint64_t> changed_in_;      // per node: the last event that changed its faces
-  std::vector<Refusal> refusals_;  // this pass's
-  std::vector<Entry> start_edges_;  // the first pass's edges
+  std::vector<uint64_t> changed_in_;     // per node: the last event that changed its faces
+  std::vector<Refusal> refusals_;        // this pass's
+  std::vector<Entry> start_edges_;       // the first pass's edges
   std::unordered_map<GridKey, std::vector<uint32_t>, GridKeyHash> batch_made_;  // the batch's new triangles
   struct Marks {  // per thread: bucket marks and plan()'s scratch lists
     std::vector<uint32_t> seen;
     uint32_t stamp = 0;
     std::vector<uint32_t> nu, nv;
-    std::vector<Box3> boxes;      // of a plan's new triangles
-    std::vector<uint32_t> spokes;  // the other ends of its new edges
-    std::vector<uint32_t> unfolded;  // corners of its new triangles whose new fans lie unfolded
+    std::vector<Box3> boxes;                   // of a plan's new triangles
+    std::vector<uint32_t> spokes;              // the other ends of its new edges
+    std::vector<uint32_t> unfolded;            // corners of its new triangles whose new fans lie unfolded
     std::vector<std::array<uint32_t, 2>> fan;  // fan_unfolded_after()'s
-    std::vector<uint32_t> made_ends;  // apply()'s: the other ends of the edges a collapse makes
+    std::vector<uint32_t> made_ends;           // apply()'s: the other ends of the edges a collapse makes
   };
   std::vector<Plan> plans_;
   std::unique_ptr<std::atomic<uint32_t>[]> witness_;  // per node: an input triangle near it, or UINT32_MAX
@@ -749,16 +764,21 @@ class Coarsener {
 }  // namespace
 
 CoarsenStats coarsen(std::vector<Vec3>& points, std::vector<Tri>& triangles, const std::vector<uint8_t>& locked,
-                     const mesh::SurfaceIndex& input, const Vec3& origin, const CoarsenParams& params, ProgressSink* progress) {
+                     const mesh::SurfaceIndex& input, const Vec3& origin, const CoarsenParams& params,
+                     ProgressSink* progress) {
   CoarsenStats stats;
   stats.triangles_before = triangles.size();
-  if (progress) progress->progress("coarsen", 0.0, "merging nodes on flat parts of " + std::to_string(triangles.size()) + " triangles");
+  if (progress)
+    progress->progress("coarsen", 0.0,
+                       "merging nodes on flat parts of " + std::to_string(triangles.size()) + " triangles");
   Coarsener c(points, triangles, locked, input, origin, params);
   stats.collapses = c.run(progress);
   stats.remap = c.compact();
   stats.triangles_after = triangles.size();
   if (progress)
-    progress->progress("coarsen", 1.0, std::to_string(stats.triangles_before) + " -> " + std::to_string(stats.triangles_after) + " triangles");
+    progress->progress(
+        "coarsen", 1.0,
+        std::to_string(stats.triangles_before) + " -> " + std::to_string(stats.triangles_after) + " triangles");
   return stats;
 }
 

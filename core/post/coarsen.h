@@ -17,12 +17,12 @@
 namespace vdbwrap::post {
 
 struct CoarsenParams {
-  double max_deviation = 0;        // model units: new triangles' sample points stay this close to the input
-  double max_edge = 0;             // longest edge a collapse may make
-  double min_area2 = 0;            // smallest doubled triangle area allowed
-  double max_normal_turn_deg = 25; // a triangle may turn at most this much
-  double min_angle_deg = 18;       // smallest angle of a new triangle (unless the old one was worse)
-  double max_chain_turn_deg = 8;   // a feature node goes only where its chain turns less than this
+  double max_deviation = 0;         // model units: new triangles' sample points stay this close to the input
+  double max_edge = 0;              // longest edge a collapse may make
+  double min_area2 = 0;             // smallest doubled triangle area allowed
+  double max_normal_turn_deg = 25;  // a triangle may turn at most this much
+  double min_angle_deg = 18;        // smallest angle of a new triangle (unless the old one was worse)
+  double max_chain_turn_deg = 8;    // a feature node goes only where its chain turns less than this
 };
 
 struct CoarsenStats {
@@ -34,6 +34,7 @@ struct CoarsenStats {
 // locked: vertices that must stay (snapped feature nodes). Compacts points and triangles
 // (stats.remap says where each point went).
 CoarsenStats coarsen(std::vector<Vec3>& points, std::vector<Tri>& triangles, const std::vector<uint8_t>& locked,
-                     const mesh::SurfaceIndex& input, const Vec3& origin, const CoarsenParams& params, ProgressSink* progress);
+                     const mesh::SurfaceIndex& input, const Vec3& origin, const CoarsenParams& params,
+                     ProgressSink* progress);
 
 }  // namespace vdbwrap::post

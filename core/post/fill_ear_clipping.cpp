@@ -51,7 +51,9 @@ std::array<double, 2> PlaneFrame::to_2d(const Vec3& p) const {
   const Vec3 d = p - origin;
   return {dot(d, e1), dot(d, e2)};
 }
-Vec3 PlaneFrame::to_3d(const std::array<double, 2>& q, double h) const { return origin + e1 * q[0] + e2 * q[1] + n * h; }
+Vec3 PlaneFrame::to_3d(const std::array<double, 2>& q, double h) const {
+  return origin + e1 * q[0] + e2 * q[1] + n * h;
+}
 double PlaneFrame::height(const Vec3& p) const { return dot(p - origin, n); }
 
 PlaneFrame plane_frame(const RegionProblem& problem) {
@@ -122,7 +124,9 @@ RegionFill fill_by_ear_clipping(const RegionProblem& problem) {
     return id;
   };
   auto next_of = [&](std::list<Node>::iterator it) { return ++it == front.end() ? front.begin() : it; };
-  auto prev_of = [&](std::list<Node>::iterator it) { return it == front.begin() ? std::prev(front.end()) : std::prev(it); };
+  auto prev_of = [&](std::list<Node>::iterator it) {
+    return it == front.begin() ? std::prev(front.end()) : std::prev(it);
+  };
   // A new front edge or triangle side (p, q) must not meet the front except at the three nodes
   // of the corner being cut.
   auto crosses_front = [&](const P2& p, const P2& q, uint32_t skip_a, uint32_t skip_i, uint32_t skip_b) {
@@ -161,7 +165,8 @@ RegionFill fill_by_ear_clipping(const RegionProblem& problem) {
     std::vector<std::pair<double, std::list<Node>::iterator>> corners;
     for (auto it = front.begin(); it != front.end(); ++it) {
       const P2 to_next = sub2(next_of(it)->q, it->q), to_prev = sub2(prev_of(it)->q, it->q);
-      double angle = std::atan2(cross2(to_next, to_prev), dot2(to_next, to_prev));  // from next, counter-clockwise, to prev
+      double angle =
+          std::atan2(cross2(to_next, to_prev), dot2(to_next, to_prev));  // from next, counter-clockwise, to prev
       if (angle <= 0) angle += 2 * M_PI;
       corners.push_back({angle, it});
     }
@@ -181,8 +186,8 @@ RegionFill fill_by_ear_clipping(const RegionProblem& problem) {
         const double chord = length2(sub2(a, b));
         const double deg = angle * 180 / M_PI;
         const int new_nodes = (pass == 1 || deg < 75 || (deg < 100 && chord <= 1.25 * L) || front.size() == 4) ? 0
-                              : deg < 135                                                                    ? 1
-                                                                                                              : 2;
+                              : deg < 135                                                                      ? 1
+                                                                                                               : 2;
         if (new_nodes == 0) {
           if (orient2(a, i, b) <= 0 || any_inside(a, i, b, pv->id, it->id, nx->id) ||
               crosses_front(a, b, pv->id, it->id, nx->id))
@@ -206,7 +211,8 @@ RegionFill fill_by_ear_clipping(const RegionProblem& problem) {
         bool ok = true;
         for (size_t k = 0; k + 1 < chain.size() && ok; ++k) ok &= orient2(i, chain[k + 1], chain[k]) > 0;
         for (const P2& q : at) ok = ok && !near_front(q, pv->id, it->id, nx->id);
-        for (size_t k = 0; k + 1 < chain.size() && ok; ++k) ok &= !crosses_front(chain[k], chain[k + 1], pv->id, it->id, nx->id);
+        for (size_t k = 0; k + 1 < chain.size() && ok; ++k)
+          ok &= !crosses_front(chain[k], chain[k + 1], pv->id, it->id, nx->id);
         for (const P2& q : at) ok = ok && !crosses_front(i, q, pv->id, it->id, nx->id);
         if (!ok) continue;
         std::vector<uint32_t> ids;
@@ -240,7 +246,8 @@ RegionFill fill_by_ear_clipping(const RegionProblem& problem) {
         for (uint32_t w : nb[v]) s += height[w];
         if (!nb[v].empty()) height[v] = s / double(nb[v].size());
       }
-    for (size_t k = 0; k < out.new_points.size(); ++k) out.new_points[k] = frame.to_3d(plane_of[base + k], height[base + k]);
+    for (size_t k = 0; k < out.new_points.size(); ++k)
+      out.new_points[k] = frame.to_3d(plane_of[base + k], height[base + k]);
   }
   out.ok = true;
   return out;

@@ -68,7 +68,6 @@ bool segments_cross(const P2& a, const P2& b, const P2& c, const P2& d) {
   return ((o1 > 0) != (o2 > 0)) && ((o3 > 0) != (o4 > 0));
 }
 
-
 }  // namespace
 
 RegionFill fill_on_substrate(const RegionProblem& pr, const Substrate& sub) {
@@ -92,7 +91,8 @@ RegionFill fill_on_substrate(const RegionProblem& pr, const Substrate& sub) {
   std::vector<P2> fixed2;
   for (const Vec3& p : pr.fixed) {
     fixed2.push_back(frame.to_2d(p));
-    if (!inside_polygon(fixed2.back(), polygon)) return fail("a kept node lies outside the contour in the region's plane");
+    if (!inside_polygon(fixed2.back(), polygon))
+      return fail("a kept node lies outside the contour in the region's plane");
   }
   auto node2 = [&](uint32_t i) { return i < nc ? polygon[i] : fixed2[i - nc]; };
 
@@ -117,9 +117,8 @@ RegionFill fill_on_substrate(const RegionProblem& pr, const Substrate& sub) {
                        normalized(normal[tris[0]] + normal[tris[1]])});
   }
   // Creases are the sorted edge map's: iteration order must not depend on the hash.
-  std::sort(creases.begin(), creases.end(), [](const Crease& x, const Crease& y) {
-    return x.a != y.a ? x.a < y.a : x.b < y.b;
-  });
+  std::sort(creases.begin(), creases.end(),
+            [](const Crease& x, const Crease& y) { return x.a != y.a ? x.a < y.a : x.b < y.b; });
 
   // The side of the substrate the wrap is on (the surface replaced tells), and the point of
   // the replaced surface over a plane point (its height there), for the mapping back.
@@ -134,7 +133,8 @@ RegionFill fill_on_substrate(const RegionProblem& pr, const Substrate& sub) {
       const double area = cross2(sub2(b, a), sub2(c, a));
       if (area <= 0) continue;
       const double u = cross2(sub2(b, q), sub2(c, q)) / area, v = cross2(sub2(c, q), sub2(a, q)) / area, w = 1 - u - v;
-      if (u >= -1e-9 && v >= -1e-9 && w >= -1e-9) return pr.old_points[t[0]] * u + pr.old_points[t[1]] * v + pr.old_points[t[2]] * w;
+      if (u >= -1e-9 && v >= -1e-9 && w >= -1e-9)
+        return pr.old_points[t[0]] * u + pr.old_points[t[1]] * v + pr.old_points[t[2]] * w;
     }
     return frame.to_3d(q, mean_height);
   };
@@ -213,15 +213,19 @@ RegionFill fill_on_substrate(const RegionProblem& pr, const Substrate& sub) {
     for (int j = 0; lo[1] + j * dy <= hi[1]; ++j)
       for (int i = 0; lo[0] + (i + 0.5 * (j % 2)) * L <= hi[0]; ++i) {
         const P2 q{lo[0] + (i + 0.5 * (j % 2)) * L, lo[1] + j * dy};
-        if (!inside_polygon(q, polygon) || boundary_distance(q, polygon) < 0.5 * L || !clear_of_fixed(q, 0.5 * L)) continue;
+        if (!inside_polygon(q, polygon) || boundary_distance(q, polygon) < 0.5 * L || !clear_of_fixed(q, 0.5 * L))
+          continue;
         bool clear = true;
-        for (size_t e = 0; e < crease_points && clear; ++e) clear = std::sqrt(dot2(sub2(q, extra2[e]), sub2(q, extra2[e]))) >= 0.5 * L;
+        for (size_t e = 0; e < crease_points && clear; ++e)
+          clear = std::sqrt(dot2(sub2(q, extra2[e]), sub2(q, extra2[e]))) >= 0.5 * L;
         for (const auto& [u, v] : constraints)
-          if (clear && u >= base && v >= base) clear = segment_distance(q, extra2[u - base], extra2[v - base]) >= 0.4 * L;
+          if (clear && u >= base && v >= base)
+            clear = segment_distance(q, extra2[u - base], extra2[v - base]) >= 0.4 * L;
         if (!clear) continue;
         const Vec3 above = old_surface_at(q);
         const Foot f = foot_of(above);
-        if (std::fabs(dot(f.normal, frame.n)) < 0.17) return fail("the input under the region is steeper than 80 degrees to its plane");
+        if (std::fabs(dot(f.normal, frame.n)) < 0.17)
+          return fail("the input under the region is steeper than 80 degrees to its plane");
         extra2.push_back(q);
         extra3.push_back(off_the_input(f.point, f.normal, above));
       }
@@ -249,7 +253,9 @@ RegionFill fill_on_substrate(const RegionProblem& pr, const Substrate& sub) {
   if (cdt.number_of_vertices() != total) return fail("constraints cross in the region's plane");
 
   // Inside the contour: across a contour edge the side flips, across other constraints not.
-  auto is_contour = [&](uint32_t a, uint32_t b) { return (a < nc && b < nc) && ((a + 1) % nc == b || (b + 1) % nc == a); };
+  auto is_contour = [&](uint32_t a, uint32_t b) {
+    return (a < nc && b < nc) && ((a + 1) % nc == b || (b + 1) % nc == a);
+  };
   for (auto f = cdt.all_faces_begin(); f != cdt.all_faces_end(); ++f) f->info() = -1;
   std::deque<CDT::Face_handle> queue;
   cdt.infinite_face()->info() = 0;

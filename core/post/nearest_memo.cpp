@@ -6,7 +6,8 @@ namespace vdbwrap::post {
 
 NearestMemo::Hit NearestMemo::closest(const Vec3& q) const {
   Hit hit;
-  if (!closest_within(q, std::numeric_limits<double>::infinity(), hit)) hit = input_.closest(q);  // no input: its "none"
+  if (!closest_within(q, std::numeric_limits<double>::infinity(), hit))
+    hit = input_.closest(q);  // no input: its "none"
   return hit;
 }
 

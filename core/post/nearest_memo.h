@@ -23,7 +23,7 @@ class NearestMemo {
 
  private:
   struct Known {
-    uint32_t triangle;   // the nearest, or UINT32_MAX: none within `none_within`
+    uint32_t triangle;  // the nearest, or UINT32_MAX: none within `none_within`
     double none_within;
   };
   const mesh::SurfaceIndex& input_;

@@ -95,9 +95,10 @@ void NormalDeviationMemo::add(const Vec3& a, const Vec3& b, const Vec3& c, doubl
   known_.emplace(key(a, b, c, cell), deviation);
 }
 
-QualityCounts analyse_quality(const std::vector<Vec3>& p, const std::vector<Tri>& tris, const std::vector<double>& cell_size,
-                              const QualityReference& ref, std::vector<uint8_t>* flags_out,
-                              const std::vector<uint32_t>* intersecting, NormalDeviationMemo* memo) {
+QualityCounts analyse_quality(const std::vector<Vec3>& p, const std::vector<Tri>& tris,
+                              const std::vector<double>& cell_size, const QualityReference& ref,
+                              std::vector<uint8_t>* flags_out, const std::vector<uint32_t>* intersecting,
+                              NormalDeviationMemo* memo) {
   const QualityThresholds& t = ref.thresholds;
   QualityCounts q;
   q.triangles = tris.size();
@@ -118,17 +119,18 @@ QualityCounts analyse_quality(const std::vector<Vec3>& p, const std::vector<Tri>
     out.nearest.assign(ref.feature_samples.size(), 0);
     mesh::SurfaceIndex surface(p, tris);
     const double tolerance = t.feature_tolerance * ref.finest_size;
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, ref.feature_samples.size(), 1024), [&](const tbb::blocked_range<size_t>& r) {
-      for (size_t i = r.begin(); i != r.end(); ++i) {
-        auto hit = surface.closest(ref.feature_samples[i] + ref.origin);
-        const double d = std::sqrt(hit.squared_distance);
-        if (d <= tolerance) continue;
-        const Tri& tri = tris[hit.triangle];
-        const double cell = std::max({cell_size[tri[0]], cell_size[tri[1]], cell_size[tri[2]]});
-        out.state[i] = d > t.feature_reach * cell ? 2 : 1;
-        out.nearest[i] = hit.triangle;
-      }
-    });
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, ref.feature_samples.size(), 1024),
+                      [&](const tbb::blocked_range<size_t>& r) {
+                        for (size_t i = r.begin(); i != r.end(); ++i) {
+                          auto hit = surface.closest(ref.feature_samples[i] + ref.origin);
+                          const double d = std::sqrt(hit.squared_distance);
+                          if (d <= tolerance) continue;
+                          const Tri& tri = tris[hit.triangle];
+                          const double cell = std::max({cell_size[tri[0]], cell_size[tri[1]], cell_size[tri[2]]});
+                          out.state[i] = d > t.feature_reach * cell ? 2 : 1;
+                          out.nearest[i] = hit.triangle;
+                        }
+                      });
     return out;
   });
 
@@ -159,7 +161,8 @@ QualityCounts analyse_quality(const std::vector<Vec3>& p, const std::vector<Tri>
         if (len > t.long_edge * std::max(cell_size[u], cell_size[v])) flags[f] |= kLongEdge;
       }
       if (ref.input) {
-        if (!memo || !memo->find(a, b, c, cell, deviation[f])) deviation[f] = normal_deviation_deg(a, b, c, cell, ref), measured[f] = 1;
+        if (!memo || !memo->find(a, b, c, cell, deviation[f]))
+          deviation[f] = normal_deviation_deg(a, b, c, cell, ref), measured[f] = 1;
         if (deviation[f] > t.normal_deviation_deg) flags[f] |= kNormalDeviation;
       }
     }
@@ -218,4 +221,3 @@ QualityCounts analyse_quality(const std::vector<Vec3>& p, const std::vector<Tri>
 }
 
 }  // namespace vdbwrap::post
-

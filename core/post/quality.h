@@ -82,7 +82,7 @@ class NormalDeviationMemo {
 // given, answers the normal deviations it knows and learns the others.
 QualityCounts analyse_quality(const std::vector<Vec3>& points, const std::vector<Tri>& triangles,
                               const std::vector<double>& cell_size, const QualityReference& ref,
-                              std::vector<uint8_t>* flags = nullptr, const std::vector<uint32_t>* intersecting = nullptr,
-                              NormalDeviationMemo* memo = nullptr);
+                              std::vector<uint8_t>* flags = nullptr,
+                              const std::vector<uint32_t>* intersecting = nullptr, NormalDeviationMemo* memo = nullptr);
 
 }  // namespace vdbwrap::post

@@ -27,8 +27,8 @@ struct RegionProblem {
   std::vector<std::pair<uint32_t, uint32_t>> fixed_edges;  // edges among contour and fixed nodes that must stay
   std::vector<Vec3> old_points;  // the surface replaced (its own numbering), for heights and sides
   std::vector<Tri> old_triangles;
-  Vec3 normal{0, 0, 1};       // unit, area-weighted normal of the replaced surface (outward)
-  double target = 0;          // characteristic edge length
+  Vec3 normal{0, 0, 1};  // unit, area-weighted normal of the replaced surface (outward)
+  double target = 0;     // characteristic edge length
 };
 
 // The input triangles under the region, in the same frame as the problem.
@@ -41,9 +41,9 @@ struct Substrate {
 
 struct RegionFill {
   bool ok = false;
-  std::string why;                // when not ok
-  std::vector<Vec3> new_points;   // nodes contour + fixed + i
-  std::vector<Tri> triangles;     // oriented like the region
+  std::string why;               // when not ok
+  std::vector<Vec3> new_points;  // nodes contour + fixed + i
+  std::vector<Tri> triangles;    // oriented like the region
 };
 
 RegionFill fill_on_substrate(const RegionProblem& problem, const Substrate& substrate);

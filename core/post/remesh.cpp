@@ -40,22 +40,26 @@ std::vector<Vec3> samples_of(const std::vector<Vec3>& p, const std::vector<Tri>&
 
 // A region to rebuild: its triangles, the problem the fills solve, and the map back.
 struct Region {
-  std::vector<uint32_t> triangles;     // sorted
-  std::vector<uint32_t> node_ids;      // problem node -> mesh vertex (contour, then fixed)
-  std::vector<uint32_t> ring;          // live triangles outside the region sharing a vertex with it
+  std::vector<uint32_t> triangles;  // sorted
+  std::vector<uint32_t> node_ids;   // problem node -> mesh vertex (contour, then fixed)
+  std::vector<uint32_t> ring;       // live triangles outside the region sharing a vertex with it
   RegionProblem problem;
   Substrate substrate;
-  double cell = 0;                     // smallest cell size at its nodes
-  double old_far = -1;                 // farthest sample of the replaced surface from the input (once known)
-  std::vector<Vec3> old_feet;          // the input points nearest those samples (known with old_far)
+  double cell = 0;             // smallest cell size at its nodes
+  double old_far = -1;         // farthest sample of the replaced surface from the input (once known)
+  std::vector<Vec3> old_feet;  // the input points nearest those samples (known with old_far)
   RegionFill on_input, by_ears;
 };
 
 class Remesher {
  public:
-  Remesher(PostSurface& s, const std::vector<uint8_t>& flags, const QualityReference& ref, const prep::PreparedInput& input,
-           const RemeshParams& params)
-      : s_(s), ref_(ref), input_(input), prm_(params), flags_(flags),
+  Remesher(PostSurface& s, const std::vector<uint8_t>& flags, const QualityReference& ref,
+           const prep::PreparedInput& input, const RemeshParams& params)
+      : s_(s),
+        ref_(ref),
+        input_(input),
+        prm_(params),
+        flags_(flags),
         buckets_(s.points, s.triangles, 2.0 * *std::max_element(s.cell_size.begin(), s.cell_size.end())) {
     alive_.assign(s.triangles.size(), 1);
     deviation_.assign(s.triangles.size(), -1);
@@ -80,8 +84,9 @@ class Remesher {
       std::vector<Region> regions = gather(rings);
       if (regions.empty()) break;
       if (progress)
-        progress->progress("remesh", double(round) / prm_.rounds,
-                           "round " + std::to_string(round + 1) + ": rebuilding " + std::to_string(regions.size()) + " bad regions");
+        progress->progress(
+            "remesh", double(round) / prm_.rounds,
+            "round " + std::to_string(round + 1) + ": rebuilding " + std::to_string(regions.size()) + " bad regions");
       stats_.regions += regions.size();
       tbb::parallel_for(size_t(0), regions.size(), [&](size_t i) {
         regions[i].on_input = fill_on_substrate(regions[i].problem, regions[i].substrate);
@@ -136,7 +141,8 @@ class Remesher {
       for (size_t k = 0; k < core.size() && core.size() < prm_.max_region_triangles; ++k)
         for (uint32_t v : s_.triangles[core[k]])
           for (uint32_t g : vf_[v])
-            if (marks_[g] != in && is_bad(g) && !taken[g] && core.size() < prm_.max_region_triangles && norm(centroid(g) - at) < reach)
+            if (marks_[g] != in && is_bad(g) && !taken[g] && core.size() < prm_.max_region_triangles &&
+                norm(centroid(g) - at) < reach)
               marks_[g] = in, core.push_back(g);
       // Next to another region: a later round. Checked after each growth step (each one only
       // adds triangles), so a clash costs no more growth than it takes to find it.
@@ -161,8 +167,10 @@ class Remesher {
     });
     std::vector<Region> kept;
     for (size_t i = 0; i < out.size(); ++i) {
-      if (out[i].triangles.empty()) ++stats_.refusals["region: " + why[i]];
-      else kept.push_back(std::move(out[i]));
+      if (out[i].triangles.empty())
+        ++stats_.refusals["region: " + why[i]];
+      else
+        kept.push_back(std::move(out[i]));
     }
     return kept;
   }
@@ -271,7 +279,8 @@ class Remesher {
     // Problem numbering: contour, then the kept (locked) nodes inside; the rest go.
     std::unordered_map<uint32_t, uint32_t> index;
     RegionProblem& pr = reg.problem;
-    for (uint32_t v : loop) index[v] = uint32_t(reg.node_ids.size()), reg.node_ids.push_back(v), pr.contour.push_back(s_.points[v]);
+    for (uint32_t v : loop)
+      index[v] = uint32_t(reg.node_ids.size()), reg.node_ids.push_back(v), pr.contour.push_back(s_.points[v]);
     std::unordered_set<uint32_t> on_loop(loop.begin(), loop.end());
     // Snapped nodes inside stay, unless one almost on another (where feature curves meet):
     // those make the slivers, and the region's check keeps the edges where they were.
@@ -309,18 +318,21 @@ class Remesher {
     reg.cell = INFINITY;
     for (uint32_t v : verts) reg.cell = std::min(reg.cell, s_.cell_size[v]);
     double contour_length = 0;
-    for (size_t i = 0; i < loop.size(); ++i) contour_length += norm(s_.points[loop[(i + 1) % loop.size()]] - s_.points[loop[i]]);
+    for (size_t i = 0; i < loop.size(); ++i)
+      contour_length += norm(s_.points[loop[(i + 1) % loop.size()]] - s_.points[loop[i]]);
     pr.target = std::max(contour_length / double(loop.size()), 0.5 * reg.cell);
     reg.ring = grow(reg.triangles);
-    reg.ring.erase(std::remove_if(reg.ring.begin(), reg.ring.end(),
-                                  [&](uint32_t f) { return std::binary_search(reg.triangles.begin(), reg.triangles.end(), f); }),
-                   reg.ring.end());
+    reg.ring.erase(
+        std::remove_if(reg.ring.begin(), reg.ring.end(),
+                       [&](uint32_t f) { return std::binary_search(reg.triangles.begin(), reg.triangles.end(), f); }),
+        reg.ring.end());
 
     // The substrate: the input triangles nearest to points spread over the region.
     std::vector<uint32_t> hits;
     for (const Tri& t : pr.old_triangles) {
       const Vec3 &a = pr.old_points[t[0]], &b = pr.old_points[t[1]], &c = pr.old_points[t[2]];
-      for (const Vec3& q : {a, (a + b + c) * (1.0 / 3.0), (a + b) * 0.5}) hits.push_back(ref_.closest(q - ref_.origin).triangle);
+      for (const Vec3& q : {a, (a + b + c) * (1.0 / 3.0), (a + b) * 0.5})
+        hits.push_back(ref_.closest(q - ref_.origin).triangle);
     }
     std::sort(hits.begin(), hits.end());
     hits.erase(std::unique(hits.begin(), hits.end()), hits.end());
@@ -380,7 +392,8 @@ class Remesher {
     out.new_points = fill.new_points;
     for (Vec3& q : out.new_points) {
       if (prm_.float_coordinates) q = round_to_float(q);
-      if (!std::isfinite(q[0]) || !std::isfinite(q[1]) || !std::isfinite(q[2])) return out.why = "a new node is not finite", out;
+      if (!std::isfinite(q[0]) || !std::isfinite(q[1]) || !std::isfinite(q[2]))
+        return out.why = "a new node is not finite", out;
     }
     const std::vector<Tri>& tris = fill.triangles;
 
@@ -395,7 +408,8 @@ class Remesher {
     std::unordered_set<uint64_t> contour_edges;
     for (uint32_t i = 0; i < nc; ++i) {
       const uint32_t u = i, v = (i + 1) % nc;
-      if (!directed.count(directed_key(u, v)) || directed.count(directed_key(v, u))) return out.why = "its border is not the contour", out;
+      if (!directed.count(directed_key(u, v)) || directed.count(directed_key(v, u)))
+        return out.why = "its border is not the contour", out;
       contour_edges.insert(edge_key(u, v));
     }
     const std::unordered_set<uint32_t> in_region(reg.triangles.begin(), reg.triangles.end());
@@ -416,7 +430,8 @@ class Remesher {
     // region and of its ring as needed.
     std::vector<Vec3> points;
     std::unordered_map<uint32_t, uint32_t> local_of;
-    for (uint32_t i = 0; i < base; ++i) points.push_back(s_.points[reg.node_ids[i]]), local_of.emplace(reg.node_ids[i], i);
+    for (uint32_t i = 0; i < base; ++i)
+      points.push_back(s_.points[reg.node_ids[i]]), local_of.emplace(reg.node_ids[i], i);
     points.insert(points.end(), out.new_points.begin(), out.new_points.end());
     auto local = [&](uint32_t g) {
       auto [it, added] = local_of.emplace(g, uint32_t(points.size()));
@@ -428,7 +443,8 @@ class Remesher {
     // The region's defects must drop: bad triangles (the triggers) fewer, defective edges
     // and poor normals not more.
     // Short and long edges, counted per triangle side (inside edges twice, in both).
-    auto count_edges = [&](const std::vector<Vec3>& p, const Tri& t, auto&& cell, size_t& short_edges, size_t& long_edges) {
+    auto count_edges = [&](const std::vector<Vec3>& p, const Tri& t, auto&& cell, size_t& short_edges,
+                           size_t& long_edges) {
       for (int k = 0; k < 3; ++k) {
         const uint32_t u = t[k], v = t[(k + 1) % 3];
         const double len = norm(p[v] - p[u]);
@@ -545,7 +561,8 @@ class Remesher {
     // No intersection among the new triangles, nor with the rest of the surface.
     for (size_t i = 0; i < tris.size(); ++i) {
       for (size_t j = 0; j < i; ++j)
-        if (check::triangle_pair_intersects(s_.points, tris[i], tris[j])) return undo_points(), why = "it intersects itself", false;
+        if (check::triangle_pair_intersects(s_.points, tris[i], tris[j]))
+          return undo_points(), why = "it intersects itself", false;
       Box3 box;
       for (uint32_t v : tris[i]) box.add(s_.points[v]);
       bool hit = false;

@@ -19,8 +19,8 @@ namespace vdbwrap::post {
 struct PostSurface {
   std::vector<Vec3> points;
   std::vector<Tri> triangles;
-  std::vector<double> cell_size;  // local cell size of the voxel stage
-  std::vector<uint8_t> locked;    // on a feature curve: stays where it is
+  std::vector<double> cell_size;                             // local cell size of the voxel stage
+  std::vector<uint8_t> locked;                               // on a feature curve: stays where it is
   std::vector<std::pair<uint32_t, uint32_t>> feature_edges;  // edges along the feature curves: stay edges
 };
 
@@ -35,11 +35,12 @@ struct RemeshParams {
   // the input removes many of them). Edge lengths follow from the cell sizes and the coarsening: a
   // rebuild of a small region rarely changes them, so they are counted, not triggers.
   uint8_t triggers = kSelfIntersecting | kSmallArea | kSliver | kNormalDeviation | kLostFeature;
-  double trigger_normal_deviation_deg = 45;  // poor normals that trigger: beyond this (may be stricter than the analysis)
-  double max_deviation = 0;     // model units: new triangles stay this close to the input (or as close as the old)
-  double offset = 0;            // model units: new nodes on the input sit this far off it
-  double flat_angle_deg = 15;   // the substrate's creases: normals more than this apart
-  int rounds = 3;               // regions grown by 1, 2, then 1 ring again
+  double trigger_normal_deviation_deg =
+      45;                            // poor normals that trigger: beyond this (may be stricter than the analysis)
+  double max_deviation = 0;          // model units: new triangles stay this close to the input (or as close as the old)
+  double offset = 0;                 // model units: new nodes on the input sit this far off it
+  double flat_angle_deg = 15;        // the substrate's creases: normals more than this apart
+  int rounds = 3;                    // regions grown by 1, 2, then 1 ring again
   size_t max_region_triangles = 32;  // bad triangles gathered into one region
   bool float_coordinates = false;    // new nodes rounded to float (binary STL output)
 };

@@ -9,13 +9,15 @@
 
 namespace vdbwrap::post {
 
-WrapRepairOutcome repair_intersections(PostSurface& s, double max_deviation, bool float_coordinates, ProgressSink* progress) {
+WrapRepairOutcome repair_intersections(PostSurface& s, double max_deviation, bool float_coordinates,
+                                       ProgressSink* progress) {
   WrapRepairOutcome out;
   out.intersecting_before = check::intersecting_triangles(s.points, s.triangles, check::SoupKind::kWrap).size();
   if (out.intersecting_before == 0) return out;
   out.ran = true;
   if (progress)
-    progress->progress("repair", 0.0, std::to_string(out.intersecting_before) + " intersecting triangles: intersection repair");
+    progress->progress("repair", 0.0,
+                       std::to_string(out.intersecting_before) + " intersecting triangles: intersection repair");
   RepairParams rp;
   rp.max_deviation = Length{max_deviation, false};
   rp.remove_small_pieces = false;
@@ -57,12 +59,12 @@ WrapRepairOutcome repair_intersections(PostSurface& s, double max_deviation, boo
   const RepairReport& r = result.report;
   out.intersecting_after = check::intersecting_triangles(s.points, s.triangles, check::SoupKind::kWrap).size();
   char text[256];
-  std::snprintf(text, sizeof text, "%zu regions: %zu fixed by local operations, %zu by refill, %zu left", r.regions_found,
-                r.fixed_by_local, r.fixed_by_refill, r.left_unfixed);
+  std::snprintf(text, sizeof text, "%zu regions: %zu fixed by local operations, %zu by refill, %zu left",
+                r.regions_found, r.fixed_by_local, r.fixed_by_refill, r.left_unfixed);
   out.summary = text;
   for (size_t i = 0; i < r.unfixed.size() && i < 5; ++i) {
-    std::snprintf(text, sizeof text, "; unfixed region around (%.6g, %.6g, %.6g)", r.unfixed[i].center[0], r.unfixed[i].center[1],
-                  r.unfixed[i].center[2]);
+    std::snprintf(text, sizeof text, "; unfixed region around (%.6g, %.6g, %.6g)", r.unfixed[i].center[0],
+                  r.unfixed[i].center[1], r.unfixed[i].center[2]);
     out.summary += text;
   }
   return out;

@@ -13,7 +13,7 @@ namespace vdbwrap::post {
 struct WrapRepairOutcome {
   bool ran = false;
   size_t intersecting_before = 0, intersecting_after = 0;  // triangles
-  std::string summary;  // regions found and fixed, or where the unfixed ones are
+  std::string summary;                                     // regions found and fixed, or where the unfixed ones are
 };
 
 // Repairs the intersections of `surface` when it has any (moves within max_deviation, model

@@ -24,12 +24,14 @@ constexpr double kDeg = M_PI / 180.0;
 // one point moves.
 struct Change {
   std::vector<uint32_t> slots;
-  std::vector<Tri> tris;     // tris[i] replaces slots[i]
+  std::vector<Tri> tris;      // tris[i] replaces slots[i]
   std::vector<uint8_t> dies;  // slot i is removed
   uint32_t moved = kNone;
   Vec3 to{0, 0, 0};
   void clear() { slots.clear(), tris.clear(), dies.clear(), moved = kNone; }
-  void add(uint32_t slot, const Tri& t, bool die = false) { slots.push_back(slot), tris.push_back(t), dies.push_back(die); }
+  void add(uint32_t slot, const Tri& t, bool die = false) {
+    slots.push_back(slot), tris.push_back(t), dies.push_back(die);
+  }
 };
 
 class SliverRemover {
@@ -46,7 +48,8 @@ class SliverRemover {
     feature_.resize(s_.points.size());
     for (const auto& [a, b] : s_.feature_edges) {
       if (a == b || a >= feature_.size() || b >= feature_.size() || !is_edge(a, b)) continue;
-      if (std::find(feature_[a].begin(), feature_[a].end(), b) == feature_[a].end()) feature_[a].push_back(b), feature_[b].push_back(a);
+      if (std::find(feature_[a].begin(), feature_[a].end(), b) == feature_[a].end())
+        feature_[a].push_back(b), feature_[b].push_back(a);
     }
     sample_cell_ = bucket_cell(s_);
     for (uint32_t i = 0; i < ref_.feature_samples.size(); ++i)
@@ -87,7 +90,8 @@ class SliverRemover {
     // Three mean edges: most triangles fall in one or two buckets.
     double sum = 0;
     size_t n = 0;
-    for (size_t f = 0; f < s.triangles.size(); f += 7, ++n) sum += norm(s.points[s.triangles[f][1]] - s.points[s.triangles[f][0]]);
+    for (size_t f = 0; f < s.triangles.size(); f += 7, ++n)
+      sum += norm(s.points[s.triangles[f][1]] - s.points[s.triangles[f][0]]);
     return n && sum > 0 ? 3 * sum / double(n) : 1.0;
   }
 
@@ -97,7 +101,8 @@ class SliverRemover {
   }
 
   GridKey cell_of(const Vec3& p) const {
-    return {int64_t(std::floor(p[0] / sample_cell_)), int64_t(std::floor(p[1] / sample_cell_)), int64_t(std::floor(p[2] / sample_cell_))};
+    return {int64_t(std::floor(p[0] / sample_cell_)), int64_t(std::floor(p[1] / sample_cell_)),
+            int64_t(std::floor(p[2] / sample_cell_))};
   }
 
   // The input's sharp edges near the change stay as near the surface as they were (or within
@@ -120,11 +125,13 @@ class SliverRemover {
             double before = INFINITY, after = INFINITY;
             for (uint32_t f : c.slots) {
               const Tri& o = s_.triangles[f];
-              before = std::min(before, norm2(q - closest_on_triangle(q, s_.points[o[0]], s_.points[o[1]], s_.points[o[2]])));
+              before = std::min(before,
+                                norm2(q - closest_on_triangle(q, s_.points[o[0]], s_.points[o[1]], s_.points[o[2]])));
             }
             before = std::sqrt(before);
             if (before > reach) continue;  // held by other triangles, or out of reach
-            for (const auto& at : made_at) after = std::min(after, norm2(q - closest_on_triangle(q, at[0], at[1], at[2])));
+            for (const auto& at : made_at)
+              after = std::min(after, norm2(q - closest_on_triangle(q, at[0], at[1], at[2])));
             if (std::sqrt(after) > std::max(before, prm_.feature_tolerance)) return false;
           }
         }
@@ -239,7 +246,8 @@ class SliverRemover {
     for (uint32_t f : c.slots)
       if (min_angle(f) >= prm_.target_angle_deg) {
         const Tri& o = s_.triangles[f];
-        patch_cos = std::min(patch_cos, dot(patch, normalized(area_vector(s_.points[o[0]], s_.points[o[1]], s_.points[o[2]]))));
+        patch_cos =
+            std::min(patch_cos, dot(patch, normalized(area_vector(s_.points[o[0]], s_.points[o[1]], s_.points[o[2]]))));
       }
     for (size_t i = 0; i < c.slots.size(); ++i) {
       const Tri& o = s_.triangles[c.slots[i]];
@@ -267,7 +275,8 @@ class SliverRemover {
     for (size_t i = 0; i < made.size(); ++i) sample(made_at[i][0], made_at[i][1], made_at[i][2], new_d);
     if (new_d.worst > std::max(prm_.max_deviation, old_d.worst)) return refuse("far");
     // On average no farther from the input than before (a tenth of the bound for rounding).
-    if (new_d.n && new_d.sum / double(new_d.n) > old_d.sum / double(std::max<size_t>(1, old_d.n)) + 0.1 * prm_.max_deviation)
+    if (new_d.n &&
+        new_d.sum / double(new_d.n) > old_d.sum / double(std::max<size_t>(1, old_d.n)) + 0.1 * prm_.max_deviation)
       return refuse("farther on average");
     if (!keeps_sharp_edges(c, made_at)) return refuse("sharp edge farther");
     // No new triangle meets another: among themselves, then the rest of the surface.
@@ -326,7 +335,8 @@ class SliverRemover {
     std::array<std::pair<double, int>, 3> edges;  // length of edge (t[i], t[i+1]), i
     for (int i = 0; i < 3; ++i) edges[i] = {norm2(s_.points[t[(i + 1) % 3]] - s_.points[t[i]]), i};
     std::sort(edges.begin(), edges.end());
-    const bool cap = edges[2].first > edges[0].first + edges[1].first - 2 * std::cos(100 * kDeg) * std::sqrt(edges[0].first * edges[1].first);
+    const bool cap = edges[2].first > edges[0].first + edges[1].first -
+                                          2 * std::cos(100 * kDeg) * std::sqrt(edges[0].first * edges[1].first);
     auto flip_at = [&](int k) { return try_flip(t[edges[k].second], t[(edges[k].second + 1) % 3]); };
     auto collapse_at = [&](int k) { return try_collapse(t[edges[k].second], t[(edges[k].second + 1) % 3]); };
     if (cap) {
@@ -411,7 +421,8 @@ class SliverRemover {
       places.push_back(s_.points[u]);
     } else {
       const double cell = std::min(s_.cell_size[u], s_.cell_size[v]);
-      places.push_back(onto_input((s_.points[u] + s_.points[v]) * 0.5, cell > 0 ? cell : norm(s_.points[u] - s_.points[v])));
+      places.push_back(
+          onto_input((s_.points[u] + s_.points[v]) * 0.5, cell > 0 ? cell : norm(s_.points[u] - s_.points[v])));
       places.push_back(s_.points[u]);
       places.push_back(s_.points[v]);
     }
@@ -519,7 +530,8 @@ class SliverRemover {
 
 }  // namespace
 
-SliverRemovalStats remove_slivers(PostSurface& surface, const QualityReference& ref, const SliverRemovalParams& params) {
+SliverRemovalStats remove_slivers(PostSurface& surface, const QualityReference& ref,
+                                  const SliverRemovalParams& params) {
   if (surface.triangles.empty() || !ref.input) return {};
   SliverRemover r(surface, ref, params);
   return r.run();

@@ -17,7 +17,8 @@ std::vector<uint8_t> wrap_defect_flags(const std::vector<Vec3>& points, const st
   tbb::parallel_sort(held_back.begin(), held_back.end());
   std::vector<uint8_t> held(points.size(), 0);
   tbb::parallel_for(tbb::blocked_range<size_t>(0, points.size(), 4096), [&](const tbb::blocked_range<size_t>& r) {
-    for (size_t i = r.begin(); i != r.end(); ++i) held[i] = std::binary_search(held_back.begin(), held_back.end(), points[i]);
+    for (size_t i = r.begin(); i != r.end(); ++i)
+      held[i] = std::binary_search(held_back.begin(), held_back.end(), points[i]);
   });
   for (size_t t = 0; t < triangles.size(); ++t)
     for (uint32_t v : triangles[t])

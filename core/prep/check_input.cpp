@@ -15,8 +15,7 @@ void check_input_mesh(const Mesh& mesh, const char* what) {
     const Vec3& p = mesh.points[i];
     for (double c : p) {
       if (!std::isfinite(c)) bad("vertex " + std::to_string(i) + " has a non-finite coordinate");
-      if (std::fabs(c) > kMaxCoordinate)
-      {
+      if (std::fabs(c) > kMaxCoordinate) {
         char value[32];
         std::snprintf(value, sizeof value, "%.3g", c);
         bad("vertex " + std::to_string(i) + " has the coordinate " + value +

@@ -36,7 +36,9 @@ inline std::vector<Opening> find_openings(const PreparedInput& in) {
   roots.erase(std::unique(roots.begin(), roots.end()), roots.end());
   std::vector<Opening> out(roots.size());
   std::vector<double> length(roots.size(), 0);
-  auto slot = [&](size_t e) { return size_t(std::lower_bound(roots.begin(), roots.end(), root_of[e]) - roots.begin()); };
+  auto slot = [&](size_t e) {
+    return size_t(std::lower_bound(roots.begin(), roots.end(), root_of[e]) - roots.begin());
+  };
   const auto& p = in.mesh.points;
   for (size_t e = 0; e < edges.size(); ++e) {
     const size_t k = slot(e);

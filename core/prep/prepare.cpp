@@ -42,7 +42,8 @@ InputIntersections input_intersections(const std::vector<check::TrianglePair>& m
   return counts;
 }
 
-PreparedInput prepare(const Mesh& input, const PrepareParams& params, ProgressSink* progress, const ExactWeld* input_weld) {
+PreparedInput prepare(const Mesh& input, const PrepareParams& params, ProgressSink* progress,
+                      const ExactWeld* input_weld) {
   PreparedInput out;
   if (input.triangles.empty()) throw Error(ErrorKind::InvalidInput, "input contains no triangles");
   for (const Vec3& p : input.points)
@@ -135,8 +136,8 @@ PreparedInput prepare(const Mesh& input, const PrepareParams& params, ProgressSi
     }
   }
   if (m.triangles.empty())
-    throw Error(ErrorKind::InvalidInput, "input has no usable triangles: all " + std::to_string(input.triangles.size()) +
-                                             " are degenerate");
+    throw Error(ErrorKind::InvalidInput,
+                "input has no usable triangles: all " + std::to_string(input.triangles.size()) + " are degenerate");
   if (progress && progress->cancelled()) throw Error(ErrorKind::Cancelled, "cancelled");
 
   if (progress) progress->progress("prepare", 0.3, "orienting connected pieces");

@@ -26,10 +26,10 @@ struct IntersectionSegment {
 };
 
 struct PreparedInput {
-  Mesh mesh;                     // welded, degenerate-free, oriented, in the local frame
-  Vec3 origin{0, 0, 0};          // world = local + origin
+  Mesh mesh;             // welded, degenerate-free, oriented, in the local frame
+  Vec3 origin{0, 0, 0};  // world = local + origin
   double diagonal = 0;
-  std::vector<Vec3> normals;     // unit normal per triangle
+  std::vector<Vec3> normals;  // unit normal per triangle
   std::vector<FeatureEdge> feature_edges;
   std::vector<IntersectionSegment> intersections;
   // Pairs of mesh triangles that intersect, sorted: the pipeline's only search for them. The

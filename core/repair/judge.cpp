@@ -10,7 +10,8 @@ namespace vdbwrap::local_repair {
 
 using check::TrianglePair;
 
-std::vector<TrianglePair> judge(Work& w, std::vector<Trial>& trials, const std::unordered_set<uint32_t>& degenerate_before,
+std::vector<TrianglePair> judge(Work& w, std::vector<Trial>& trials,
+                                const std::unordered_set<uint32_t>& degenerate_before,
                                 const std::function<void(size_t)>& undo) {
   std::set<std::pair<uint32_t, uint32_t>> before;
   for (const auto& p : w.pairs) before.insert({p.a, p.b});
@@ -62,8 +63,10 @@ std::vector<TrianglePair> judge(Work& w, std::vector<Trial>& trials, const std::
         if (t.refill) {
           // New triangles only meet triangles outside that the region met before.
           bool a_in = watched.count(pr.first) > 0, b_in = watched.count(pr.second) > 0;
-          if (a_in && b_in) ok = false;
-          else ok = t.partners_allowed.count(a_in ? pr.second : pr.first) > 0;
+          if (a_in && b_in)
+            ok = false;
+          else
+            ok = t.partners_allowed.count(a_in ? pr.second : pr.first) > 0;
         } else {
           ok = before.count(pr) > 0;
         }

@@ -14,9 +14,9 @@ namespace vdbwrap::local_repair {
 
 // One trial: a change per region applied at once, judged per region.
 struct Trial {
-  std::vector<uint32_t> watched;  // triangles whose pairs decide (region + changed)
-  std::vector<uint32_t> changed;  // triangles the change made or moved
-  std::vector<uint32_t> gone;     // triangles it deleted (their old pairs go with them)
+  std::vector<uint32_t> watched;                  // triangles whose pairs decide (region + changed)
+  std::vector<uint32_t> changed;                  // triangles the change made or moved
+  std::vector<uint32_t> gone;                     // triangles it deleted (their old pairs go with them)
   std::unordered_set<uint32_t> partners_allowed;  // refill: the outside triangles it may still meet
   bool refill = false;
   bool accepted = true;

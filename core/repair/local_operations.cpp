@@ -44,8 +44,10 @@ std::vector<Vec3> segment_triangle_points(const Vec3& a, const Vec3& b, const Ve
         continue;
       }
       double s = -f0 / df;
-      if (df > 0) s0 = std::max(s0, s);
-      else s1 = std::min(s1, s);
+      if (df > 0)
+        s0 = std::max(s0, s);
+      else
+        s1 = std::min(s1, s);
     }
     if (s0 > s1) return {};
     if (s1 - s0 <= 1e-12) return {a + ab * s0};
@@ -178,7 +180,8 @@ double move_epsilon(double accuracy, double longest, double delta, double gamma)
 }
 
 std::vector<Move> plan_triangle_shifts(const std::vector<Vec3>& points, const std::vector<Tri>& triangles,
-                                       const std::vector<uint32_t>& region, const std::vector<check::TrianglePair>& pairs,
+                                       const std::vector<uint32_t>& region,
+                                       const std::vector<check::TrianglePair>& pairs,
                                        const std::vector<Crossing>& crossings, const LocalParams& params) {
   // The triangle in the most pairs (the first on a tie).
   std::unordered_map<uint32_t, int> count;
@@ -251,7 +254,8 @@ void measure_move(const std::vector<Vec3>& points, const std::vector<Tri>& trian
     area_before += 0.5 * norm(area_vector(a, b, c));
     area_after += 0.5 * norm(area_vector(a2, b2, c2));
     // Signed volume of the cone from `origin`: its change is the volume the move sweeps.
-    volume += dot(a2 - origin, cross(b2 - origin, c2 - origin)) / 6 - dot(a - origin, cross(b - origin, c - origin)) / 6;
+    volume +=
+        dot(a2 - origin, cross(b2 - origin, c2 - origin)) / 6 - dot(a - origin, cross(b - origin, c - origin)) / 6;
   }
   move.volume_change = std::fabs(volume);
   double hi = std::max(area_before, area_after);

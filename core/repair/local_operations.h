@@ -16,9 +16,9 @@ struct Move {
   enum class Kind { VertexShift, TriangleShift };
   Kind kind = Kind::VertexShift;
   std::vector<std::pair<uint32_t, Vec3>> positions;  // vertex, new position
-  double volume_change = 0;  // |volume swept by the modified triangles|
-  double area_ratio = 1;     // r_S: min/max area of the modified triangles, before and after
-  bool primary = true;       // the paper's choice; others are tried after it (see plan_vertex_shifts)
+  double volume_change = 0;                          // |volume swept by the modified triangles|
+  double area_ratio = 1;                             // r_S: min/max area of the modified triangles, before and after
+  bool primary = true;  // the paper's choice; others are tried after it (see plan_vertex_shifts)
 };
 
 // Points where segment (a, b) meets triangle (p, q, r): none, one crossing point, or the two
@@ -29,8 +29,8 @@ std::vector<Vec3> segment_triangle_points(const Vec3& a, const Vec3& b, const Ve
 
 // An edge of one triangle of an intersecting pair passing through the other triangle.
 struct Crossing {
-  uint32_t u, v;          // the edge
-  uint32_t triangle;      // the triangle it cuts
+  uint32_t u, v;             // the edge
+  uint32_t triangle;         // the triangle it cuts
   std::vector<Vec3> points;  // where (shared vertices left out)
   bool coplanar = false;     // the edge lies in the triangle's plane: points are the overlap's ends
 };
@@ -64,7 +64,8 @@ double move_epsilon(double accuracy, double longest, double delta, double gamma)
 // Triangle shift: the region triangle in the most pairs moved along its normal n past the
 // vertices of the edges that cut it, to d_max + eps_move and to d_min - eps_move (two moves).
 std::vector<Move> plan_triangle_shifts(const std::vector<Vec3>& points, const std::vector<Tri>& triangles,
-                                       const std::vector<uint32_t>& region, const std::vector<check::TrianglePair>& pairs,
+                                       const std::vector<uint32_t>& region,
+                                       const std::vector<check::TrianglePair>& pairs,
                                        const std::vector<Crossing>& crossings, const LocalParams& params);
 
 // Fills volume_change and area_ratio from the triangles around the moved vertices.

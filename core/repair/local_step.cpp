@@ -23,11 +23,11 @@ using check::TrianglePair;
 struct RegionPlan {
   std::vector<uint32_t> triangles;
   size_t too_far = 0, area_refused = 0;  // candidates dropped by --max-deviation and eps_S
-  std::vector<Move> queue;  // passing the area criterion and the deviation bound, by volume change
+  std::vector<Move> queue;               // passing the area criterion and the deviation bound, by volume change
 };
 
-RegionPlan plan_region(const Work& w, const VertexFaces& faces, std::vector<uint32_t> region,
-                       const LocalParams& lp, const RepairParams& params, double max_dev) {
+RegionPlan plan_region(const Work& w, const VertexFaces& faces, std::vector<uint32_t> region, const LocalParams& lp,
+                       const RepairParams& params, double max_dev) {
   RegionPlan plan;
   plan.triangles = std::move(region);
   std::unordered_set<uint32_t> in(plan.triangles.begin(), plan.triangles.end());
@@ -36,7 +36,8 @@ RegionPlan plan_region(const Work& w, const VertexFaces& faces, std::vector<uint
     if (in.count(p.a) || in.count(p.b)) pairs.push_back(p);
   auto crossings = edge_crossings(w.points, w.tris, pairs);
   std::vector<Move> moves = plan_vertex_shifts(w.points, w.tris, plan.triangles, crossings, lp, 8);
-  for (Move& m : plan_triangle_shifts(w.points, w.tris, plan.triangles, pairs, crossings, lp)) moves.push_back(std::move(m));
+  for (Move& m : plan_triangle_shifts(w.points, w.tris, plan.triangles, pairs, crossings, lp))
+    moves.push_back(std::move(m));
   // A move reaching beyond --max-deviation (from where its vertices started) is also tried
   // cut short at the bound, after the others: it often still clears the crossing.
   const size_t planned = moves.size();
@@ -68,8 +69,10 @@ RegionPlan plan_region(const Work& w, const VertexFaces& faces, std::vector<uint
       continue;
     }
     measure_move(w.points, w.tris, faces, m);
-    if (m.area_ratio >= params.area_ratio) plan.queue.push_back(std::move(m));
-    else ++plan.area_refused;
+    if (m.area_ratio >= params.area_ratio)
+      plan.queue.push_back(std::move(m));
+    else
+      ++plan.area_refused;
   }
   // The paper's operations by increasing volume change, then the other vertices' shifts and
   // the moves cut short.
@@ -145,8 +148,10 @@ void run_local(Work& w, const RepairParams& params, const LocalParams& lp, doubl
         for (uint32_t t : trials[j].changed) w.touched[t] = 1;
         done[who[j]] = 1;
         ++accepted_this_iteration;
-        if (plans[who[j]].queue[k].kind == Move::Kind::VertexShift) ++report.vertex_shifts;
-        else ++report.triangle_shifts;
+        if (plans[who[j]].queue[k].kind == Move::Kind::VertexShift)
+          ++report.vertex_shifts;
+        else
+          ++report.triangle_shifts;
       }
       w.update_pairs(changed, found);
     }

@@ -75,8 +75,8 @@ enum class Mode { RefineAndFair, Refine, Triangulate };
 
 // Fills the hole of `loop` in the local mesh; the patch's faces and new vertices are appended.
 std::string fill_closed_loop(LocalMesh& lm, const std::vector<uint32_t>& loop, Mode mode,
-                             std::vector<SurfaceMesh::Face_index>& faces, std::vector<SurfaceMesh::Vertex_index>& vertices,
-                             bool& faired) {
+                             std::vector<SurfaceMesh::Face_index>& faces,
+                             std::vector<SurfaceMesh::Vertex_index>& vertices, bool& faired) {
   for (uint32_t g : loop)
     if (!lm.local.count(g)) return "contour vertex without a triangle outside the region";
   // The border halfedge of the hole runs like the removed triangles: loop[0] -> loop[1].
@@ -149,8 +149,10 @@ std::vector<Piece> pieces_beyond(const std::vector<Tri>& triangles, const Vertex
       for (const uint32_t* f = faces.begin(v); f != faces.end(v) && found == SIZE_MAX; ++f) {
         if (in_region(*f)) continue;
         auto it = piece_of.find(*f);
-        if (it != piece_of.end()) found = it->second;
-        else if (seed == UINT32_MAX) seed = *f;
+        if (it != piece_of.end())
+          found = it->second;
+        else if (seed == UINT32_MAX)
+          seed = *f;
       }
       if (found != SIZE_MAX) break;
     }
@@ -178,7 +180,8 @@ std::vector<Piece> pieces_beyond(const std::vector<Tri>& triangles, const Vertex
 
 }  // namespace
 
-std::vector<std::vector<uint32_t>> contour_loops(const std::vector<std::pair<uint32_t, uint32_t>>& edges, std::string& why) {
+std::vector<std::vector<uint32_t>> contour_loops(const std::vector<std::pair<uint32_t, uint32_t>>& edges,
+                                                 std::string& why) {
   std::unordered_map<uint32_t, uint32_t> next;
   for (const auto& [a, b] : edges)
     if (!next.emplace(a, b).second) {
@@ -218,7 +221,8 @@ std::vector<std::vector<uint32_t>> contour_loops(const std::vector<std::pair<uin
 }
 
 Refill refill_region(const std::vector<Vec3>& points, const std::vector<Tri>& triangles, const VertexFaces& faces,
-                     const std::vector<uint32_t>& region, const RefillParams& params, const mesh::SurfaceIndex* original) {
+                     const std::vector<uint32_t>& region, const RefillParams& params,
+                     const mesh::SurfaceIndex* original) {
   if (region.empty()) return fail("empty region");
   auto in_region = [&](uint32_t t) { return std::binary_search(region.begin(), region.end(), t); };
 
@@ -315,7 +319,8 @@ Refill refill_region(const std::vector<Vec3>& points, const std::vector<Tri>& tr
     for (size_t i : filled) {
       const auto& l = loops[i];
       loop_length += l.size();
-      for (size_t k = 0; k < l.size(); ++k) loop_edges[edge_key(l[k], l[(k + 1) % l.size()])] = {l[k], l[(k + 1) % l.size()]};
+      for (size_t k = 0; k < l.size(); ++k)
+        loop_edges[edge_key(l[k], l[(k + 1) % l.size()])] = {l[k], l[(k + 1) % l.size()]};
     }
     // The patch on its own points (contour vertices and new ones), to measure it.
     std::vector<Vec3> patch_points;
@@ -480,7 +485,8 @@ Refill refill_region(const std::vector<Vec3>& points, const std::vector<Tri>& tr
         for (auto v : CGAL::vertices_around_face(lm.sm.halfedge(patch_faces[q]), lm.sm)) {
           if (k == 3) return "refill face is not a triangle";
           auto it = new_index.find(v.idx());
-          if (it != new_index.end()) t[k++] = it->second;
+          if (it != new_index.end())
+            t[k++] = it->second;
           else {
             uint32_t g = lm.global_of[v.idx()];
             if (!on_contour.count(g)) return "refill uses a vertex off the contour";

@@ -19,20 +19,20 @@ class SurfaceIndex;
 namespace vdbwrap::local_repair {
 
 struct RefillParams {
-  double area_ratio = 0.5;      // min/max of the region's and the refill's area must reach this
-  double max_deviation = 0;     // model units; 0: no bound
+  double area_ratio = 0.5;   // min/max of the region's and the refill's area must reach this
+  double max_deviation = 0;  // model units; 0: no bound
   bool fair = true;
   bool float_coordinates = false;
 };
 
 struct Refill {
   bool ok = false;
-  std::string why;                 // when not ok
-  std::vector<Vec3> new_points;    // to append to the mesh's points
+  std::string why;               // when not ok
+  std::vector<Vec3> new_points;  // to append to the mesh's points
   // New triangles: an index below points.size() is a contour vertex, one at or above it is
   // new_points[index - points.size()].
   std::vector<Tri> triangles;
-  std::vector<uint32_t> replaces;  // per new triangle, the nearest removed triangle (for its part)
+  std::vector<uint32_t> replaces;      // per new triangle, the nearest removed triangle (for its part)
   std::vector<uint32_t> also_removed;  // pieces cut off by the region and deleted with it (sorted)
   size_t loops = 0;                    // contour loops filled
   bool faired = false;
@@ -43,7 +43,8 @@ struct Refill {
 // stay within max_deviation of the refill.
 // A contour as directed edges (vertex -> next vertex) split into simple loops; empty with
 // `why` set when it is not closed or a vertex lies on two loops.
-std::vector<std::vector<uint32_t>> contour_loops(const std::vector<std::pair<uint32_t, uint32_t>>& edges, std::string& why);
+std::vector<std::vector<uint32_t>> contour_loops(const std::vector<std::pair<uint32_t, uint32_t>>& edges,
+                                                 std::string& why);
 
 Refill refill_region(const std::vector<Vec3>& points, const std::vector<Tri>& triangles, const VertexFaces& faces,
                      const std::vector<uint32_t>& region, const RefillParams& params,

@@ -36,7 +36,8 @@ void run_refill(Work& w, const RepairParams& params, double max_dev, const mesh:
     for (const auto& p : pairs_of_region(w, only)) intersecting.insert(p.a), intersecting.insert(p.b);
     regions.erase(std::remove_if(regions.begin(), regions.end(),
                                  [&](const std::vector<uint32_t>& r) {
-                                   return std::none_of(r.begin(), r.end(), [&](uint32_t t) { return intersecting.count(t) > 0; });
+                                   return std::none_of(r.begin(), r.end(),
+                                                       [&](uint32_t t) { return intersecting.count(t) > 0; });
                                  }),
                   regions.end());
     // Where a region's border pinches (refined meshes: vertices of high valence), its contour
@@ -49,9 +50,8 @@ void run_refill(Work& w, const RepairParams& params, double max_dev, const mesh:
     for (size_t i = 0; i < regions.size(); ++i)
       for (uint32_t v : vertices_of(w.tris, regions[i])) owner.emplace(v, i);
     std::vector<Refill> fills(regions.size());
-    tbb::parallel_for(size_t(0), regions.size(), [&](size_t i) {
-      fills[i] = refill_region(w.points, w.tris, faces, regions[i], rp, &original);
-    });
+    tbb::parallel_for(size_t(0), regions.size(),
+                      [&](size_t i) { fills[i] = refill_region(w.points, w.tris, faces, regions[i], rp, &original); });
 
     // Apply every refill that was built; judge them together.
     const uint32_t seen = uint32_t(w.points.size());  // refills number new points from here
@@ -75,7 +75,8 @@ void run_refill(Work& w, const RepairParams& params, double max_dev, const mesh:
       }
       if (!fills[i].ok) {
         if (debug_enabled())
-          std::fprintf(stderr, "[repair] region %d refill of %zu triangles refused: %s\n", only, regions[i].size(), fills[i].why.c_str());
+          std::fprintf(stderr, "[repair] region %d refill of %zu triangles refused: %s\n", only, regions[i].size(),
+                       fills[i].why.c_str());
         ++report.refill_failures;
         ++report.refusals["refill: " + fills[i].why];
         continue;
@@ -140,7 +141,8 @@ void run_refill(Work& w, const RepairParams& params, double max_dev, const mesh:
         changed.insert(region.begin(), region.end());
         changed.insert(trials[k].changed.begin(), trials[k].changed.end());
       } else {
-        if (debug_enabled()) std::fprintf(stderr, "[repair] region %d refill judged: intersections not fewer, or new ones\n", only);
+        if (debug_enabled())
+          std::fprintf(stderr, "[repair] region %d refill judged: intersections not fewer, or new ones\n", only);
         ++report.refill_failures;
         ++report.refusals["refill: intersections not fewer, or new ones"];
       }

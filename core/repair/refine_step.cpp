@@ -99,9 +99,11 @@ void run_refine_and_refill(Work& w, const RepairParams& params, double max_dev, 
     check_cancel(progress);
     Work unrefined = w;
     size_t added = 0;
-    if (debug_enabled()) std::fprintf(stderr, "[repair] region %d: refine and refill, %zu pairs\n", r, pairs_of_region(w, r).size());
+    if (debug_enabled())
+      std::fprintf(stderr, "[repair] region %d: refine and refill, %zu pairs\n", r, pairs_of_region(w, r).size());
     if (!refine_around(w, r, max_dev / 3, budget, params.float_coordinates, added)) {
-      if (debug_enabled()) std::fprintf(stderr, "[repair] region %d: area crossing, not refined (%zu added)\n", r, added);
+      if (debug_enabled())
+        std::fprintf(stderr, "[repair] region %d: area crossing, not refined (%zu added)\n", r, added);
       w = std::move(unrefined);
       ++report.refusals["refine and refill: intersections cover an area, not a curve (not refined)"];
       continue;
@@ -113,7 +115,8 @@ void run_refine_and_refill(Work& w, const RepairParams& params, double max_dev, 
       const auto refills = report.refills;
       run_refill(w, params, max_dev, original, report, progress, r, fair);
       if (debug_enabled())
-        std::fprintf(stderr, "[repair] region %d: after refill (fair %d): %zu pairs left\n", r, int(fair), pairs_of_region(w, r).size());
+        std::fprintf(stderr, "[repair] region %d: after refill (fair %d): %zu pairs left\n", r, int(fair),
+                     pairs_of_region(w, r).size());
       if (!has_pairs(r)) {
         fixed = true;
         ++report.regions_refined;

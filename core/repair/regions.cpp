@@ -89,7 +89,8 @@ std::vector<std::vector<uint32_t>> group_regions(const std::vector<Tri>& all, co
   return regions;
 }
 
-std::vector<uint32_t> grow_ring(const std::vector<Tri>& all, const VertexFaces& faces, const std::vector<uint32_t>& set) {
+std::vector<uint32_t> grow_ring(const std::vector<Tri>& all, const VertexFaces& faces,
+                                const std::vector<uint32_t>& set) {
   std::vector<uint32_t> out(set);
   for (uint32_t t : set)
     for (uint32_t v : all[t]) out.insert(out.end(), faces.begin(v), faces.end(v));

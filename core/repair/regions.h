@@ -34,7 +34,8 @@ std::vector<std::vector<uint32_t>> group_regions(const std::vector<Tri>& all, co
 std::vector<uint32_t> triangles_of(const std::vector<check::TrianglePair>& pairs);
 
 // `set` (sorted) plus every live triangle that shares a vertex with it, sorted.
-std::vector<uint32_t> grow_ring(const std::vector<Tri>& all, const VertexFaces& faces, const std::vector<uint32_t>& set);
+std::vector<uint32_t> grow_ring(const std::vector<Tri>& all, const VertexFaces& faces,
+                                const std::vector<uint32_t>& set);
 
 // `set` (sorted) plus every live triangle around each vertex where the set's border pinches
 // (a vertex that two of its border loops pass through), repeated up to `rounds` times: a

@@ -89,13 +89,13 @@ struct Pass {
   std::vector<std::unique_ptr<SolidTest>> solids;  // bodies united: their insides
   std::vector<uint8_t> by_union;                   // per input region: the union fixed it
   std::vector<uint8_t> clean_after_local;          // per input region: clean after part 1
-  size_t unite_tried = 0;  // groups of closed crossing bodies the union was tried on
+  size_t unite_tried = 0;                          // groups of closed crossing bodies the union was tried on
 };
 
 // Step 4, the union of crossing closed bodies (of input regions `regions` only, when given),
 // noting the regions it fixed. `input`: the input surface as it came.
-void unite_bodies(Work& w, const RepairParams& params, const mesh::SurfaceIndex& input, const std::set<int32_t>* regions,
-                  Pass& pass, RepairReport& report, ProgressSink* progress) {
+void unite_bodies(Work& w, const RepairParams& params, const mesh::SurfaceIndex& input,
+                  const std::set<int32_t>* regions, Pass& pass, RepairReport& report, ProgressSink* progress) {
   StageTimer timer("unite crossing bodies", report.stages);
   check_cancel(progress);
   const auto clean_before = clean_regions(w, report.regions_found);

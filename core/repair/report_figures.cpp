@@ -14,10 +14,14 @@ void count_fixed_regions(const Work& w, const std::vector<uint8_t>& by_union,
                          const std::vector<uint8_t>& clean_after_local, RepairReport& report) {
   const auto clean_at_end = clean_regions(w, report.regions_found);
   for (size_t r = 0; r < report.regions_found; ++r) {
-    if (by_union[r]) ++report.fixed_by_union;
-    else if (clean_after_local[r]) ++report.fixed_by_local;
-    else if (clean_at_end[r]) ++report.fixed_by_refill;
-    else ++report.left_unfixed;
+    if (by_union[r])
+      ++report.fixed_by_union;
+    else if (clean_after_local[r])
+      ++report.fixed_by_local;
+    else if (clean_at_end[r])
+      ++report.fixed_by_refill;
+    else
+      ++report.left_unfixed;
   }
 }
 

@@ -48,8 +48,10 @@ void remove_small_pieces(Work& w, const RepairParams& params, double max_dev, Re
   if (pieces.size() < 2) return;
   std::vector<uint32_t> doomed, kept;
   for (const auto& [root, p] : pieces) {
-    bool small = p.tris.size() <= size_t(params.small_piece_triangles) && p.area <= params.small_piece_area * total_area;
-    (small && p.touched ? doomed : kept).insert((small && p.touched ? doomed : kept).end(), p.tris.begin(), p.tris.end());
+    bool small =
+        p.tris.size() <= size_t(params.small_piece_triangles) && p.area <= params.small_piece_area * total_area;
+    (small && p.touched ? doomed : kept)
+        .insert((small && p.touched ? doomed : kept).end(), p.tris.begin(), p.tris.end());
   }
   if (doomed.empty() || kept.empty()) return;
   // A piece goes only when all of it lies within the deviation bound of what stays.
@@ -57,7 +59,8 @@ void remove_small_pieces(Work& w, const RepairParams& params, double max_dev, Re
   for (uint32_t t : kept) kept_tris.push_back(w.tris[t]);
   mesh::SurfaceIndex rest(w.points, kept_tris);
   for (const auto& [root, p] : pieces) {
-    bool small = p.tris.size() <= size_t(params.small_piece_triangles) && p.area <= params.small_piece_area * total_area;
+    bool small =
+        p.tris.size() <= size_t(params.small_piece_triangles) && p.area <= params.small_piece_area * total_area;
     if (!(small && p.touched)) continue;
     bool near = true;
     for (uint32_t t : p.tris)

@@ -73,7 +73,8 @@ Stitches find_stitches(const std::vector<Vec3>& points, const std::vector<Tri>& 
     std::sort(at.begin(), at.end());
     at.erase(std::unique(at.begin(), at.end()), at.end());
     // Along the edge from u.
-    std::sort(at.begin(), at.end(), [&](uint32_t x, uint32_t y) { return norm2(points[x] - from) < norm2(points[y] - from); });
+    std::sort(at.begin(), at.end(),
+              [&](uint32_t x, uint32_t y) { return norm2(points[x] - from) < norm2(points[y] - from); });
     // Two vertices within the tolerance of each other would make a needle: they weld first.
     bool close = false;
     for (size_t i = 1; i < at.size(); ++i) close |= norm2(points[at[i]] - points[at[i - 1]]) <= tol2;
@@ -83,8 +84,8 @@ Stitches find_stitches(const std::vector<Vec3>& points, const std::vector<Tri>& 
   return out;
 }
 
-std::vector<std::pair<uint32_t, uint32_t>> bad_edges(const std::vector<Tri>& all, const std::vector<uint32_t>& triangles,
-                                                     const VertexFaces& faces) {
+std::vector<std::pair<uint32_t, uint32_t>> bad_edges(const std::vector<Tri>& all,
+                                                     const std::vector<uint32_t>& triangles, const VertexFaces& faces) {
   std::vector<std::pair<uint32_t, uint32_t>> out;
   for (uint32_t t : triangles) {
     const Tri& tri = all[t];
@@ -95,8 +96,10 @@ std::vector<std::pair<uint32_t, uint32_t>> bad_edges(const std::vector<Tri>& all
       for (const uint32_t* f = faces.begin(u); f != faces.end(u); ++f) {
         const Tri& o = all[*f];
         for (int j = 0; j < 3; ++j) {
-          if (o[j] == u && o[(j + 1) % 3] == v) ++uses, ++same_way;
-          else if (o[j] == v && o[(j + 1) % 3] == u) ++uses;
+          if (o[j] == u && o[(j + 1) % 3] == v)
+            ++uses, ++same_way;
+          else if (o[j] == v && o[(j + 1) % 3] == u)
+            ++uses;
         }
       }
       if (uses > 2 || same_way > 1) out.push_back({std::min(u, v), std::max(u, v)});

@@ -36,7 +36,7 @@ Stitches find_stitches(const std::vector<Vec3>& points, const std::vector<Tri>& 
 
 // Edges among `triangles` (live ones listed) used by more than two triangles, or by two that
 // run the same way (inconsistent orientation): what a stitch must not create. Edge keys.
-std::vector<std::pair<uint32_t, uint32_t>> bad_edges(const std::vector<Tri>& all, const std::vector<uint32_t>& triangles,
-                                                     const VertexFaces& faces);
+std::vector<std::pair<uint32_t, uint32_t>> bad_edges(const std::vector<Tri>& all,
+                                                     const std::vector<uint32_t>& triangles, const VertexFaces& faces);
 
 }  // namespace vdbwrap::local_repair

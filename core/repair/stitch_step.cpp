@@ -100,8 +100,10 @@ void run_stitch(Work& w, double tol, RepairReport& report) {
     const size_t forbidden_before = forbidden.size();
     w = std::move(saved);
     original_of = saved_original;
-    ++report.refusals["stitch: would make a degenerate triangle, a new intersection, or a non-manifold or misoriented edge"];
-    if (forbidden.size() == forbidden_before) forbidden.insert(placed.begin(), placed.end());  // no culprit found: leave them
+    ++report.refusals
+          ["stitch: would make a degenerate triangle, a new intersection, or a non-manifold or misoriented edge"];
+    if (forbidden.size() == forbidden_before)
+      forbidden.insert(placed.begin(), placed.end());  // no culprit found: leave them
   }
 }
 

@@ -44,7 +44,8 @@ bool build(const std::vector<Vec3>& points, const std::vector<Tri>& tris, SM& m)
 
 }  // namespace
 
-Union unite_bodies(const std::vector<Vec3>& points, const std::vector<std::vector<Tri>>& bodies, bool float_coordinates) {
+Union unite_bodies(const std::vector<Vec3>& points, const std::vector<std::vector<Tri>>& bodies,
+                   bool float_coordinates) {
   Union out;
   auto fail = [&](const std::string& why) {
     out.ok = false;

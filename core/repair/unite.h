@@ -20,7 +20,8 @@ struct Union {
 
 // The union of `bodies` (triangle lists on `points`), each a closed, oriented surface that
 // bounds a volume and does not cut itself; coordinates rounded to float when asked.
-Union unite_bodies(const std::vector<Vec3>& points, const std::vector<std::vector<Tri>>& bodies, bool float_coordinates);
+Union unite_bodies(const std::vector<Vec3>& points, const std::vector<std::vector<Tri>>& bodies,
+                   bool float_coordinates);
 
 // Do triangles a and b lie in one plane (exact predicates)?
 bool coplanar_pair(const std::vector<Vec3>& points, const Tri& a, const Tri& b);

@@ -61,8 +61,10 @@ size_t run_unite(Work& w, const RepairParams& params, double max_dev, const mesh
   std::set<uint32_t> spoiled, wanted;  // wanted: components holding a triangle of `regions`
   for (const auto& p : w.pairs) {
     const uint32_t a = find(p.a), b = find(p.b);
-    if (a == b) spoiled.insert(a);
-    else group[gfind(a)] = gfind(b);
+    if (a == b)
+      spoiled.insert(a);
+    else
+      group[gfind(a)] = gfind(b);
   }
   if (regions)
     for (const auto& [c, tris] : members)
@@ -94,7 +96,8 @@ size_t run_unite(Work& w, const RepairParams& params, double max_dev, const mesh
       std::map<std::pair<uint32_t, uint32_t>, int> directed;
       for (const Tri& t : body)
         for (int k = 0; k < 3; ++k) ++directed[{t[k], t[(k + 1) % 3]}];
-      for (const auto& [e, n] : directed) closed &= n == 1 && directed.count({e.second, e.first}) && directed[{e.second, e.first}] == 1;
+      for (const auto& [e, n] : directed)
+        closed &= n == 1 && directed.count({e.second, e.first}) && directed[{e.second, e.first}] == 1;
       if (!closed) break;
     }
     if (!closed) {

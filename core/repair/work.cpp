@@ -17,7 +17,8 @@ using check::TrianglePair;
 
 void Work::set_pairs(std::vector<TrianglePair> p) {
   p.erase(std::remove_if(p.begin(), p.end(), [](const TrianglePair& x) { return x.a == x.b; }), p.end());
-  std::sort(p.begin(), p.end(), [](const TrianglePair& u, const TrianglePair& v) { return u.a != v.a ? u.a < v.a : u.b < v.b; });
+  std::sort(p.begin(), p.end(),
+            [](const TrianglePair& u, const TrianglePair& v) { return u.a != v.a ? u.a < v.a : u.b < v.b; });
   pairs = std::move(p);
 }
 
@@ -44,7 +45,8 @@ Work make_work(const Mesh& input, bool float_coordinates) {
     Tri tri = input.triangles[t];
     for (uint32_t& v : tri) {
       if (v >= remap.size())
-        throw Error(ErrorKind::InvalidInput, "repair: triangle " + std::to_string(t) + " has a vertex index out of range");
+        throw Error(ErrorKind::InvalidInput,
+                    "repair: triangle " + std::to_string(t) + " has a vertex index out of range");
       v = remap[v];
     }
     if (is_dead(tri)) continue;  // all three corners equal: nothing there

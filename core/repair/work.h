@@ -22,9 +22,9 @@ inline bool touches(const check::TrianglePair& p, const std::unordered_set<uint3
 struct Work {
   std::vector<Vec3> points, origin;  // origin: where each vertex started (new ones: where made)
   std::vector<Tri> tris;
-  std::vector<int32_t> part;         // per triangle
-  std::vector<int32_t> region_of;    // per triangle: the input region it belongs to, or -1
-  std::vector<uint8_t> touched;      // per triangle: changed by the repair
+  std::vector<int32_t> part;               // per triangle
+  std::vector<int32_t> region_of;          // per triangle: the input region it belongs to, or -1
+  std::vector<uint8_t> touched;            // per triangle: changed by the repair
   std::vector<check::TrianglePair> pairs;  // current intersecting pairs (a < b), sorted
 
   // Sets the pairs, sorted, without the (t, t) entries of degenerate triangles.

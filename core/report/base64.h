@@ -16,7 +16,8 @@ inline std::string base64(const void* data, size_t bytes) {
   size_t i = 0;
   for (; i + 2 < bytes; i += 3) {
     const uint32_t v = (uint32_t(in[i]) << 16) | (uint32_t(in[i + 1]) << 8) | in[i + 2];
-    out += kAlphabet[v >> 18], out += kAlphabet[(v >> 12) & 63], out += kAlphabet[(v >> 6) & 63], out += kAlphabet[v & 63];
+    out += kAlphabet[v >> 18], out += kAlphabet[(v >> 12) & 63], out += kAlphabet[(v >> 6) & 63],
+        out += kAlphabet[v & 63];
   }
   if (i < bytes) {
     uint32_t v = uint32_t(in[i]) << 16;

@@ -157,8 +157,8 @@ class OrientedReference {
 }  // namespace
 
 std::vector<std::string> defect_flag_names(uint8_t flags) {
-  static const char* const kNames[8] = {"self_intersecting", "small_area",       "sliver",        "short_edge",
-                                        "long_edge",         "normal_deviation", "lost_feature",  "held_back"};
+  static const char* const kNames[8] = {"self_intersecting", "small_area",       "sliver",       "short_edge",
+                                        "long_edge",         "normal_deviation", "lost_feature", "held_back"};
   std::vector<std::string> names;
   for (int bit = 0; bit < 8; ++bit)
     if (flags & (1u << bit)) names.emplace_back(kNames[bit]);
@@ -182,14 +182,15 @@ std::vector<uint8_t> geometric_defect_flags(const Mesh& surface, double cell_siz
     cell_size = edges[edges.size() / 2];
   }
   const QualityThresholds thresholds;
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, surface.triangles.size(), 4096), [&](const tbb::blocked_range<size_t>& r) {
-    for (size_t f = r.begin(); f != r.end(); ++f) {
-      const Tri& t = surface.triangles[f];
-      const Vec3 &a = p[t[0]], &b = p[t[1]], &c = p[t[2]];
-      flags[f] = post::shape_flags(a, b, c, cell_size, thresholds);
-      if (norm2(area_vector(a, b, c)) == 0) flags[f] |= kDefectSelfIntersecting;  // degenerate
-    }
-  });
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, surface.triangles.size(), 4096),
+                    [&](const tbb::blocked_range<size_t>& r) {
+                      for (size_t f = r.begin(); f != r.end(); ++f) {
+                        const Tri& t = surface.triangles[f];
+                        const Vec3 &a = p[t[0]], &b = p[t[1]], &c = p[t[2]];
+                        flags[f] = post::shape_flags(a, b, c, cell_size, thresholds);
+                        if (norm2(area_vector(a, b, c)) == 0) flags[f] |= kDefectSelfIntersecting;  // degenerate
+                      }
+                    });
   return flags;
 }
 
@@ -199,10 +200,12 @@ DeviationField measure_deviation(const Mesh& surface, const Mesh& reference, con
       for (uint32_t v : t)
         if (v >= m->points.size())
           throw Error(ErrorKind::InvalidArgument, std::string("deviation: a triangle of the ") +
-                                                      (m == &surface ? "surface" : "reference") + " refers to a missing vertex");
+                                                      (m == &surface ? "surface" : "reference") +
+                                                      " refers to a missing vertex");
   if (defect_flags && defect_flags->size() != surface.triangles.size())
-    throw Error(ErrorKind::InvalidArgument, "deviation: " + std::to_string(defect_flags->size()) + " defect flags for " +
-                                                std::to_string(surface.triangles.size()) + " triangles");
+    throw Error(ErrorKind::InvalidArgument, "deviation: " + std::to_string(defect_flags->size()) +
+                                                " defect flags for " + std::to_string(surface.triangles.size()) +
+                                                " triangles");
   DeviationField field;
   field.triangle_flags = defect_flags ? *defect_flags : geometric_defect_flags(surface);
   Box3 box;
@@ -216,16 +219,17 @@ DeviationField measure_deviation(const Mesh& surface, const Mesh& reference, con
   const mesh::SurfaceIndex index(ref.points(), ref.triangles());
   const double outward = ref.orientation();
   const bool signed_field = field.sign != DistanceSign::Unsigned;
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, surface.points.size(), 512), [&](const tbb::blocked_range<size_t>& r) {
-    uint32_t hint = UINT32_MAX;  // neighbouring vertices tend to share a nearest triangle
-    for (size_t i = r.begin(); i != r.end(); ++i) {
-      const Vec3& q = surface.points[i];
-      const mesh::SurfaceIndex::Hit hit = index.closest(q, hint);
-      hint = hit.triangle;
-      const double d = std::sqrt(hit.squared_distance);
-      field.distance[i] = signed_field ? outward * ref.side(q, hit) * d : d;
-    }
-  });
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, surface.points.size(), 512),
+                    [&](const tbb::blocked_range<size_t>& r) {
+                      uint32_t hint = UINT32_MAX;  // neighbouring vertices tend to share a nearest triangle
+                      for (size_t i = r.begin(); i != r.end(); ++i) {
+                        const Vec3& q = surface.points[i];
+                        const mesh::SurfaceIndex::Hit hit = index.closest(q, hint);
+                        hint = hit.triangle;
+                        const double d = std::sqrt(hit.squared_distance);
+                        field.distance[i] = signed_field ? outward * ref.side(q, hit) * d : d;
+                      }
+                    });
 
   std::vector<double> magnitude(field.distance.size());
   double sum = 0;

@@ -17,8 +17,8 @@ struct DisplayMesh {
   std::vector<uint32_t> source_triangle;  // the mesh triangle each display triangle stands for
   std::vector<uint32_t> vertex_of;        // per mesh point: its display vertex
   size_t mesh_triangles = 0;
-  bool clustered = false;                 // vertex clustering reduced it
-  double cluster_size = 0;                // the clustering cell, model units
+  bool clustered = false;   // vertex clustering reduced it
+  double cluster_size = 0;  // the clustering cell, model units
 };
 
 // The mesh as is when it has at most max_triangles triangles; else its points merged by cells

@@ -26,12 +26,23 @@ std::string escape_html(const std::string& s) {
   out.reserve(s.size());
   for (char c : s) {
     switch (c) {
-      case '&': out += "&amp;"; break;
-      case '<': out += "&lt;"; break;
-      case '>': out += "&gt;"; break;
-      case '"': out += "&quot;"; break;
-      case '\'': out += "&#39;"; break;
-      default: out += c;
+      case '&':
+        out += "&amp;";
+        break;
+      case '<':
+        out += "&lt;";
+        break;
+      case '>':
+        out += "&gt;";
+        break;
+      case '"':
+        out += "&quot;";
+        break;
+      case '\'':
+        out += "&#39;";
+        break;
+      default:
+        out += c;
     }
   }
   return out;
@@ -54,7 +65,8 @@ std::string script_text(const std::string& code) {
   std::string out;
   out.reserve(code.size());
   size_t from = 0;
-  for (size_t at; (at = code.find("</script", from)) != std::string::npos; from = at + 2) out += code.substr(from, at - from) + "<\\/";
+  for (size_t at; (at = code.find("</script", from)) != std::string::npos; from = at + 2)
+    out += code.substr(from, at - from) + "<\\/";
   return out + code.substr(from);
 }
 
@@ -78,7 +90,8 @@ enum class Shown { Plain, Percent, Seconds };
 std::string shown(const json& v, Shown how) {
   if (v.is_boolean()) return v.get<bool>() ? "yes" : "no";
   if (v.is_number_unsigned()) return with_thousands(v.get<unsigned long long>());
-  if (v.is_number_integer()) return v.get<long long>() < 0 ? "-" + with_thousands(-v.get<long long>()) : with_thousands(v.get<long long>());
+  if (v.is_number_integer())
+    return v.get<long long>() < 0 ? "-" + with_thousands(-v.get<long long>()) : with_thousands(v.get<long long>());
   if (v.is_number()) return real(v.get<double>()) + (how == Shown::Percent ? " %" : how == Shown::Seconds ? " s" : "");
   if (v.is_string()) return v.get<std::string>().empty() ? "none" : v.get<std::string>();
   if (v.is_null()) return "none";
@@ -128,8 +141,8 @@ class Tables {
   void value_row(const std::string& label, const std::string& path, const json& v, Shown how = Shown::Plain) {
     if (!open_) html_ << pending_, open_ = true;
     html_ << "<tr><th>" << escape_html(label) << "</th><td data-key=\"" << escape_html(path) << "\" data-value=\""
-          << escape_html(v.dump(-1, ' ', false, json::error_handler_t::replace)) << "\">"
-          << escape_html(shown(v, how)) << "</td></tr>";
+          << escape_html(v.dump(-1, ' ', false, json::error_handler_t::replace)) << "\">" << escape_html(shown(v, how))
+          << "</td></tr>";
   }
   std::string done() {
     close();
@@ -153,9 +166,7 @@ std::string numbers_html(const json& r, bool has_wrap) {
   const bool leaked = leak && leak->is_boolean() && leak->get<bool>();
   if (leaked) {
     t.section("Leak", "leak");
-    t.rows({{"What", "leak.description"},
-            {"Narrowest passage at", "leak.location"},
-            {"Passage width", "leak.width"}});
+    t.rows({{"What", "leak.description"}, {"Narrowest passage at", "leak.location"}, {"Passage width", "leak.width"}});
   }
   t.section("Input", "input");
   t.rows({{"Triangles", "input.triangles"},
@@ -267,16 +278,21 @@ void check_indices(const Mesh& m, const char* which) {
     for (uint32_t v : t)
       if (v >= m.points.size())
         throw Error(ErrorKind::InvalidArgument, std::string("html report: the ") + which + " has a triangle corner " +
-                                                    std::to_string(v) + " past its " + std::to_string(m.points.size()) + " points");
+                                                    std::to_string(v) + " past its " + std::to_string(m.points.size()) +
+                                                    " points");
   if (!m.triangle_part.empty() && m.triangle_part.size() != m.triangles.size())
-    throw Error(ErrorKind::InvalidArgument, std::string("html report: the ") + which + "'s part list does not match its triangles");
+    throw Error(ErrorKind::InvalidArgument,
+                std::string("html report: the ") + which + "'s part list does not match its triangles");
 }
 
 const char* sign_name(DistanceSign s) {
   switch (s) {
-    case DistanceSign::Outside: return "outside";
-    case DistanceSign::FrontSide: return "front";
-    default: return "unsigned";
+    case DistanceSign::Outside:
+      return "outside";
+    case DistanceSign::FrontSide:
+      return "front";
+    default:
+      return "unsigned";
   }
 }
 
@@ -336,8 +352,8 @@ std::string html_report(const HtmlReportData& data, const std::string& three_js)
     const DeviationField* dev = data.deviation;
     if (dev && dev->distance.size() == wrap->points.size()) {
       scene["wrap"]["deviation"] = report::base64(report::display_values(wrap_display, dev->distance));
-      scene["deviation"] = {{"sign", sign_name(dev->sign)}, {"max_abs", dev->max_abs},   {"max_at", dev->max_at},
-                            {"mean_abs", dev->mean_abs},    {"p95_abs", dev->p95_abs},   {"diagonal", dev->diagonal}};
+      scene["deviation"] = {{"sign", sign_name(dev->sign)}, {"max_abs", dev->max_abs}, {"max_at", dev->max_at},
+                            {"mean_abs", dev->mean_abs},    {"p95_abs", dev->p95_abs}, {"diagonal", dev->diagonal}};
     }
     if (dev && dev->triangle_flags.size() == wrap->triangles.size()) {
       scene["wrap"]["flags"] = report::base64(report::display_per_triangle(wrap_display, dev->triangle_flags));
@@ -358,14 +374,15 @@ std::string html_report(const HtmlReportData& data, const std::string& three_js)
     verdict = wrap ? "The wrap failed validation" : "No wrap", verdict_class = "bad";
 
   std::ostringstream page;
-  page << "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">"
-       << "<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">"
-       << "<meta name=\"generator\" content=\"vdbwrap\"><title>" << escape_html(title) << "</title>\n<style>"
-       << report::kViewerCss << "</style></head>\n<body data-viewer=\"loading\">\n"
-       << "<div id=\"app\"><main id=\"view\"><div id=\"toolbar\"></div><div id=\"stage\"><canvas id=\"canvas\"></canvas>"
-       << "<div id=\"message\"></div><div id=\"legend\"></div></div><div id=\"note\"></div></main>\n"
-       << "<aside id=\"numbers\"><header><h1>" << escape_html(data.title.empty() ? "vdbwrap report" : data.title)
-       << "</h1><p class=\"verdict " << verdict_class << "\">" << escape_html(verdict) << "</p>";
+  page
+      << "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">"
+      << "<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">"
+      << "<meta name=\"generator\" content=\"vdbwrap\"><title>" << escape_html(title) << "</title>\n<style>"
+      << report::kViewerCss << "</style></head>\n<body data-viewer=\"loading\">\n"
+      << "<div id=\"app\"><main id=\"view\"><div id=\"toolbar\"></div><div id=\"stage\"><canvas id=\"canvas\"></canvas>"
+      << "<div id=\"message\"></div><div id=\"legend\"></div></div><div id=\"note\"></div></main>\n"
+      << "<aside id=\"numbers\"><header><h1>" << escape_html(data.title.empty() ? "vdbwrap report" : data.title)
+      << "</h1><p class=\"verdict " << verdict_class << "\">" << escape_html(verdict) << "</p>";
   if (const json* v = at_path(r, "vdbwrap_version"); v && v->is_string())
     page << "<p class=\"small\">vdbwrap " << escape_html(v->get<std::string>()) << "</p>";
   page << "</header>" << numbers_html(r, wrap != nullptr) << "</aside></div>\n"

@@ -20,9 +20,9 @@ enum InputDefect : uint8_t {
 };
 
 struct InputMarks {
-  std::vector<uint8_t> flags;                     // per input triangle, InputDefect bits
+  std::vector<uint8_t> flags;  // per input triangle, InputDefect bits
   bool intersections_searched = false;
-  std::vector<std::array<Vec3, 2>> sharp_edges;   // normals more than the feature angle apart
+  std::vector<std::array<Vec3, 2>> sharp_edges;  // normals more than the feature angle apart
 };
 
 // weld: the exact weld of input.points.

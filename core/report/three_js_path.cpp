@@ -37,7 +37,8 @@ std::string find_three_js() {
     tried.push_back(p);
   for (const std::string& p : tried)
     if (readable(p)) return p;
-  std::string msg = "--html needs three.js (Debian package libjs-three; or set VDBWRAP_THREE_JS to a three.min.js); not found at";
+  std::string msg =
+      "--html needs three.js (Debian package libjs-three; or set VDBWRAP_THREE_JS to a three.min.js); not found at";
   for (size_t i = 0; i < tried.size(); ++i) msg += (i ? ", " : " ") + tried[i];
   throw Error(ErrorKind::InvalidArgument, msg);
 }

@@ -29,8 +29,8 @@ void check_consistent(const Mesh& m) {
     FUZZ_CHECK(m.triangle_part.empty(), "triangle_part filled for %zu part(s)", m.part_names.size());
     return;
   }
-  FUZZ_CHECK(m.triangle_part.size() == m.triangles.size(), "%zu parts for %zu triangles",
-             m.triangle_part.size(), m.triangles.size());
+  FUZZ_CHECK(m.triangle_part.size() == m.triangles.size(), "%zu parts for %zu triangles", m.triangle_part.size(),
+             m.triangles.size());
   std::vector<bool> used(m.part_names.size(), false);
   for (int32_t p : m.triangle_part) {
     FUZZ_CHECK(p >= 0 && size_t(p) < m.part_names.size(), "part %d of %zu", p, m.part_names.size());
@@ -63,7 +63,7 @@ void check_round_trip(const Mesh& m, io::Format format) {
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   if (size < 1) return 0;
   // New formats go at the end: the seeds' first bytes keep their meaning.
-  static const io::Format kFormats[] = {io::Format::Unknown, io::Format::Stl, io::Format::Obj, io::Format::Off,
+  static const io::Format kFormats[] = {io::Format::Unknown, io::Format::Stl, io::Format::Obj,    io::Format::Off,
                                         io::Format::Ply,     io::Format::Vtp, io::Format::Nastran};
   const io::Format format = kFormats[data[0] % std::size(kFormats)];
   const std::string_view bytes(reinterpret_cast<const char*>(data) + 1, size - 1);
@@ -81,7 +81,8 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   check_round_trip(mesh, io::Format::Vtp);
   // Nastran's 16-character fields round the points: only the triangle count must survive.
   try {
-    const Mesh back = io::read_mesh_from_bytes(io::write_mesh_to_bytes(mesh, io::Format::Nastran), io::Format::Nastran, "round trip");
+    const Mesh back =
+        io::read_mesh_from_bytes(io::write_mesh_to_bytes(mesh, io::Format::Nastran), io::Format::Nastran, "round trip");
     FUZZ_CHECK(back.triangles.size() == mesh.triangles.size(), "Nastran: %zu triangles read back of %zu",
                back.triangles.size(), mesh.triangles.size());
   } catch (const Error& e) {

@@ -63,8 +63,12 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   if (size < 1) return 0;
   const std::string text(reinterpret_cast<const char*>(data) + 1, size - 1);
   switch (data[0] % 7) {
-    case 0: params_file(text, false); break;
-    case 1: params_file(text, true); break;
+    case 0:
+      params_file(text, false);
+      break;
+    case 1:
+      params_file(text, true);
+      break;
     case 2: {
       ControlVolume cv;
       if (!accepted([&] { cv = ControlVolume::parse(text); })) break;

@@ -4,7 +4,8 @@
 //
 // Input layout (missing bytes read as 0):
 //   0  flags: bits 0-1 volume (outside, inside, seed points, outside), 2 gap closure,
-//      3 contact prevention, 4 group against group (three parts), 5 no feature snapping, 6 no remeshing, 7 far from origin
+//      3 contact prevention, 4 group against group (three parts), 5 no feature snapping, 6 no remeshing, 7 far from
+//      origin
 //   1  levels (b % 3)            2  base size, % of the diagonal (finest cell >= 1.5 %)
 //   3  scale 10^(b % 19 - 9)     4  gap closure 0.5..20 %     5  translation 10^(b % 8) x scale
 //   6  seed count (1 + b % 2), then 3 bytes per seed point
@@ -202,7 +203,9 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   auto place = [&](const Vec3& g) { return Vec3{g[0] * scale + offset, g[1] * scale + offset, g[2] * scale + offset}; };
 
   switch (flags & 3) {
-    case 1: params.volume = VolumeChoice::Inside; break;
+    case 1:
+      params.volume = VolumeChoice::Inside;
+      break;
     case 2: {
       params.volume = VolumeChoice::SeedPoints;
       const int seeds = 1 + in.next() % 2;
@@ -213,7 +216,8 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
       }
       break;
     }
-    default: break;
+    default:
+      break;
   }
   if (flags & 4) params.gap_closure = Length{gap, true};
   // The report's distance sampling is fixed at 1000 samples per diagonal: seconds per input here.
@@ -243,7 +247,8 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   if (verbose)
     std::fprintf(stderr, "fuzz_wrap: %zu triangles, %zu points, %zu parts, base %g%%, levels %d, volume %d, gap %s\n",
                  mesh.triangles.size(), mesh.points.size(), mesh.part_names.size(), params.base_size.value,
-                 params.levels, int(params.volume), params.gap_closure ? params.gap_closure->to_string().c_str() : "off");
+                 params.levels, int(params.volume),
+                 params.gap_closure ? params.gap_closure->to_string().c_str() : "off");
   WrapResult result;
   try {
     result = wrap(mesh, params);
@@ -252,7 +257,8 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     return 0;  // refused or failed, as documented: not a crash
   }
   if (verbose)
-    for (const StageStats& st : result.report.stages) std::fprintf(stderr, "fuzz_wrap: %-20s %.3f s\n", st.name.c_str(), st.seconds);
+    for (const StageStats& st : result.report.stages)
+      std::fprintf(stderr, "fuzz_wrap: %-20s %.3f s\n", st.name.c_str(), st.seconds);
   // wrap() returns only surfaces that passed its validation (wrap.h, README): check it did,
   // and check the surface again independently.
   const Mesh& s = result.surface;

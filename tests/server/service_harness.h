@@ -217,12 +217,14 @@ class Client {
     out.job_id = reply.job_id();
     out.duplicate = reply.duplicate();
     auto md = ctx.GetServerTrailingMetadata();
-    if (auto it = md.find("vdbwrap-error-kind"); it != md.end()) out.error_kind = std::string(it->second.data(), it->second.size());
+    if (auto it = md.find("vdbwrap-error-kind"); it != md.end())
+      out.error_kind = std::string(it->second.data(), it->second.size());
     peer_ = ctx.peer();
     return out;
   }
 
-  std::string submit_ok(const std::string& name, const pb::WrapParameters& params = coarse(), const std::string& key = "") {
+  std::string submit_ok(const std::string& name, const pb::WrapParameters& params = coarse(),
+                        const std::string& key = "") {
     SubmitOutcome o = submit(data(name), name, params, key);
     EXPECT_TRUE(o.status.ok()) << o.status.error_message();
     return o.job_id;
@@ -259,12 +261,17 @@ class Client {
     return s;
   }
   pb::JobStatus wait_done(const std::string& id, std::chrono::seconds limit = 120s) {
-    return poll(id, [](const pb::JobStatus& s) {
-      return s.state() == pb::JOB_STATE_SUCCEEDED || s.state() == pb::JOB_STATE_FAILED || s.state() == pb::JOB_STATE_CANCELLED;
-    }, limit);
+    return poll(
+        id,
+        [](const pb::JobStatus& s) {
+          return s.state() == pb::JOB_STATE_SUCCEEDED || s.state() == pb::JOB_STATE_FAILED ||
+                 s.state() == pb::JOB_STATE_CANCELLED;
+        },
+        limit);
   }
 
-  grpc::Status download(const std::string& id, std::string& bytes, pb::MeshFormat format = pb::MESH_FORMAT_UNSPECIFIED) {
+  grpc::Status download(const std::string& id, std::string& bytes,
+                        pb::MeshFormat format = pb::MESH_FORMAT_UNSPECIFIED) {
     grpc::ClientContext ctx;
     prepare(ctx);
     pb::DownloadRequest req;
@@ -339,9 +346,9 @@ inline void expect_valid_result(const std::string& bytes, vdbwrap::io::Format fo
   vdbwrap::Mesh m = vdbwrap::io::read_mesh_from_bytes(bytes, format, what);
   // diagnose() welds bit-identical points first (STL stores 3 points per facet).
   vdbwrap::MeshDiagnostics d = vdbwrap::diagnose(m, true);
-  EXPECT_TRUE(d.valid_closed_surface()) << what << ": closed " << d.closed << ", manifold " << d.manifold << ", oriented "
-                                        << d.oriented << ", outward " << d.outward << ", self-intersecting "
-                                        << d.self_intersecting;
+  EXPECT_TRUE(d.valid_closed_surface()) << what << ": closed " << d.closed << ", manifold " << d.manifold
+                                        << ", oriented " << d.oriented << ", outward " << d.outward
+                                        << ", self-intersecting " << d.self_intersecting;
 }
 
 inline std::string binary_stl(uint32_t declared, size_t triangles, float fill = 0.0f) {
@@ -370,12 +377,15 @@ class Service : public ::testing::Test {
   }
   void TearDown() override {
     servers_.clear();  // SIGKILL whatever still runs
-    if (!HasFailure()) fs::remove_all(dir_);
-    else std::fprintf(stderr, "kept %s for inspection\n", dir_.c_str());
+    if (!HasFailure())
+      fs::remove_all(dir_);
+    else
+      std::fprintf(stderr, "kept %s for inspection\n", dir_.c_str());
   }
 
   ServerProcess& server(std::vector<std::string> extra = {}, const std::string& name = "a") {
-    servers_.push_back(std::make_unique<ServerProcess>(dir_ / ("spool_" + name), dir_ / ("server_" + name + ".log"), extra));
+    servers_.push_back(
+        std::make_unique<ServerProcess>(dir_ / ("spool_" + name), dir_ / ("server_" + name + ".log"), extra));
     servers_.back()->start();
     return *servers_.back();
   }
@@ -391,7 +401,6 @@ class Service : public ::testing::Test {
   fs::path dir_;
   std::vector<std::unique_ptr<ServerProcess>> servers_;
 };
-
 
 // grpc.health.v1.Health/Check through a generic call: the request is {service: NAME}
 // (field 1), the answer {status: SERVING = 1} (field 1, varint).

@@ -81,7 +81,8 @@ TEST_F(Service, CrashingJobFailsAloneWhileTheServerServesOn) {
   // An upload whose check crashes the mesh reader is refused, and no job is created.
   SubmitOutcome unreadable = c.submit(data("fuze.obj"), "crash-read.obj", coarse());
   EXPECT_EQ(unreadable.status.error_code(), grpc::StatusCode::INTERNAL);
-  EXPECT_NE(unreadable.status.error_message().find("crash-read.obj: the mesh reader's process ended with signal 11 (SIGSEGV)"),
+  EXPECT_NE(unreadable.status.error_message().find(
+                "crash-read.obj: the mesh reader's process ended with signal 11 (SIGSEGV)"),
             std::string::npos)
       << unreadable.status.error_message();
   EXPECT_EQ(s.jobs_on_disk(), 6u);
@@ -160,7 +161,8 @@ TEST_F(Service, CancelAndTimeoutKillAJobProcessThatIgnoresThem) {
   SubmitOutcome timed = c.submit(data("fuze.obj"), "hang-timeout.obj", coarse());
   SubmitOutcome cancelled = c.submit(data("fuze.obj"), "hang-cancel.obj", coarse());
   ASSERT_TRUE(timed.status.ok() && cancelled.status.ok());
-  c.poll(cancelled.job_id, [](const pb::JobStatus& st) { return st.stage() == "read"; }, 30s);
+  c.poll(
+      cancelled.job_id, [](const pb::JobStatus& st) { return st.stage() == "read"; }, 30s);
   const auto t0 = Clock::now();
   ASSERT_TRUE(c.cancel(cancelled.job_id).ok());
   // The stand-in ignores SIGTERM: it ends by the SIGKILL that follows a grace period.
@@ -174,8 +176,8 @@ TEST_F(Service, CancelAndTimeoutKillAJobProcessThatIgnoresThem) {
 }
 
 TEST_F(Service, ServerKilledWhileAJobRunsGivesUpAfterMaxAttempts) {
-  ServerProcess& s = server(
-      {"--workers", "1", "--max-attempts", "2", "--job-memory", "3G", "--worker-command", VDBWRAP_WORKER_HOOK});
+  ServerProcess& s =
+      server({"--workers", "1", "--max-attempts", "2", "--job-memory", "3G", "--worker-command", VDBWRAP_WORKER_HOOK});
   std::string id;
   {
     Client c(s.address());
@@ -185,7 +187,8 @@ TEST_F(Service, ServerKilledWhileAJobRunsGivesUpAfterMaxAttempts) {
   }
   for (int run = 1; run <= 2; ++run) {
     Client c(s.address());
-    c.poll(id, [](const pb::JobStatus& st) { return st.state() == pb::JOB_STATE_RUNNING && st.stage() == "read"; }, 30s);
+    c.poll(
+        id, [](const pb::JobStatus& st) { return st.state() == pb::JOB_STATE_RUNNING && st.stage() == "read"; }, 30s);
     std::map<pid_t, char> workers = children_of(s.pid());
     ASSERT_EQ(workers.size(), 1u) << "run " << run;
     if (run == 1) {
@@ -238,7 +241,8 @@ TEST_F(Service, RetainPrunesOldEndedJobs) {
   // One job ended eight days ago.
   const fs::path record = s.spool() / "jobs" / old_id / "job.json";
   const int64_t eight_days_ago =
-      std::chrono::duration_cast<std::chrono::milliseconds>(std::chrono::system_clock::now().time_since_epoch()).count() -
+      std::chrono::duration_cast<std::chrono::milliseconds>(std::chrono::system_clock::now().time_since_epoch())
+          .count() -
       8 * 86400 * 1000LL;
   const std::string json = std::regex_replace(read_file(record), std::regex("\"finished_unix_ms\": \"[0-9]+\""),
                                               "\"finished_unix_ms\": \"" + std::to_string(eight_days_ago) + "\"");
@@ -246,7 +250,8 @@ TEST_F(Service, RetainPrunesOldEndedJobs) {
   write_file(record, json);
 
   // The same spool, with a retention of seven days.
-  servers_.push_back(std::make_unique<ServerProcess>(s.spool(), dir_ / "server_retain.log", std::vector<std::string>{"--retain", "7d"}));
+  servers_.push_back(std::make_unique<ServerProcess>(s.spool(), dir_ / "server_retain.log",
+                                                     std::vector<std::string>{"--retain", "7d"}));
   ServerProcess& kept = *servers_.back();
   kept.start();
   Client c(kept.address());

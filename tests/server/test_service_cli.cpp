@@ -11,8 +11,8 @@ namespace {
 TEST_F(Service, CliSubmitDownloadsTheResult) {
   ServerProcess& s = server({"--workers", "2"});
   const fs::path out = dir_ / "fuze_remote.stl", report = dir_ / "fuze_remote.json";
-  CliRun r = cli("submit --server " + s.address() + " " + vdbwrap::testing::data_path("fuze.obj") + " -o " + out.string() +
-              " --base-size 3% --report " + report.string());
+  CliRun r = cli("submit --server " + s.address() + " " + vdbwrap::testing::data_path("fuze.obj") + " -o " +
+                 out.string() + " --base-size 3% --report " + report.string());
   ASSERT_EQ(r.code, 0) << r.err;
   expect_valid_result(read_file(out), vdbwrap::io::Format::Stl, "fuze_remote.stl");
   EXPECT_NE(read_file(report).find("\"valid_closed_surface\": true"), std::string::npos);
@@ -24,7 +24,8 @@ TEST_F(Service, CliSubmitDownloadsTheResult) {
           " --base-size 3% --format ply -q");
   ASSERT_EQ(r.code, 0) << r.err;
   expect_valid_result(read_file(dir_ / "outs" / "unit_sphere_wrap.ply"), vdbwrap::io::Format::Ply, "sphere");
-  expect_valid_result(read_file(dir_ / "outs" / "two_objects_mixed_case_names_wrap.ply"), vdbwrap::io::Format::Ply, "two");
+  expect_valid_result(read_file(dir_ / "outs" / "two_objects_mixed_case_names_wrap.ply"), vdbwrap::io::Format::Ply,
+                      "two");
   EXPECT_TRUE(fs::exists(dir_ / "outs" / "unit_sphere_wrap.json"));
 }
 
@@ -39,7 +40,8 @@ TEST_F(Service, RemoteLeakKeepsTheReportAndTheLeakPathAndParamsFilesWork) {
   EXPECT_NE(read_file(report).find("\"detected\": true"), std::string::npos);
   EXPECT_EQ(vdbwrap::io::read_mesh(leak.string()).triangles.size(), 8u);
   // The same job with a gap closure from a parameter file: wrapped on the server.
-  write_file(dir_ / "p.yaml", "volume: seed_points\nseed_points: [{x: 0.5, y: 0.5, z: 0.5}]\ngap_closure: {model_units: 0.15}\n");
+  write_file(dir_ / "p.yaml",
+             "volume: seed_points\nseed_points: [{x: 0.5, y: 0.5, z: 0.5}]\ngap_closure: {model_units: 0.15}\n");
   r = cli("submit --server " + s.address() + " " + in.string() + " -o " + (dir_ / "c.ply").string() + " --params " +
           (dir_ / "p.yaml").string() + " -q");
   ASSERT_EQ(r.code, 0) << r.err;
@@ -48,8 +50,9 @@ TEST_F(Service, RemoteLeakKeepsTheReportAndTheLeakPathAndParamsFilesWork) {
 
 TEST_F(Service, CliDetachWaitJobsCancel) {
   ServerProcess& s = server({"--workers", "1"});
-  CliRun r = cli("submit --server " + s.address() + " --detach " + vdbwrap::testing::data_path("two_objects_mixed_case_names.stl") +
-              " " + vdbwrap::testing::data_path("unit_sphere.STL") + " --base-size 3%");
+  CliRun r = cli("submit --server " + s.address() + " --detach " +
+                 vdbwrap::testing::data_path("two_objects_mixed_case_names.stl") + " " +
+                 vdbwrap::testing::data_path("unit_sphere.STL") + " --base-size 3%");
   ASSERT_EQ(r.code, 0) << r.err;
   std::istringstream lines(r.out);
   std::vector<std::string> ids;
@@ -59,13 +62,14 @@ TEST_F(Service, CliDetachWaitJobsCancel) {
   ASSERT_EQ(listed.code, 0) << listed.err;
   for (auto& id : ids) EXPECT_NE(listed.out.find(id), std::string::npos);
   fs::create_directories(dir_ / "w");
-  CliRun waited = cli("wait --server " + s.address() + " " + ids[0] + " " + ids[1] + " --out-dir " + (dir_ / "w").string());
+  CliRun waited =
+      cli("wait --server " + s.address() + " " + ids[0] + " " + ids[1] + " --out-dir " + (dir_ / "w").string());
   ASSERT_EQ(waited.code, 0) << waited.err;
   expect_valid_result(read_file(dir_ / "w" / "two_objects_mixed_case_names_wrap.stl"), vdbwrap::io::Format::Stl, "two");
   expect_valid_result(read_file(dir_ / "w" / "unit_sphere_wrap.stl"), vdbwrap::io::Format::Stl, "sphere");
   // cancel
   CliRun slow_job = cli("submit --server " + s.address() + " --detach " + vdbwrap::testing::data_path("fuze.obj") +
-                     " --base-size 0.5% --threads 1 --no-features");
+                        " --base-size 0.5% --threads 1 --no-features");
   ASSERT_EQ(slow_job.code, 0) << slow_job.err;
   std::string slow_id = slow_job.out.substr(0, 32);
   CliRun cancelled = cli("cancel --server " + s.address() + " " + slow_id);
@@ -89,8 +93,8 @@ TEST_F(Service, CliOutputFoldersAndEnvironmentDefaults) {
   CliRun early = cli("submit " + sphere + " -o " + (missing / "o.stl").string() + " --base-size 3%", env);
   EXPECT_EQ(early.code, 2) << early.err;
   EXPECT_NE(early.err.find(missing.string()), std::string::npos) << early.err;
-  CliRun early_report = cli("submit " + sphere + " -o " + (dir_ / "o.stl").string() + " --report " +
-                            (missing / "r.json").string(), env);
+  CliRun early_report =
+      cli("submit " + sphere + " -o " + (dir_ / "o.stl").string() + " --report " + (missing / "r.json").string(), env);
   EXPECT_EQ(early_report.code, 2) << early_report.err;
   EXPECT_EQ(s.jobs_on_disk(), 0u) << "nothing uploaded";
   // --out-dir is created, parents included.
@@ -115,7 +119,8 @@ TEST_F(Service, CliOutputFoldersAndEnvironmentDefaults) {
   EXPECT_EQ(no_token.code, 2);
   EXPECT_NE(no_token.err.find("UNAUTHENTICATED"), std::string::npos) << no_token.err;
   // Options given on the command line win over the environment.
-  CliRun explicit_server = cli("jobs --server " + s.address(), "VDBWRAP_SERVER=127.0.0.1:1 VDBWRAP_TOKEN_FILE=" + token.string());
+  CliRun explicit_server =
+      cli("jobs --server " + s.address(), "VDBWRAP_SERVER=127.0.0.1:1 VDBWRAP_TOKEN_FILE=" + token.string());
   EXPECT_EQ(explicit_server.code, 0) << explicit_server.err;
   EXPECT_NE(explicit_server.out.find(id), std::string::npos);
   // A token file in the environment that does not exist: named when a remote command needs
@@ -123,7 +128,8 @@ TEST_F(Service, CliOutputFoldersAndEnvironmentDefaults) {
   CliRun missing_token = cli("jobs --server " + s.address(), "VDBWRAP_TOKEN_FILE=" + (dir_ / "nope").string());
   EXPECT_EQ(missing_token.code, 2);
   EXPECT_NE(missing_token.err.find((dir_ / "nope").string()), std::string::npos) << missing_token.err;
-  CliRun local = cli("check " + sphere, "VDBWRAP_TOKEN_FILE=" + (dir_ / "nope").string() + " VDBWRAP_SERVER=127.0.0.1:1");
+  CliRun local =
+      cli("check " + sphere, "VDBWRAP_TOKEN_FILE=" + (dir_ / "nope").string() + " VDBWRAP_SERVER=127.0.0.1:1");
   EXPECT_EQ(local.code, 0) << local.err;
   // Neither: --server is required.
   CliRun none = cli("jobs");
@@ -138,7 +144,8 @@ TEST_F(Service, CliDeletesEndedJobsAndListsJobsAsJson) {
   const pb::JobStatus done_status = c.wait_done(done);
   ASSERT_EQ(done_status.state(), pb::JOB_STATE_SUCCEEDED);
   const std::string running = c.submit_ok("fuze.obj", slow());
-  c.poll(running, [](const pb::JobStatus& st) { return st.state() == pb::JOB_STATE_RUNNING; }, 30s);
+  c.poll(
+      running, [](const pb::JobStatus& st) { return st.state() == pb::JOB_STATE_RUNNING; }, 30s);
   const std::string at = " --server " + s.address();
 
   CliRun listed = cli("jobs --json" + at);
@@ -185,8 +192,8 @@ TEST_F(Service, CliDeletesEndedJobsAndListsJobsAsJson) {
 TEST_F(Service, CliRoundRobinSpreadsAndFollowsEachJob) {
   std::vector<ServerProcess*> servers;
   for (const char* name : {"a", "b"}) servers.push_back(&server({"--workers", "1"}, name));
-  const std::string target = "ipv4:127.0.0.1:" + std::to_string(servers[0]->port()) + ",127.0.0.1:" +
-                             std::to_string(servers[1]->port());
+  const std::string target =
+      "ipv4:127.0.0.1:" + std::to_string(servers[0]->port()) + ",127.0.0.1:" + std::to_string(servers[1]->port());
   fs::create_directories(dir_ / "rr");
   std::string inputs;
   for (const char* n : {"two_objects_mixed_case_names.stl", "unit_sphere.STL", "fuze.obj", "multibody.stl"})
@@ -212,7 +219,8 @@ TEST_F(Service, CliWaitSurvivesAServerCrashAndRestart) {
     return cli("wait --server " + s.address() + " " + id + " --out-dir " + (dir_ / "w").string() + " --retry 60");
   });
   Client c(s.address());
-  c.poll(id, [](const pb::JobStatus& st) { return st.state() == pb::JOB_STATE_RUNNING && st.stage() != "read"; }, 30s);
+  c.poll(
+      id, [](const pb::JobStatus& st) { return st.state() == pb::JOB_STATE_RUNNING && st.stage() != "read"; }, 30s);
   EXPECT_EQ(s.kill(SIGKILL), 128 + SIGKILL);
   s.set_listen(s.address());  // same address: the waiting CLI reconnects
   s.start();
@@ -226,7 +234,8 @@ TEST_F(Service, CliWaitSurvivesAServerCrashAndRestart) {
 std::set<std::string> long_options(const std::string& help) {
   std::set<std::string> out;
   const std::regex opt("--[a-z][a-z0-9-]+");
-  for (auto it = std::sregex_iterator(help.begin(), help.end(), opt); it != std::sregex_iterator(); ++it) out.insert(it->str());
+  for (auto it = std::sregex_iterator(help.begin(), help.end(), opt); it != std::sregex_iterator(); ++it)
+    out.insert(it->str());
   return out;
 }
 
@@ -246,7 +255,8 @@ TEST_F(Service, CliSubmitTakesEveryWrapOption) {
 
 TEST_F(Service, CliSubmitRepairRunsTheRepairOnTheServer) {
   // `submit --repair` takes every option of `vdbwrap repair`, and gives its exit codes.
-  const std::set<std::string> repair_options = long_options(cli("repair --help").out), submit_options = long_options(cli("submit --help").out);
+  const std::set<std::string> repair_options = long_options(cli("repair --help").out),
+                              submit_options = long_options(cli("submit --help").out);
   ASSERT_GT(repair_options.size(), 10u);
   for (const auto& o : repair_options)
     if (!kLocalOutputs.count(o)) EXPECT_TRUE(submit_options.count(o)) << "submit lacks repair's " << o;
@@ -254,8 +264,8 @@ TEST_F(Service, CliSubmitRepairRunsTheRepairOnTheServer) {
   ServerProcess& s = server({"--workers", "1"});
   const fs::path folded = dir_ / "folded.obj", out = dir_ / "fixed.obj", report = dir_ / "fixed.json";
   vdbwrap::io::write_mesh(vdbwrap::testing::folded_icosphere(), folded.string());
-  CliRun r = cli("submit --repair --server " + s.address() + " " + folded.string() + " -o " + out.string() + " --report " +
-                 report.string() + " --max-deviation 5% --alpha 0.3");
+  CliRun r = cli("submit --repair --server " + s.address() + " " + folded.string() + " -o " + out.string() +
+                 " --report " + report.string() + " --max-deviation 5% --alpha 0.3");
   ASSERT_EQ(r.code, 0) << r.err;
   EXPECT_EQ(vdbwrap::diagnose(vdbwrap::io::read_mesh(out.string()), true).intersecting_pairs, 0u);
   EXPECT_NE(read_file(report).find("\"all_fixed\": true"), std::string::npos);
@@ -265,19 +275,22 @@ TEST_F(Service, CliSubmitRepairRunsTheRepairOnTheServer) {
   const fs::path crossing = dir_ / "sheets.obj";
   vdbwrap::io::write_mesh(vdbwrap::testing::crossing_sheets(), crossing.string());
   fs::create_directories(dir_ / "outs");
-  r = cli("submit --repair --server " + s.address() + " " + crossing.string() + " --out-dir " + (dir_ / "outs").string() + " -q");
+  r = cli("submit --repair --server " + s.address() + " " + crossing.string() + " --out-dir " +
+          (dir_ / "outs").string() + " -q");
   EXPECT_EQ(r.code, 4) << r.err;
   EXPECT_TRUE(fs::exists(dir_ / "outs" / "sheets_repaired.obj"));
   EXPECT_TRUE(fs::exists(dir_ / "outs" / "sheets_repaired.json"));
   EXPECT_NE(r.err.find("intersecting pairs left"), std::string::npos) << r.err;
   // One kind's options with the other kind: refused before anything is sent.
-  r = cli("submit --repair --server " + s.address() + " " + folded.string() + " -o " + out.string() + " --base-size 1%");
+  r = cli("submit --repair --server " + s.address() + " " + folded.string() + " -o " + out.string() +
+          " --base-size 1%");
   EXPECT_EQ(r.code, 2) << r.err;
   EXPECT_NE(r.err.find("--base-size"), std::string::npos) << r.err;
   r = cli("submit --server " + s.address() + " " + folded.string() + " -o " + out.string() + " --alpha 0.3");
   EXPECT_EQ(r.code, 2) << r.err;
   EXPECT_NE(r.err.find("--repair"), std::string::npos) << r.err;
-  r = cli("submit --repair --server " + s.address() + " " + folded.string() + " -o " + out.string() + " --area-ratio 1.5");
+  r = cli("submit --repair --server " + s.address() + " " + folded.string() + " -o " + out.string() +
+          " --area-ratio 1.5");
   EXPECT_EQ(r.code, 2) << r.err;
   EXPECT_EQ(s.jobs_on_disk(), 2u);
 }
@@ -288,13 +301,13 @@ TEST_F(Service, CliExitCodesMatchTheLocalWrap) {
   write_file(dir_ / "garbage.stl", std::string(3000, '\x01'));
   const std::string token = " --token-file " + (dir_ / "token").string();
   CliRun bad_input = cli("submit --server " + s.address() + token + " " + (dir_ / "garbage.stl").string() + " -o " +
-                      (dir_ / "o.stl").string());
+                         (dir_ / "o.stl").string());
   EXPECT_EQ(bad_input.code, 3) << bad_input.err;
-  CliRun bad_levels = cli("submit --server " + s.address() + token + " " + vdbwrap::testing::data_path("fuze.obj") + " -o " +
-                       (dir_ / "o.stl").string() + " --levels 9");
+  CliRun bad_levels = cli("submit --server " + s.address() + token + " " + vdbwrap::testing::data_path("fuze.obj") +
+                          " -o " + (dir_ / "o.stl").string() + " --levels 9");
   EXPECT_EQ(bad_levels.code, 2) << bad_levels.err;
-  CliRun bad_output = cli("submit --server " + s.address() + token + " " + vdbwrap::testing::data_path("fuze.obj") + " -o " +
-                       (dir_ / "o.xyz").string());
+  CliRun bad_output = cli("submit --server " + s.address() + token + " " + vdbwrap::testing::data_path("fuze.obj") +
+                          " -o " + (dir_ / "o.xyz").string());
   EXPECT_EQ(bad_output.code, 2) << bad_output.err;
   CliRun no_token = cli("jobs --server " + s.address());
   EXPECT_EQ(no_token.code, 2) << no_token.err;

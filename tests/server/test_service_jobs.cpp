@@ -35,19 +35,23 @@ TEST_F(Service, RepairJobRepairsAnUploadedMesh) {
   EXPECT_EQ(repair_report["source"]["parts"][0].value("triangles", size_t(0)), folded.triangles.size());
   std::string result;
   ASSERT_TRUE(c.download(st.job_id(), result).ok());
-  const vdbwrap::MeshDiagnostics after = vdbwrap::diagnose(vdbwrap::io::read_mesh_from_bytes(result, vdbwrap::io::Format::Obj, "r"), true);
+  const vdbwrap::MeshDiagnostics after =
+      vdbwrap::diagnose(vdbwrap::io::read_mesh_from_bytes(result, vdbwrap::io::Format::Obj, "r"), true);
   EXPECT_LT(after.intersecting_pairs, before.intersecting_pairs);
   EXPECT_EQ(after.intersecting_pairs, 0u);
   EXPECT_TRUE(after.valid_closed_surface());
   EXPECT_EQ(after.triangles, folded.triangles.size()) << "a local repair: no re-wrap";
   // As STL (single precision): converted on download, still free of intersections.
   ASSERT_TRUE(c.download(st.job_id(), result, pb::MESH_FORMAT_STL).ok());
-  EXPECT_EQ(vdbwrap::diagnose(vdbwrap::io::read_mesh_from_bytes(result, vdbwrap::io::Format::Stl, "r"), true).intersecting_pairs, 0u);
+  EXPECT_EQ(vdbwrap::diagnose(vdbwrap::io::read_mesh_from_bytes(result, vdbwrap::io::Format::Stl, "r"), true)
+                .intersecting_pairs,
+            0u);
 
   // Two open sheets crossing edge to edge: beyond repair (nothing to cap). The job succeeds
   // with the result written and says how many pairs are left.
   spec.set_file_name("sheets.obj");
-  o = c.submit_spec(vdbwrap::io::write_mesh_to_bytes(vdbwrap::testing::crossing_sheets(), vdbwrap::io::Format::Obj), spec);
+  o = c.submit_spec(vdbwrap::io::write_mesh_to_bytes(vdbwrap::testing::crossing_sheets(), vdbwrap::io::Format::Obj),
+                    spec);
   ASSERT_TRUE(o.status.ok()) << o.status.error_message();
   const pb::JobStatus left = c.wait_done(o.job_id);
   ASSERT_EQ(left.state(), pb::JOB_STATE_SUCCEEDED) << left.error_message();
@@ -136,7 +140,8 @@ TEST_F(Service, ProgressEventsArriveInOrder) {
       EXPECT_GE(int(events[i].state()), int(events[i - 1].state()));
       EXPECT_GE(events[i].elapsed_seconds() + 1e-9, events[i - 1].elapsed_seconds());
     }
-    if (!events[i].stage().empty() && (stages.empty() || stages.back() != events[i].stage())) stages.push_back(events[i].stage());
+    if (!events[i].stage().empty() && (stages.empty() || stages.back() != events[i].stage()))
+      stages.push_back(events[i].stage());
   }
   EXPECT_EQ(events.front().state(), pb::JOB_STATE_QUEUED);
   EXPECT_EQ(events.back().state(), pb::JOB_STATE_SUCCEEDED);
@@ -145,7 +150,8 @@ TEST_F(Service, ProgressEventsArriveInOrder) {
     auto it = std::find(stages.begin(), stages.end(), name);
     return it == stages.end() ? -1 : int(it - stages.begin());
   };
-  std::vector<std::string> expected = {"read", "diagnose input", "prepare", "refine", "flood fill", "extract", "project", "validate", "write"};
+  std::vector<std::string> expected = {"read",    "diagnose input", "prepare",  "refine", "flood fill",
+                                       "extract", "project",        "validate", "write"};
   for (size_t i = 0; i < expected.size(); ++i) {
     ASSERT_GE(pos(expected[i]), 0) << expected[i];
     if (i > 0) EXPECT_LT(pos(expected[i - 1]), pos(expected[i]));
@@ -163,9 +169,13 @@ TEST_F(Service, CancelStopsARunningJobAndOthersRunOn) {
   std::string slow_id = c.submit_ok("fuze.obj", slow());
   std::string small_id = c.submit_ok("two_objects_mixed_case_names.stl");
   // Cancel once the slow job is inside the voxel stages.
-  c.poll(slow_id, [](const pb::JobStatus& st) {
-    return st.state() == pb::JOB_STATE_RUNNING && (st.stage() == "extract" || st.stage() == "project" || st.stage() == "flood fill");
-  }, 60s);
+  c.poll(
+      slow_id,
+      [](const pb::JobStatus& st) {
+        return st.state() == pb::JOB_STATE_RUNNING &&
+               (st.stage() == "extract" || st.stage() == "project" || st.stage() == "flood fill");
+      },
+      60s);
   pb::JobStatus after;
   const auto t0 = Clock::now();
   ASSERT_TRUE(c.cancel(slow_id, &after).ok());
@@ -198,7 +208,8 @@ TEST_F(Service, FullQueueIsResourceExhausted) {
   ServerProcess& s = server({"--workers", "1", "--queue", "1"});
   Client c(s.address());
   std::string running = c.submit_ok("fuze.obj", slow());
-  c.poll(running, [](const pb::JobStatus& st) { return st.state() == pb::JOB_STATE_RUNNING; }, 30s);
+  c.poll(
+      running, [](const pb::JobStatus& st) { return st.state() == pb::JOB_STATE_RUNNING; }, 30s);
   std::string waiting = c.submit_ok("two_objects_mixed_case_names.stl");
   SubmitOutcome full = c.submit(data("unit_sphere.STL"), "unit_sphere.STL", coarse());
   EXPECT_EQ(full.status.error_code(), grpc::StatusCode::RESOURCE_EXHAUSTED);
@@ -206,7 +217,8 @@ TEST_F(Service, FullQueueIsResourceExhausted) {
   EXPECT_EQ(s.jobs_on_disk(), 2u);
   // Room again once the waiting job has started.
   c.cancel(running);
-  c.poll(waiting, [](const pb::JobStatus& st) { return st.state() != pb::JOB_STATE_QUEUED; }, 30s);
+  c.poll(
+      waiting, [](const pb::JobStatus& st) { return st.state() != pb::JOB_STATE_QUEUED; }, 30s);
   SubmitOutcome again = c.submit(data("unit_sphere.STL"), "unit_sphere.STL", coarse());
   EXPECT_TRUE(again.status.ok()) << again.status.error_message();
   EXPECT_EQ(c.wait_done(waiting).state(), pb::JOB_STATE_SUCCEEDED);
@@ -225,7 +237,8 @@ TEST_F(Service, SigkillAndRestartFinishesEveryAcceptedJob) {
     ids.push_back(c.submit_ok("unit_sphere.STL"));
     ids.push_back(c.submit_ok("fuze.obj"));
     ids.push_back(c.submit_ok("two_objects_mixed_case_names.stl", coarse(5)));
-    c.poll(ids[1], [](const pb::JobStatus& st) { return st.state() == pb::JOB_STATE_RUNNING; }, 30s);
+    c.poll(
+        ids[1], [](const pb::JobStatus& st) { return st.state() == pb::JOB_STATE_RUNNING; }, 30s);
   }
   EXPECT_EQ(s.kill(SIGKILL), 128 + SIGKILL);
   EXPECT_EQ(s.jobs_on_disk(), ids.size());
@@ -247,7 +260,8 @@ TEST_F(Service, SigtermRequeuesTheRunningJob) {
   {
     Client c(s.address());
     id = c.submit_ok("fuze.obj", slow());
-    c.poll(id, [](const pb::JobStatus& st) { return st.state() == pb::JOB_STATE_RUNNING && st.stage() != "read"; }, 30s);
+    c.poll(
+        id, [](const pb::JobStatus& st) { return st.state() == pb::JOB_STATE_RUNNING && st.stage() != "read"; }, 30s);
   }
   const auto t0 = Clock::now();
   EXPECT_EQ(s.kill(SIGTERM), 0);
@@ -280,7 +294,8 @@ TEST_F(Service, BadUploadsAreRefusedWhileAJobRunsUnharmed) {
 
   SubmitOutcome truncated = c.submit(binary_stl(100, 10), "truncated.stl", coarse());
   EXPECT_EQ(truncated.status.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
-  EXPECT_NE(truncated.status.error_message().find("truncated.stl"), std::string::npos) << truncated.status.error_message();
+  EXPECT_NE(truncated.status.error_message().find("truncated.stl"), std::string::npos)
+      << truncated.status.error_message();
   std::string half = data("unit_sphere.STL");
   half.resize(half.size() / 2);
   EXPECT_EQ(c.submit(half, "unit_sphere.STL", coarse()).status.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
@@ -358,7 +373,8 @@ TEST_F(Service, TokenIsRequiredInEveryCall) {
   ServerProcess& s = server({"--token-file", (dir_ / "token").string()});
   Client none(s.address()), wrong(s.address(), "guess"), right(s.address(), "s3cret-token");
   EXPECT_EQ(none.submit(data("fuze.obj"), "fuze.obj", coarse()).status.error_code(), grpc::StatusCode::UNAUTHENTICATED);
-  EXPECT_EQ(wrong.submit(data("fuze.obj"), "fuze.obj", coarse()).status.error_code(), grpc::StatusCode::UNAUTHENTICATED);
+  EXPECT_EQ(wrong.submit(data("fuze.obj"), "fuze.obj", coarse()).status.error_code(),
+            grpc::StatusCode::UNAUTHENTICATED);
   pb::ListReply list;
   EXPECT_EQ(none.list(list).error_code(), grpc::StatusCode::UNAUTHENTICATED);
   EXPECT_EQ(wrong.list(list).error_code(), grpc::StatusCode::UNAUTHENTICATED);
@@ -462,7 +478,8 @@ TEST_F(Service, RoundRobinSpreadsJobsOverServers) {
   std::vector<ServerProcess*> servers;
   for (const char* name : {"a", "b", "c"}) servers.push_back(&server({"--workers", "1"}, name));
   std::string target = "ipv4:";
-  for (size_t i = 0; i < servers.size(); ++i) target += (i ? ",127.0.0.1:" : "127.0.0.1:") + std::to_string(servers[i]->port());
+  for (size_t i = 0; i < servers.size(); ++i)
+    target += (i ? ",127.0.0.1:" : "127.0.0.1:") + std::to_string(servers[i]->port());
   grpc::ChannelArguments args;
   args.SetLoadBalancingPolicyName("round_robin");
   Client balanced(grpc::CreateCustomChannel(target, grpc::InsecureChannelCredentials(), args), "");
@@ -495,9 +512,10 @@ TEST_F(Service, RoundRobinSpreadsJobsOverServers) {
 TEST_F(Service, TlsServesEncryptedClientsOnly) {
   if (std::system("command -v openssl > /dev/null 2>&1") != 0) GTEST_SKIP() << "openssl not installed";
   const fs::path key = dir_ / "key.pem", cert = dir_ / "cert.pem";
-  std::string cmd = "openssl req -x509 -newkey rsa:2048 -nodes -days 1 -subj /CN=localhost -addext "
-                    "subjectAltName=DNS:localhost,IP:127.0.0.1 -keyout " + key.string() + " -out " + cert.string() +
-                    " > /dev/null 2>&1";
+  std::string cmd =
+      "openssl req -x509 -newkey rsa:2048 -nodes -days 1 -subj /CN=localhost -addext "
+      "subjectAltName=DNS:localhost,IP:127.0.0.1 -keyout " +
+      key.string() + " -out " + cert.string() + " > /dev/null 2>&1";
   ASSERT_EQ(std::system(cmd.c_str()), 0);
   ServerProcess& s = server({"--tls-cert", cert.string(), "--tls-key", key.string()});
   grpc::SslCredentialsOptions ssl;

@@ -45,7 +45,8 @@ struct Frame {
 
 Frame random_frame(Rng& rng, const Vec3& origin) {
   const double a = rng.u(0, 2 * M_PI), b = rng.u(0, 2 * M_PI), c = rng.u(0, 2 * M_PI);
-  const double ca = std::cos(a), sa = std::sin(a), cb = std::cos(b), sb = std::sin(b), cc = std::cos(c), sc = std::sin(c);
+  const double ca = std::cos(a), sa = std::sin(a), cb = std::cos(b), sb = std::sin(b), cc = std::cos(c),
+               sc = std::sin(c);
   Frame f;
   const double m[3][3] = {{ca * cb, ca * sb * sc - sa * cc, ca * sb * cc + sa * sc},
                           {sa * cb, sa * sb * sc + ca * cc, sa * sb * cc - ca * sc},
@@ -230,8 +231,8 @@ HostileMesh duplicates(int scale, uint32_t seed) {
   const size_t n = shell.triangles.size();
   for (size_t i = 0; i < n; ++i) {
     const Tri t = shell.triangles[i];
-    shell.triangles.push_back(t);                                     // every triangle twice
-    if (rng.chance(0.2)) shell.triangles.push_back(t);                // some three times
+    shell.triangles.push_back(t);                                        // every triangle twice
+    if (rng.chance(0.2)) shell.triangles.push_back(t);                   // some three times
     if (rng.chance(0.1)) shell.triangles.push_back({t[0], t[2], t[1]});  // and reversed
   }
   Mesh pin = vdbwrap::testing::cylinder_mesh({0.6, 0, -0.2}, 0.3, 1.2, 32 * scale);
@@ -269,7 +270,8 @@ HostileMesh nonmanifold_fan(int scale, uint32_t seed) {
   // Two cubes on one edge and a third on one corner, sharing those points.
   auto cube = [&](const Vec3& lo) {
     Mesh c = grid_box(lo, add(lo, {1, 1, 1}), scale);
-    for (const Tri& t : c.triangles) m.triangles.push_back({vid(c.points[t[0]]), vid(c.points[t[1]]), vid(c.points[t[2]])});
+    for (const Tri& t : c.triangles)
+      m.triangles.push_back({vid(c.points[t[0]]), vid(c.points[t[1]]), vid(c.points[t[2]])});
   };
   cube({1, 0, 0});
   cube({2, 1, 0});
@@ -330,7 +332,8 @@ Mesh csg_scene(int scale, uint32_t seed, Vec3& inside) {
     const Tri t = m.triangles[rng.below(uint32_t(n))];
     m.triangles.push_back({t[0], t[1], t[1]});
     m.triangle_part.push_back(m.triangle_part[rng.below(uint32_t(n))]);
-    const Vec3 a = m.points[m.triangles[rng.below(uint32_t(n))][0]], b = m.points[m.triangles[rng.below(uint32_t(n))][0]];
+    const Vec3 a = m.points[m.triangles[rng.below(uint32_t(n))][0]],
+               b = m.points[m.triangles[rng.below(uint32_t(n))][0]];
     const uint32_t p = uint32_t(m.points.size());
     m.points.push_back(a);
     m.points.push_back(lerp(a, b, 0.5));
@@ -413,7 +416,8 @@ HostileMesh open_sheet(int scale, uint32_t seed) {
 HostileMesh single_triangle(int scale, uint32_t seed) {
   Rng rng(seed);
   Mesh m;
-  m.points = {{rng.u(-1, 1), rng.u(-1, 1), rng.u(-1, 1)}, {rng.u(-1, 1), rng.u(-1, 1), rng.u(-1, 1)},
+  m.points = {{rng.u(-1, 1), rng.u(-1, 1), rng.u(-1, 1)},
+              {rng.u(-1, 1), rng.u(-1, 1), rng.u(-1, 1)},
               {rng.u(-1, 1), rng.u(-1, 1), rng.u(-1, 1)}};
   m.triangles = {{0, 1, 2}};
   const Vec3 c = mul(add(add(m.points[0], m.points[1]), m.points[2]), 1.0 / 3);
@@ -578,11 +582,23 @@ const std::vector<std::pair<std::string, Maker>>& makers() {
       {"long_thin", long_thin},
       {"tiny_parts", tiny_parts},
       {"anisotropic_sphere", anisotropic_sphere},
-      {"tiny_coordinates", [](int s, uint32_t seed) { return scaled("tiny_coordinates", s, seed, 1e-9, {0, 0, 0}, "obj"); }},
-      {"huge_coordinates", [](int s, uint32_t seed) { return scaled("huge_coordinates", s, seed, 1e9, {0, 0, 0}, "ply"); }},
-      {"far_offset", [](int s, uint32_t seed) { return scaled("far_offset", s, seed, 1.0, {1e7, 1e7, 1e7}, "obj"); }},
+      {"tiny_coordinates",
+       [](int s, uint32_t seed) {
+         return scaled("tiny_coordinates", s, seed, 1e-9, {0, 0, 0}, "obj");
+       }},
+      {"huge_coordinates",
+       [](int s, uint32_t seed) {
+         return scaled("huge_coordinates", s, seed, 1e9, {0, 0, 0}, "ply");
+       }},
+      {"far_offset",
+       [](int s, uint32_t seed) {
+         return scaled("far_offset", s, seed, 1.0, {1e7, 1e7, 1e7}, "obj");
+       }},
       // The same in binary STL: float32 has a resolution of 1 at 1e7, the unit solid collapses.
-      {"far_offset_float", [](int s, uint32_t seed) { return scaled("far_offset_float", s, seed, 1.0, {1e7, 1e7, 1e7}, "stl"); }},
+      {"far_offset_float",
+       [](int s, uint32_t seed) {
+         return scaled("far_offset_float", s, seed, 1.0, {1e7, 1e7, 1e7}, "stl");
+       }},
       {"unreferenced_vertices", unreferenced_vertices},
       {"nan_coordinates", nan_coordinates},
       {"inf_coordinates", inf_coordinates},

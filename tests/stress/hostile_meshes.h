@@ -12,15 +12,15 @@
 namespace vdbwrap::stress {
 
 struct HostileMesh {
-  std::string kind;        // the class, e.g. "csg_intersecting"
-  std::string file_name;   // KIND_sSCALE_SEED.EXT; the extension gives the format
-  std::string bytes;       // the file as written
-  Vec3 seed_point{0, 0, 0};  // a material point: inside a solid where the mesh has one
+  std::string kind;                // the class, e.g. "csg_intersecting"
+  std::string file_name;           // KIND_sSCALE_SEED.EXT; the extension gives the format
+  std::string bytes;               // the file as written
+  Vec3 seed_point{0, 0, 0};        // a material point: inside a solid where the mesh has one
   std::vector<std::string> parts;  // part names the file carries (OBJ groups, PLY part values)
   // The reader must refuse the file (exit 3, one line naming the file and `refusal_word`).
   bool must_be_refused = false;
   std::string refusal_word;
-  size_t triangles = 0;    // as generated (before any reader)
+  size_t triangles = 0;  // as generated (before any reader)
 };
 
 // Every kind the generator makes, in a fixed order.

@@ -28,9 +28,12 @@ int main(int argc, char** argv) {
   std::vector<std::string> kinds;
   for (int i = 2; i + 1 < argc; i += 2) {
     const std::string opt = argv[i], value = argv[i + 1];
-    if (opt == "--scale") scale = std::atoi(value.c_str());
-    else if (opt == "--seed") seed = uint32_t(std::strtoul(value.c_str(), nullptr, 10));
-    else if (opt == "--kind") kinds.push_back(value);
+    if (opt == "--scale")
+      scale = std::atoi(value.c_str());
+    else if (opt == "--seed")
+      seed = uint32_t(std::strtoul(value.c_str(), nullptr, 10));
+    else if (opt == "--kind")
+      kinds.push_back(value);
     else {
       std::fprintf(stderr, "make_hostile: unknown option %s\n", opt.c_str());
       return 2;

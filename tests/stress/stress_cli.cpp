@@ -65,7 +65,7 @@ std::vector<OptionSet> option_sets() {
       {"gap8", {"--gap-closure", "8%"}, "stl"},
       {"gap15", {"--gap-closure", "15%"}, "obj"},
       {"inside", {"--volume", "inside"}, "obj"},
-      {"seed_point", {"--volume", "SEED"}, "off"},       // the mesh's material point
+      {"seed_point", {"--volume", "SEED"}, "off"},            // the mesh's material point
       {"contact", {"--contact-prevention", "PARTS"}, "obj"},  // its first two parts
       {"no_features", {"--no-features"}, "stl"},
   };
@@ -75,13 +75,20 @@ enum class Outcome { Valid, ClearError, Signal, Hang, InvalidOutput, InternalErr
 
 const char* outcome_name(Outcome o) {
   switch (o) {
-    case Outcome::Valid: return "valid";
-    case Outcome::ClearError: return "clear error";
-    case Outcome::Signal: return "SIGNAL";
-    case Outcome::Hang: return "HANG";
-    case Outcome::InvalidOutput: return "INVALID OUTPUT";
-    case Outcome::InternalError: return "INTERNAL ERROR";
-    case Outcome::UnclearError: return "UNCLEAR ERROR";
+    case Outcome::Valid:
+      return "valid";
+    case Outcome::ClearError:
+      return "clear error";
+    case Outcome::Signal:
+      return "SIGNAL";
+    case Outcome::Hang:
+      return "HANG";
+    case Outcome::InvalidOutput:
+      return "INVALID OUTPUT";
+    case Outcome::InternalError:
+      return "INTERNAL ERROR";
+    case Outcome::UnclearError:
+      return "UNCLEAR ERROR";
   }
   return "?";
 }
@@ -93,8 +100,8 @@ struct Run {
   std::vector<std::string> argv;
   // results
   Outcome outcome = Outcome::Valid;
-  int code = 0;          // exit code, or the signal number for Outcome::Signal
-  std::string detail;    // the error line, the signal, or why the output is invalid
+  int code = 0;        // exit code, or the signal number for Outcome::Signal
+  std::string detail;  // the error line, the signal, or why the output is invalid
   double seconds = 0;
 };
 
@@ -203,7 +210,8 @@ void classify(Run& run, const HostileMesh& mesh, const fs::path& input, const fs
   }
   const std::string line = error_line(err);
   run.detail = "exit " + std::to_string(run.code) + ": ";
-  run.detail += line.empty() ? "(no message; stderr tail: " + err.substr(err.size() > 200 ? err.size() - 200 : 0) + ")" : line;
+  run.detail +=
+      line.empty() ? "(no message; stderr tail: " + err.substr(err.size() > 200 ? err.size() - 200 : 0) + ")" : line;
   if (run.code == 1) {
     run.outcome = Outcome::InternalError;
     return;
@@ -258,17 +266,28 @@ Config parse(int argc, char** argv) {
       }
       return argv[++i];
     };
-    if (a == "--set") c.set = value();
-    else if (a == "--scales") for (auto& s : split(value(), ',')) c.scales.push_back(std::atoi(s.c_str()));
-    else if (a == "--seeds") for (auto& s : split(value(), ',')) c.seeds.push_back(uint32_t(std::strtoul(s.c_str(), nullptr, 10)));
-    else if (a == "--kinds") c.kinds = split(value(), ',');
-    else if (a == "--options") c.options = split(value(), ',');
-    else if (a == "--jobs") c.jobs = std::max(1, std::atoi(value().c_str()));
-    else if (a == "--timeout") c.timeout = std::atof(value().c_str());
-    else if (a == "--work") c.work = value();
-    else if (a == "--table") c.table = value();
-    else if (a == "--cli") c.cli = value();
-    else if (a == "--gdb") c.gdb = true;
+    if (a == "--set")
+      c.set = value();
+    else if (a == "--scales")
+      for (auto& s : split(value(), ',')) c.scales.push_back(std::atoi(s.c_str()));
+    else if (a == "--seeds")
+      for (auto& s : split(value(), ',')) c.seeds.push_back(uint32_t(std::strtoul(s.c_str(), nullptr, 10)));
+    else if (a == "--kinds")
+      c.kinds = split(value(), ',');
+    else if (a == "--options")
+      c.options = split(value(), ',');
+    else if (a == "--jobs")
+      c.jobs = std::max(1, std::atoi(value().c_str()));
+    else if (a == "--timeout")
+      c.timeout = std::atof(value().c_str());
+    else if (a == "--work")
+      c.work = value();
+    else if (a == "--table")
+      c.table = value();
+    else if (a == "--cli")
+      c.cli = value();
+    else if (a == "--gdb")
+      c.gdb = true;
     else {
       std::fprintf(stderr, "vdbwrap_stress: unknown option %s\n", a.c_str());
       std::exit(2);
@@ -314,7 +333,8 @@ int main(int argc, char** argv) {
       if (!only_set.empty()) {
         if (o.name != only_set) continue;
       } else {
-        if (!cfg.options.empty() && std::find(cfg.options.begin(), cfg.options.end(), o.name) == cfg.options.end()) continue;
+        if (!cfg.options.empty() && std::find(cfg.options.begin(), cfg.options.end(), o.name) == cfg.options.end())
+          continue;
         if (cfg.set == "ci" && !in_ci(h.kind, kind_index, s, o.name)) continue;
       }
       if (o.name == "contact" && h.parts.size() < 2) continue;
@@ -382,8 +402,8 @@ int main(int argc, char** argv) {
       }
       fs::remove(output);
       std::lock_guard<std::mutex> lock(print);
-      tsv << h.file_name << '\t' << h.kind << '\t' << r.options.name << '\t' << outcome_name(r.outcome) << '\t' << r.code
-          << '\t' << r.seconds << '\t' << r.detail.substr(0, 300) << std::endl;
+      tsv << h.file_name << '\t' << h.kind << '\t' << r.options.name << '\t' << outcome_name(r.outcome) << '\t'
+          << r.code << '\t' << r.seconds << '\t' << r.detail.substr(0, 300) << std::endl;
       std::printf("[%zu/%zu] %-40s %-14s %-15s %6.1fs  %s%s\n", ++done, runs.size(), h.file_name.c_str(),
                   r.options.name.c_str(), outcome_name(r.outcome), r.seconds, r.detail.substr(0, 160).c_str(),
                   gdb_note.c_str());
@@ -437,8 +457,8 @@ int main(int argc, char** argv) {
   std::printf("\n%s", md.str().c_str());
   if (!cfg.table.empty()) std::ofstream(cfg.table) << md.str();
   if (!failures.empty()) {
-    std::printf("\nvdbwrap_stress: %zu of %zu runs failed; inputs and command lines in %s\n", failures.size(), runs.size(),
-                (cfg.work / "failures").string().c_str());
+    std::printf("\nvdbwrap_stress: %zu of %zu runs failed; inputs and command lines in %s\n", failures.size(),
+                runs.size(), (cfg.work / "failures").string().c_str());
     return 1;
   }
   std::printf("\nvdbwrap_stress: all %zu runs valid or a clear error\n", runs.size());

@@ -28,7 +28,8 @@ inline std::string test_name_of(const std::string& file) {
 // Axis-aligned box, 12 outward triangles, as part `part`.
 inline void add_box(Mesh& m, const Vec3& lo, const Vec3& hi, int32_t part = 0) {
   uint32_t base = uint32_t(m.points.size());
-  for (int i = 0; i < 8; ++i) m.points.push_back({(i & 1) ? hi[0] : lo[0], (i & 2) ? hi[1] : lo[1], (i & 4) ? hi[2] : lo[2]});
+  for (int i = 0; i < 8; ++i)
+    m.points.push_back({(i & 1) ? hi[0] : lo[0], (i & 2) ? hi[1] : lo[1], (i & 4) ? hi[2] : lo[2]});
   const uint32_t f[12][3] = {{0, 2, 1}, {1, 2, 3}, {4, 5, 6}, {5, 7, 6}, {0, 1, 4}, {1, 5, 4},
                              {2, 6, 3}, {3, 6, 7}, {0, 4, 2}, {2, 4, 6}, {1, 3, 5}, {3, 7, 5}};
   for (auto& t : f) {
@@ -90,7 +91,7 @@ inline Mesh holed_cube(double hole) {
   for (int i = 0; i < n; ++i)
     for (int j = 0; j < n; ++j) {
       double u0 = i * w, u1 = (i + 1) * w, v0 = j * w, v1 = (j + 1) * w;
-      quad({u0, v0, 0}, {u0, v1, 0}, {u1, v1, 0}, {u1, v0, 0});                // z = 0, normal -z
+      quad({u0, v0, 0}, {u0, v1, 0}, {u1, v1, 0}, {u1, v0, 0});  // z = 0, normal -z
       bool in_hole = u0 >= h0 - 1e-9 && u1 <= h1 + 1e-9 && v0 >= h0 - 1e-9 && v1 <= h1 + 1e-9;
       if (!in_hole) quad({u0, v0, 1}, {u1, v0, 1}, {u1, v1, 1}, {u0, v1, 1});  // z = 1, normal +z
       quad({u0, 0, v0}, {u1, 0, v0}, {u1, 0, v1}, {u0, 0, v1});                // y = 0
@@ -137,11 +138,11 @@ inline SurfaceVerdict valid_closed_surface(const Mesh& unwelded) {
 inline Mesh icosphere_mesh(double r, int level) {
   const double t = (1 + std::sqrt(5.0)) / 2;
   Mesh m;
-  m.points = {{-1, t, 0}, {1, t, 0}, {-1, -t, 0}, {1, -t, 0}, {0, -1, t}, {0, 1, t},
-              {0, -1, -t}, {0, 1, -t}, {t, 0, -1}, {t, 0, 1}, {-t, 0, -1}, {-t, 0, 1}};
-  m.triangles = {{0, 11, 5}, {0, 5, 1},  {0, 1, 7},  {0, 7, 10}, {0, 10, 11}, {1, 5, 9}, {5, 11, 4},
-                 {11, 10, 2}, {10, 7, 6}, {7, 1, 8}, {3, 9, 4},  {3, 4, 2},   {3, 2, 6}, {3, 6, 8},
-                 {3, 8, 9},  {4, 9, 5},  {2, 4, 11}, {6, 2, 10}, {8, 6, 7},   {9, 8, 1}};
+  m.points = {{-1, t, 0},  {1, t, 0},  {-1, -t, 0}, {1, -t, 0}, {0, -1, t},  {0, 1, t},
+              {0, -1, -t}, {0, 1, -t}, {t, 0, -1},  {t, 0, 1},  {-t, 0, -1}, {-t, 0, 1}};
+  m.triangles = {{0, 11, 5},  {0, 5, 1},  {0, 1, 7},  {0, 7, 10}, {0, 10, 11}, {1, 5, 9}, {5, 11, 4},
+                 {11, 10, 2}, {10, 7, 6}, {7, 1, 8},  {3, 9, 4},  {3, 4, 2},   {3, 2, 6}, {3, 6, 8},
+                 {3, 8, 9},   {4, 9, 5},  {2, 4, 11}, {6, 2, 10}, {8, 6, 7},   {9, 8, 1}};
   for (int l = 0; l < level; ++l) {
     std::map<std::pair<uint32_t, uint32_t>, uint32_t> mid;
     auto middle = [&](uint32_t a, uint32_t b) {
@@ -175,7 +176,8 @@ inline Mesh folded_icosphere() {
   Mesh m = icosphere_mesh(1.0, 3);
   const Vec3 p = m.points[5];
   const Vec3 a = m.points[m.triangles[0][0]], b = m.points[m.triangles[0][1]];
-  const double edge = std::sqrt((b[0] - a[0]) * (b[0] - a[0]) + (b[1] - a[1]) * (b[1] - a[1]) + (b[2] - a[2]) * (b[2] - a[2]));
+  const double edge =
+      std::sqrt((b[0] - a[0]) * (b[0] - a[0]) + (b[1] - a[1]) * (b[1] - a[1]) + (b[2] - a[2]) * (b[2] - a[2]));
   const Vec3 w{0.3, 0.5, 0.8};  // a tangent direction: w x p, normalized
   Vec3 t{w[1] * p[2] - w[2] * p[1], w[2] * p[0] - w[0] * p[2], w[0] * p[1] - w[1] * p[0]};
   const double tn = std::sqrt(t[0] * t[0] + t[1] * t[1] + t[2] * t[2]);

@@ -17,12 +17,12 @@ namespace vdbwrap {
 enum DefectFlag : uint8_t {
   kDefectSelfIntersecting = 1 << 0,  // in an intersecting pair, or degenerate
   kDefectSmallArea = 1 << 1,
-  kDefectSliver = 1 << 2,            // smallest angle under the sliver angle
+  kDefectSliver = 1 << 2,  // smallest angle under the sliver angle
   kDefectShortEdge = 1 << 3,
   kDefectLongEdge = 1 << 4,
-  kDefectNormalDeviation = 1 << 5,   // normal off the input's near it
-  kDefectLostFeature = 1 << 6,       // a sharp-edge sample of the input near it was not reached
-  kDefectHeldBack = 1 << 7,          // a corner is a node the fit kept off the input to stay valid
+  kDefectNormalDeviation = 1 << 5,  // normal off the input's near it
+  kDefectLostFeature = 1 << 6,      // a sharp-edge sample of the input near it was not reached
+  kDefectHeldBack = 1 << 7,         // a corner is a node the fit kept off the input to stay valid
 };
 
 // Short names of the bits set in `flags`, lowest bit first ("sliver", "small_area", ...).
@@ -40,9 +40,9 @@ enum class DistanceSign {
 struct DeviationField {
   std::vector<double> distance;  // per surface vertex, model units, signed as `sign` says
   DistanceSign sign = DistanceSign::Unsigned;
-  double diagonal = 0;           // of the reference's bounding box (for percentages)
-  double max_abs = 0;            // largest |distance|
-  Vec3 max_at{0, 0, 0};          // the vertex where it is
+  double diagonal = 0;   // of the reference's bounding box (for percentages)
+  double max_abs = 0;    // largest |distance|
+  Vec3 max_at{0, 0, 0};  // the vertex where it is
   uint32_t max_vertex = 0;
   double mean_abs = 0, p95_abs = 0;
   // Per surface triangle, DefectFlag bits; empty when the surface has no triangles.

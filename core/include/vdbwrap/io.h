@@ -58,8 +58,8 @@ Format format_from_extension(std::string_view path);
 // binary STL, one per OBJ o/g group ("default" before any), one per distinct PLY face "part"
 // value or VTP cell "part_id" value (named by the VTP's "part_names" field data), one per
 // Nastran PID (named by "$ PID n: name", ANSA or HyperMesh comments); OFF, and PLY or VTP
-// without those, have none. Nastran: GRID, CTRIA3/6, CQUAD4/8 in the basic coordinate system. Parts are in order of first appearance and only
-// parts with triangles exist. With at most one part, triangle_part is left empty.
+// without those, have none. Nastran: GRID, CTRIA3/6, CQUAD4/8 in the basic coordinate system. Parts are in order of
+// first appearance and only parts with triangles exist. With at most one part, triangle_part is left empty.
 Mesh read_mesh(const std::string& path);
 // The same, with the single-component numeric arrays of a .vtp (point and cell data) or the
 // scalar properties of a .ply (vertex and face, besides x, y, z) in `data`; cell values follow

@@ -69,47 +69,47 @@ std::string volume_choice_to_string(VolumeChoice choice, const std::vector<Vec3>
 // approximation of the input). Sizes are relative to the local cell size of the voxel stage at
 // the triangle (the edge of the smallest lattice face at its nodes).
 struct QualityThresholds {
-  double small_area = 0.01;           // area under this x (local cell size)^2
-  double sliver_angle_deg = 5;        // smallest angle under this (needles and caps)
-  double short_edge = 0.1;            // edge shorter than this x the local cell size
-  double long_edge = 4;               // edge longer than this x the local cell size (the larger at its ends)
-  double normal_deviation_deg = 45;   // normal off the input's near the triangle by more than this
-  double near_input = 0.25;           // normals are judged where the input is within this x the local cell size
-  double feature_tolerance = 0.1;     // sharp-edge samples farther than this x the finest cell are lost ...
-  double feature_reach = 2;           // ... unless farther than this x the local cell size (out of the wrap's reach)
+  double small_area = 0.01;          // area under this x (local cell size)^2
+  double sliver_angle_deg = 5;       // smallest angle under this (needles and caps)
+  double short_edge = 0.1;           // edge shorter than this x the local cell size
+  double long_edge = 4;              // edge longer than this x the local cell size (the larger at its ends)
+  double normal_deviation_deg = 45;  // normal off the input's near the triangle by more than this
+  double near_input = 0.25;          // normals are judged where the input is within this x the local cell size
+  double feature_tolerance = 0.1;    // sharp-edge samples farther than this x the finest cell are lost ...
+  double feature_reach = 2;          // ... unless farther than this x the local cell size (out of the wrap's reach)
 };
 
 struct WrapParams {
-  Length base_size{1.0, true};     // edge of a level-0 cell
-  int levels = 1;                  // most 2x2x2 refinements below the base size
-  double feature_angle_deg = 30;   // dihedral angle (between normals) that makes an edge sharp
+  Length base_size{1.0, true};    // edge of a level-0 cell
+  int levels = 1;                 // most 2x2x2 refinements below the base size
+  double feature_angle_deg = 30;  // dihedral angle (between normals) that makes an edge sharp
   VolumeChoice volume = VolumeChoice::Outside;
-  std::vector<Vec3> seed_points;   // VolumeChoice::SeedPoints: one or more material points
-  int threads = 0;                 // 0: all cores
+  std::vector<Vec3> seed_points;  // VolumeChoice::SeedPoints: one or more material points
+  int threads = 0;                // 0: all cores
 
   // User controls of the voxel stage (spec stage 2).
-  std::optional<Length> gap_closure;          // openings narrower than this do not let the volume through
-  std::vector<ControlVolume> control_volumes; // finer cells inside these regions
-  std::vector<PartSize> part_sizes;           // finer cells where these parts pass
+  std::optional<Length> gap_closure;            // openings narrower than this do not let the volume through
+  std::vector<ControlVolume> control_volumes;   // finer cells inside these regions
+  std::vector<PartSize> part_sizes;             // finer cells where these parts pass
   std::vector<ContactRule> contact_prevention;  // parts kept apart by refining between them
-  std::optional<Length> contact_floor;        // smallest cell contact prevention may use (default: finest / 8)
+  std::optional<Length> contact_floor;          // smallest cell contact prevention may use (default: finest / 8)
 
   // Refinement criteria of a cell the input passes through (spec stage 2).
-  int refine_max_triangles = 64;        // more triangles than this in a cell: refine
-  double refine_normal_spread_deg = 20; // normals spread more than this: refine
-  bool refine_at_features = true;       // sharp, boundary or intersection edges: refine
+  int refine_max_triangles = 64;         // more triangles than this in a cell: refine
+  double refine_normal_spread_deg = 20;  // normals spread more than this: refine
+  bool refine_at_features = true;        // sharp, boundary or intersection edges: refine
   // Refine a cell the input passes through when a point of its boundary lies more than a base
   // cell from its triangles: held-back nodes then stay within a base cell of the input.
   bool refine_far_cells = false;
 
   // Projection (spec stage 3).
-  double weld_tolerance = 1e-7;    // fraction of the diagonal under which vertices merge
-  double surface_offset = 0.005;   // nodes stop this fraction of the finest cell off the input
+  double weld_tolerance = 1e-7;   // fraction of the diagonal under which vertices merge
+  double surface_offset = 0.005;  // nodes stop this fraction of the finest cell off the input
   // Where the volume lies on both sides of an input surface (open sheets, scans with holes), a node
   // that would make the wrap invalid first moves farther off the input on its own side (up to
   // 64 x the offset) before it is pulled back toward the lattice.
   bool two_sided_sheets = true;
-  int presmooth_iterations = 16;   // smoothing of the voxel surface before projection (untangling)
+  int presmooth_iterations = 16;  // smoothing of the voxel surface before projection (untangling)
   // Rounds of the projection's validity loop (offending nodes pulled back toward the lattice);
   // intersections still left afterwards go to stage 4's remeshing and intersection repair.
   int validity_rounds = 400;
@@ -117,7 +117,7 @@ struct WrapParams {
   // Feature snapping (spec stage 3): wrap edges traced along the feature curves and moved
   // onto them, convex and concave alike, with the corners.
   bool snap_features = true;
-  double corner_angle_deg = 30;    // a feature curve turning more than this at a point has a corner there
+  double corner_angle_deg = 30;  // a feature curve turning more than this at a point has a corner there
 
   // Coarsening (stage 4): nodes merged on flat parts while every new triangle stays within
   // this fraction of the base size of the input; 0 turns it off.
@@ -129,13 +129,13 @@ struct WrapParams {
   // Stage 4: triangles with an angle under 10 degrees left after the rebuilds are removed by edge
   // flips, collapses and tangential moves checked against the input.
   bool remove_slivers = true;
-  QualityThresholds quality;       // what counts as a defect (fixed; listed in the report)
+  QualityThresholds quality;  // what counts as a defect (fixed; listed in the report)
 
   // The output will be stored in single precision (binary STL): coordinates are rounded to
   // float during the validity loop, so the validity checked is that of what is written.
   bool float_coordinates = false;
 
-  bool compute_distances = true;   // sample output-to-input distances for the report
+  bool compute_distances = true;  // sample output-to-input distances for the report
 };
 
 // Throws Error(InvalidArgument) naming the first parameter out of its range.

@@ -10,21 +10,21 @@
 
 #include "vdbwrap/errors.h"
 #include "vdbwrap/mesh.h"
-#include "vdbwrap/params.h"    // Length
+#include "vdbwrap/params.h"  // Length
 #include "vdbwrap/progress.h"
-#include "vdbwrap/report.h"    // MeshDiagnostics, DistanceStats
+#include "vdbwrap/report.h"  // MeshDiagnostics, DistanceStats
 
 namespace vdbwrap {
 
 struct RepairParams {
   // Part 1: local operations (vertex shift, triangle shift).
   int local_iterations = 15;
-  double alpha = 0.25;         // vertex shift: share of |x b| kept between the new point and b
-  double beta = 0.1;           // vertex shift: alpha |x b| must stay under beta L (L: longest region edge)
-  double delta = 0.5;          // triangle shift: eps_move = delta * accuracy ...
-  double gamma = 0.001;        // ... capped at gamma * L
-  double area_ratio = 0.95;    // eps_S: min/max area of the modified triangles must be at least this
-  double accuracy = 0;         // model accuracy eps; 0: 0.05 x the shortest edge (floored at 1e-16)
+  double alpha = 0.25;       // vertex shift: share of |x b| kept between the new point and b
+  double beta = 0.1;         // vertex shift: alpha |x b| must stay under beta L (L: longest region edge)
+  double delta = 0.5;        // triangle shift: eps_move = delta * accuracy ...
+  double gamma = 0.001;      // ... capped at gamma * L
+  double area_ratio = 0.95;  // eps_S: min/max area of the modified triangles must be at least this
+  double accuracy = 0;       // model accuracy eps; 0: 0.05 x the shortest edge (floored at 1e-16)
 
   // Part 2: remove and refill.
   int refill_iterations = 3;
@@ -38,7 +38,7 @@ struct RepairParams {
   // Afterwards, delete pieces that the repair left disconnected or still intersecting when
   // they have at most this many triangles and at most this fraction of the total area.
   bool remove_small_pieces = true;
-  bool unite_bodies = true;        // last stage: closed bodies still crossing are united (exact union)
+  bool unite_bodies = true;  // last stage: closed bodies still crossing are united (exact union)
   int small_piece_triangles = 16;
   double small_piece_area = 1e-3;
 
@@ -46,8 +46,8 @@ struct RepairParams {
   // rounded to float, so the checks hold for what is written.
   bool float_coordinates = false;
 
-  int threads = 0;                 // 0: all cores
-  bool compute_distances = true;   // Metro-style deviation of the result from the input
+  int threads = 0;                // 0: all cores
+  bool compute_distances = true;  // Metro-style deviation of the result from the input
 };
 
 // One region of intersecting triangles (a connected set; regions share no vertex).

@@ -53,44 +53,45 @@ struct FeatureStats {
 
 // What the flood fill found: does the input enclose anything at this cell size?
 struct VolumeReport {
-  size_t free_volumes = 0;         // connected volumes of cells the input does not touch
-  size_t enclosed_volumes = 0;     // of those, the ones that do not reach the outside and hold a whole base cell
-  double largest_enclosed = 0;     // model units cubed (cells, so approximate)
-  bool encloses_volume = false;    // the input, as given, is closed at this cell size
-  double chosen_volume = 0;        // model units cubed, before the surface is fitted
-  double gap_closure = 0;          // model units; 0: off
+  size_t free_volumes = 0;       // connected volumes of cells the input does not touch
+  size_t enclosed_volumes = 0;   // of those, the ones that do not reach the outside and hold a whole base cell
+  double largest_enclosed = 0;   // model units cubed (cells, so approximate)
+  bool encloses_volume = false;  // the input, as given, is closed at this cell size
+  double chosen_volume = 0;      // model units cubed, before the surface is fitted
+  double gap_closure = 0;        // model units; 0: off
 };
 
 // A seed point's volume reached the outside or another seed point's volume.
 struct LeakReport {
   bool detected = false;
-  std::string description;         // e.g. "seed point 1 reaches the outside"
-  Vec3 location{0, 0, 0};          // the narrowest passage on the widest way through
-  double width = 0;                // about twice the passage's clearance from the input
-  std::vector<Vec3> path;          // from the seed point out, through the passage
+  std::string description;  // e.g. "seed point 1 reaches the outside"
+  Vec3 location{0, 0, 0};   // the narrowest passage on the widest way through
+  double width = 0;         // about twice the passage's clearance from the input
+  std::vector<Vec3> path;   // from the seed point out, through the passage
 };
 
 // Where contact prevention could not keep parts apart above its floor size.
 struct ContactReport {
   size_t rules = 0;
-  double floor = 0;                // model units
-  size_t unresolved_cells = 0;     // cells at the floor still holding parts that must stay apart
+  double floor = 0;                        // model units
+  size_t unresolved_cells = 0;             // cells at the floor still holding parts that must stay apart
   std::vector<Vec3> unresolved_locations;  // one per cluster (at most 100)
-  size_t separate_bodies = 0;      // connected pieces of the wrap
+  size_t separate_bodies = 0;              // connected pieces of the wrap
 };
 
 // Defects of one surface, by kind (QualityThresholds says when each counts).
 struct QualityCounts {
   size_t triangles = 0, edges = 0;
-  size_t self_intersecting = 0;      // triangles in an intersecting pair, or degenerate
-  size_t small_area = 0;             // triangles
-  size_t slivers = 0;                // triangles
+  size_t self_intersecting = 0;            // triangles in an intersecting pair, or degenerate
+  size_t small_area = 0;                   // triangles
+  size_t slivers = 0;                      // triangles
   size_t short_edges = 0, long_edges = 0;  // edges
-  size_t normal_deviation = 0;       // triangles
-  size_t feature_samples = 0;        // points along the input's sharp edges (feature angle), every 0.1 % of the diagonal
-  size_t lost_feature_samples = 0;   // of those, farther from the surface than the feature tolerance (within reach)
-  size_t unreachable_feature_samples = 0;  // farther than the reach: inside other bodies, in slots narrower than the cells
-  double min_angle_deg = 0;          // smallest angle of any triangle
+  size_t normal_deviation = 0;             // triangles
+  size_t feature_samples = 0;       // points along the input's sharp edges (feature angle), every 0.1 % of the diagonal
+  size_t lost_feature_samples = 0;  // of those, farther from the surface than the feature tolerance (within reach)
+  size_t unreachable_feature_samples =
+      0;                     // farther than the reach: inside other bodies, in slots narrower than the cells
+  double min_angle_deg = 0;  // smallest angle of any triangle
   double max_normal_deviation_deg = 0;
 };
 
@@ -98,24 +99,24 @@ struct QualityCounts {
 // and, when anything still intersects, the intersection repair), and what each step did.
 struct QualityReport {
   QualityCounts before, after;
-  size_t regions = 0;                // bad regions tried
-  size_t remeshed_on_input = 0;      // rebuilt with the input as substrate (constrained Delaunay)
-  size_t remeshed_by_ear_clipping = 0;  // rebuilt by the fallback
-  size_t restored = 0;               // rebuilt, but the rebuild was refused: put back as it was
+  size_t regions = 0;                      // bad regions tried
+  size_t remeshed_on_input = 0;            // rebuilt with the input as substrate (constrained Delaunay)
+  size_t remeshed_by_ear_clipping = 0;     // rebuilt by the fallback
+  size_t restored = 0;                     // rebuilt, but the rebuild was refused: put back as it was
   std::map<std::string, size_t> refusals;  // why rebuilds were refused
   // Intersection repair (spec, second paper) on the wrap when anything still intersected.
   size_t repair_runs = 0;
   size_t intersecting_before_repair = 0, intersecting_after_repair = 0;  // triangles
-  std::string repair_summary;        // what the repair did, when it ran
+  std::string repair_summary;                                            // what the repair did, when it ran
 };
 
 // Where the chosen volume lies on both sides of an input surface (the outside got in through
 // openings of the input, or the input is an open sheet), the wrap follows both of its faces.
 struct TwoSidedReport {
-  double area_fraction = 0;      // of the input's area, wrapped from both sides
-  size_t nodes = 0;              // wrap nodes projected onto such places
-  size_t nodes_raised = 0;       // of those, moved farther off the input to stay valid (two_sided_sheets)
-  size_t openings = 0;           // boundary loops of the input
+  double area_fraction = 0;  // of the input's area, wrapped from both sides
+  size_t nodes = 0;          // wrap nodes projected onto such places
+  size_t nodes_raised = 0;   // of those, moved farther off the input to stay valid (two_sided_sheets)
+  size_t openings = 0;       // boundary loops of the input
   Vec3 largest_opening_centre{0, 0, 0};
   double largest_opening_width = 0;  // model units: about the widest ball that passes through it
   double suggested_gap_closure = 0;  // model units, closing every opening; 0: none (open sheets)
@@ -126,14 +127,14 @@ struct WrapReport {
   FeatureStats features;
   WrapParams params;
   double base_size = 0, finest_size = 0, diagonal = 0;
-  std::vector<size_t> cells_per_level;  // cells the input passes through, per level
+  std::vector<size_t> cells_per_level;                        // cells the input passes through, per level
   std::vector<std::pair<std::string, double>> control_sizes;  // control volumes / part sizes and their cell size
   VolumeReport volumes;
   LeakReport leak;
   ContactReport contact;
-  size_t manifold_fixes = 0;            // cells taken out of the volume to keep it manifold
-  size_t nodes_held_back = 0;           // nodes kept off the input to stay valid
-  size_t nodes_projected = 0;           // nodes of the lattice surface (with polygon centres)
+  size_t manifold_fixes = 0;   // cells taken out of the volume to keep it manifold
+  size_t nodes_held_back = 0;  // nodes kept off the input to stay valid
+  size_t nodes_projected = 0;  // nodes of the lattice surface (with polygon centres)
   TwoSidedReport two_sided;
   size_t triangles_before_coarsening = 0;
   QualityReport quality;
@@ -145,8 +146,8 @@ struct WrapReport {
   // Filled by the caller, not by wrap(): the program and the input file the report is about
   // (the CLI knows the file's name; the library never sees one). Left out of the JSON when empty.
   struct Source {
-    std::string tool_version;                            // "0.1.0"
-    std::string file_name;                               // the input's file name, without its folder
+    std::string tool_version;                           // "0.1.0"
+    std::string file_name;                              // the input's file name, without its folder
     std::vector<std::pair<std::string, size_t>> parts;  // each input part's name and triangle count
   } source;
 };
