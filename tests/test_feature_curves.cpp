@@ -19,7 +19,6 @@
 
 #include "common/vec.h"
 #include "vdbwrap/io.h"
-#include "vdbwrap/io.h"
 #include "vdbwrap/wrap.h"
 
 #ifndef VDBWRAP_CLI
