@@ -23,16 +23,13 @@ void HtmlOutput::check() {
 }
 
 std::string HtmlOutput::write(const Mesh& input, const Mesh* wrap, const std::string& report_json,
-                              const std::vector<uint8_t>* wrap_flags, const std::string& title) const {
+                              const DeviationField* deviation, const std::string& title) const {
   const auto start = std::chrono::steady_clock::now();
-  DeviationField deviation;
-  if (wrap && wrap_flags && wrap_flags->size() != wrap->triangles.size()) wrap_flags = nullptr;
-  if (wrap) deviation = measure_deviation(*wrap, input, wrap_flags);
   HtmlReportData data;
   data.input = &input;
   data.wrap = wrap;
   data.report_json = report_json;
-  data.deviation = wrap ? &deviation : nullptr;
+  data.deviation = wrap ? deviation : nullptr;
   data.title = title;
   const std::string page = html_report(data, read_three_js(three_js_));
   const std::string tmp = path_ + ".tmp";

@@ -20,11 +20,11 @@ class HtmlOutput {
   // Throws Error(InvalidArgument) for a path in a missing folder or when three.js is not found.
   void check();
   // wrap: null when the run stopped (the page then shows the leak of the report, if any);
-  // else its deviation from the input is measured for the page, with the wrap's defect flags
-  // (WrapResult::triangle_flags) when given. Returns the line to print when not quiet
-  // ("page FILE (SIZE, TIME)"). Throws Error(OutputFailed) when the file cannot be written.
+  // else with its deviation from the input (measured once by the caller, who may write it to
+  // a file too). Returns the line to print when not quiet ("page FILE (SIZE, TIME)").
+  // Throws Error(OutputFailed) when the file cannot be written.
   std::string write(const Mesh& input, const Mesh* wrap, const std::string& report_json,
-                    const std::vector<uint8_t>* wrap_flags, const std::string& title) const;
+                    const DeviationField* deviation, const std::string& title) const;
   const std::string& path() const { return path_; }
 
  private:

@@ -358,15 +358,17 @@ int main(int argc, char** argv) {
       if (!features_path.empty()) io::write_feature_curves(features_path, result.feature_curves);
       result.report.source = source;
       if (!report_path.empty()) write_text(report_path, to_json(result.report));
-      if (!deviation_path.empty()) {
-        progress.progress("deviation", 0.0, deviation_path);
-        write_deviation(deviation_path, result.surface,
-                        measure_deviation(result.surface, mesh, &result.triangle_flags));
+      // The deviation field, measured once for the file and the page.
+      DeviationField deviation;
+      if (!deviation_path.empty() || html_output.wanted()) {
+        progress.progress("deviation", 0.0, deviation_path.empty() ? html_output.path() : deviation_path);
+        deviation = measure_deviation(result.surface, mesh, &result.triangle_flags);
       }
+      if (!deviation_path.empty()) write_deviation(deviation_path, result.surface, deviation);
       progress.complete(output);
       if (html_output.wanted()) {
         const std::string page =
-            html_output.write(mesh, &result.surface, to_json(result.report), &result.triangle_flags, source.file_name);
+            html_output.write(mesh, &result.surface, to_json(result.report), &deviation, source.file_name);
         if (!quiet) std::fprintf(stderr, "wrote %s\n", page.c_str());
       }
       const auto& r = result.report;
