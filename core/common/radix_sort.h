@@ -92,6 +92,17 @@ FillVector<T> radix_sort_joined(std::vector<std::vector<T>>& parts, Key&& key, i
 }
 
 // The items of `parts` joined and sorted by `less`, for keys too wide for a radix sort alone:
+// Where each run of equal keys starts in sorted items, then the end: run r is
+// [starts[r], starts[r + 1]).
+template <typename Items, typename Key>
+std::vector<size_t> run_starts(const Items& sorted, Key&& key) {
+  std::vector<size_t> starts;
+  for (size_t i = 0; i < sorted.size(); ++i)
+    if (i == 0 || key(sorted[i]) != key(sorted[i - 1])) starts.push_back(i);
+  starts.push_back(sorted.size());
+  return starts;
+}
+
 // `bucket(item)` (below 2^bucket_bits) must follow `less` (less(a, b) implies bucket(a) <=
 // bucket(b)), so a stable radix sort by bucket and then a sort of each bucket by `less`
 // give the order of one sort by `less`. Buckets are cut into slices at bucket starts and

@@ -5,12 +5,12 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
-#include <unordered_map>
 #include <utility>
 #include <vector>
 
 #include <tbb/parallel_for.h>
 
+#include "common/cell_lists.h"
 #include "common/dense_numbers.h"
 #include "common/fill_vector.h"
 #include "common/grid_key.h"
@@ -25,7 +25,7 @@ namespace vdbwrap {
 class TriangleBuckets {
  public:
   TriangleBuckets(const std::vector<Vec3>& p, const std::vector<Tri>& tris, double cell)
-      : p_(p), tris_(tris), inv_(1.0 / cell) {
+      : p_(p), tris_(tris), inv_(1.0 / cell), cells_(cell) {
     // Room for the triangles feature insertion appends (tens of thousands on a large wrap),
     // reserved, not touched: each growth had copied every box into fresh pages.
     boxes_.reserve(tris.size() + tris.size() / 8 + 64);
@@ -55,19 +55,19 @@ class TriangleBuckets {
     };
     for_cells(old, [&](const Key& k) {
       if (inside(k, lo, hi)) return;
-      auto& list = cells_.find(k)->second;
+      auto& list = *cells_.find(k);
       auto it = std::find(list.begin(), list.end(), f);
       *it = list.back(), list.pop_back();
     });
     for_cells(b, [&](const Key& k) {
       if (inside(k, olo, ohi)) return;
-      (add_cells ? cells_[k] : cells_.find(k)->second).push_back(f);
+      (add_cells ? cells_[k] : *cells_.find(k)).push_back(f);
     });
   }
   // Do all cells of box b exist already?
   bool covers(const Box3& b) const {
     bool all = true;
-    for_cells(b, [&](const Key& k) { all = all && cells_.count(k) != 0; });
+    for_cells(b, [&](const Key& k) { all = all && cells_.has(k); });
     return all;
   }
   // The bounding box of triangle f when it was last inserted or updated.
@@ -91,12 +91,10 @@ class TriangleBuckets {
   void for_each_in_box(const Box3& b, std::vector<uint32_t>& seen, uint32_t& stamp, F&& fn) const {
     if (seen.size() < boxes_.size()) seen.resize(boxes_.size(), 0);
     ++stamp;
-    for_cells(b, [&](const Key& k) {
-      auto it = cells_.find(k);
-      if (it == cells_.end()) return;
+    cells_.for_lists(b, [&](const std::vector<uint32_t>& list) {
       // The box first: most entries are beside b, and their marks are then never written
       // (a write to the marks, scattered over the whole surface, missed the cache each time).
-      for (uint32_t g : it->second) {
+      for (uint32_t g : list) {
         if (!boxes_[g].overlaps(b) || seen[g] == stamp) continue;
         seen[g] = stamp;
         fn(g);
@@ -112,11 +110,7 @@ class TriangleBuckets {
   }
   template <typename F>
   void for_cells(const Box3& b, F&& fn) const {
-    int64_t lo[3], hi[3];
-    cell_range(b, lo, hi);
-    for (int64_t x = lo[0]; x <= hi[0]; ++x)
-      for (int64_t y = lo[1]; y <= hi[1]; ++y)
-        for (int64_t z = lo[2]; z <= hi[2]; ++z) fn(Key{x, y, z});
+    cells_.for_cells(b, std::forward<F>(fn));
   }
   // Entries are never removed, so f is already in every cell of the box it had: only cells new
   // to it get an entry. (Appending to all of them again made most entries duplicates, read
@@ -180,10 +174,7 @@ class TriangleBuckets {
     });
     const FillVector<Entry> sorted = radix_sort_joined(
         parts, [](const Entry& e) { return e.cell; }, bits_for(numbers.count));
-    std::vector<size_t> runs;  // where each cell's entries start
-    for (size_t i = 0; i < sorted.size(); ++i)
-      if (i == 0 || sorted[i].cell != sorted[i - 1].cell) runs.push_back(i);
-    runs.push_back(sorted.size());
+    const std::vector<size_t> runs = run_starts(sorted, [](const Entry& e) { return e.cell; });
     std::vector<std::vector<uint32_t>> lists(runs.size() - 1);  // made in parallel, moved into the map
     tbb::parallel_for(tbb::blocked_range<size_t>(0, lists.size(), 1024), [&](const tbb::blocked_range<size_t>& r) {
       for (size_t k = r.begin(); k != r.end(); ++k) {
@@ -194,7 +185,7 @@ class TriangleBuckets {
     cells_.reserve(lists.size());
     for (size_t k = 0; k < lists.size(); ++k) {
       const std::array<int64_t, 3> at = numbers.point(sorted[runs[k]].cell);
-      cells_.emplace(Key{at[0], at[1], at[2]}, std::move(lists[k]));
+      cells_.set(Key{at[0], at[1], at[2]}, std::move(lists[k]));
     }
     return true;
   }
@@ -205,7 +196,7 @@ class TriangleBuckets {
   RawFillVector<Box3> boxes_;
   std::vector<uint32_t> seen_;  // for_each_in_box's marks, sized when first used
   uint32_t stamp_ = 0;
-  std::unordered_map<Key, std::vector<uint32_t>, GridKeyHash> cells_;
+  CellLists<> cells_;
 };
 
 }  // namespace vdbwrap

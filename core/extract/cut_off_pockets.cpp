@@ -8,6 +8,7 @@
 #include <utility>
 #include <vector>
 
+#include "common/cell_lists.h"
 #include "common/grid_key.h"
 
 namespace vdbwrap::extract {
@@ -36,18 +37,15 @@ bool drop_cut_off_pockets(AdaptiveGrid& g, int32_t label, const std::vector<std:
     return x;
   };
   {
-    std::unordered_map<GridKey, std::vector<uint32_t>, GridKeyHash> near;
+    CellLists<> near;  // keys made here, on the fine lattice
     auto key_of = [&](const Coord& c) { return GridKey{c.x() / span, c.y() / span, c.z() / span}; };
-    for (uint32_t i = 0; i < taken_out.size(); ++i) near[key_of(fine_corner(taken_out[i]))].push_back(i);
+    for (uint32_t i = 0; i < taken_out.size(); ++i) near.add(key_of(fine_corner(taken_out[i])), i);
     for (uint32_t i = 0; i < taken_out.size(); ++i) {
       const GridKey k = key_of(fine_corner(taken_out[i]));
-      for (int dx = -1; dx <= 1; ++dx)
-        for (int dy = -1; dy <= 1; ++dy)
-          for (int dz = -1; dz <= 1; ++dz) {
-            auto it = near.find({k.x + dx, k.y + dy, k.z + dz});
-            if (it != near.end())
-              for (uint32_t j : it->second) parent[find(parent, i)] = find(parent, j);
-          }
+      near.for_lists(GridKey{k.x - 1, k.y - 1, k.z - 1}, GridKey{k.x + 1, k.y + 1, k.z + 1},
+                     [&](const std::vector<uint32_t>& list) {
+                       for (uint32_t j : list) parent[find(parent, i)] = find(parent, j);
+                     });
     }
   }
   std::map<uint32_t, std::vector<uint32_t>> clusters;  // ordered: the same drops on every run

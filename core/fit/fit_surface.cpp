@@ -12,6 +12,7 @@
 #include "common/float_round.h"
 #include "common/grid_key.h"
 #include "common/sorted_point_grid.h"
+#include "common/cell_lists.h"
 #include "common/triangle_buckets.h"
 #include "common/vec.h"
 #include "fit/two_sided.h"
@@ -45,9 +46,13 @@ namespace {
 class NodeProximity {
  public:
   NodeProximity(const std::vector<Vec3>& p, double min_separation)
-      : p_(p), sep_(min_separation), sep2_(min_separation * min_separation), start_(p, 1024 * min_separation) {}
+      : p_(p),
+        sep_(min_separation),
+        sep2_(min_separation * min_separation),
+        start_(p, 1024 * min_separation),
+        moved_(1024 * min_separation) {}
   void update(uint32_t i) {
-    auto& list = moved_[grid_key(p_[i], start_.inverse_cell())];
+    auto& list = moved_[moved_.cell_of(p_[i])];
     if (std::find(list.begin(), list.end(), i) == list.end()) list.push_back(i);
   }
   bool crowded(uint32_t i) const {
@@ -55,9 +60,9 @@ class NodeProximity {
     auto near = [&](uint32_t j) { return j != i && norm2(q - p_[j]) < sep2_; };
     if (start_.any_near(q, sep_, near)) return true;
     if (moved_.empty()) return false;
-    return any_cell_near(q, sep_, start_.inverse_cell(), [&](const GridKey& k) {
-      auto it = moved_.find(k);
-      return it != moved_.end() && std::any_of(it->second.begin(), it->second.end(), near);
+    return any_cell_near(q, sep_, moved_.inverse_cell(), [&](const GridKey& k) {
+      const std::vector<uint32_t>* list = moved_.find(k);
+      return list && std::any_of(list->begin(), list->end(), near);
     });
   }
 
@@ -65,7 +70,7 @@ class NodeProximity {
   const std::vector<Vec3>& p_;
   double sep_, sep2_;
   SortedPointGrid start_;
-  std::unordered_map<GridKey, std::vector<uint32_t>, GridKeyHash> moved_;
+  CellLists<> moved_;
 };
 
 // Diagonal (0-2 or 1-3) of a quad whose midpoint lies nearer the input: the split that

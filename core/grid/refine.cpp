@@ -165,10 +165,7 @@ std::vector<CellTris> level0_cells(const prep::PreparedInput& in, const Vec3& or
   });
   const FillVector<Entry> entries = radix_sort_joined(
       chunk_entries, [](const Entry& e) { return e.block; }, bits_for(blocks.count));
-  std::vector<size_t> runs;  // where each block's triangles start
-  for (size_t i = 0; i < entries.size(); ++i)
-    if (i == 0 || entries[i].block != entries[i - 1].block) runs.push_back(i);
-  runs.push_back(entries.size());
+  const std::vector<size_t> runs = run_starts(entries, [](const Entry& e) { return e.block; });
 
   constexpr int kCells = kBlock * kBlock * kBlock;
   struct Hit {

@@ -634,10 +634,7 @@ SurfaceIndex::SurfaceIndex(const std::vector<Vec3>& points, const std::vector<Tr
   }
   store.keys.resize(store.ids.size(), 0.0f);
   // The cells' pieces in parallel, in runs of cells, then appended in cell order.
-  std::vector<size_t> cell_starts;
-  for (size_t e = 0; e < cut.size(); ++e)
-    if (e == 0 || cut[e].cell != cut[e - 1].cell) cell_starts.push_back(e);
-  cell_starts.push_back(cut.size());
+  const std::vector<size_t> cell_starts = run_starts(cut, [](const auto& c) { return c.cell; });
   constexpr size_t kCellsPerRun = 256;
   const size_t cells = cell_starts.size() - 1, runs = (cells + kCellsPerRun - 1) / kCellsPerRun;
   std::vector<PieceList> run_lists(runs);

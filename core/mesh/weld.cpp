@@ -6,8 +6,8 @@
 #include <algorithm>
 #include <cmath>
 #include <numeric>
-#include <unordered_map>
 
+#include "common/cell_lists.h"
 #include "common/edge_key.h"
 #include "common/edge_triangles.h"
 #include "common/exact_weld.h"
@@ -51,25 +51,20 @@ std::vector<uint32_t> weld_points(const std::vector<Vec3>& points, double tolera
     // In order, each crowded point goes to the first weld within the tolerance (hash grid with
     // cells of the tolerance: a match can only be in the 27 cells around), or starts one.
     const std::vector<uint8_t> crowded = crowded_points(distinct, tolerance);
-    const double inv = 1.0 / tolerance, tol2 = tolerance * tolerance;
-    std::unordered_map<GridKey, std::vector<uint32_t>, GridKeyHash> buckets;
+    const double tol2 = tolerance * tolerance;
+    CellLists<> buckets(tolerance);
     for (size_t i = 0; i < distinct.size(); ++i) {
       const Vec3& p = distinct[i];
       uint32_t found = UINT32_MAX;
       if (crowded[i]) {
-        const GridKey key = grid_key(p, inv);
-        for (int dx = -1; dx <= 1 && found == UINT32_MAX; ++dx)
-          for (int dy = -1; dy <= 1 && found == UINT32_MAX; ++dy)
-            for (int dz = -1; dz <= 1 && found == UINT32_MAX; ++dz) {
-              auto it = buckets.find({key.x + dx, key.y + dy, key.z + dz});
-              if (it == buckets.end()) continue;
-              for (uint32_t w : it->second)
-                if (norm2(welded[w] - p) <= tol2) {
-                  found = w;
-                  break;
-                }
-            }
-        if (found == UINT32_MAX) buckets[key].push_back(uint32_t(welded.size()));
+        const GridKey key = buckets.cell_of(p);
+        buckets.for_lists(GridKey{key.x - 1, key.y - 1, key.z - 1}, GridKey{key.x + 1, key.y + 1, key.z + 1},
+                          [&](const std::vector<uint32_t>& list) {
+                            for (uint32_t w : list)
+                              if (norm2(welded[w] - p) <= tol2) return found = w, true;
+                            return false;
+                          });
+        if (found == UINT32_MAX) buckets.add(key, uint32_t(welded.size()));
       }
       if (found == UINT32_MAX) {
         found = uint32_t(welded.size());

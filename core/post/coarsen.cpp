@@ -13,6 +13,7 @@
 #include <unordered_map>
 
 #include "check/intersections.h"
+#include "common/cell_lists.h"
 #include "common/compressed_lists.h"
 #include "common/dense_numbers.h"
 #include "common/edge_key.h"
@@ -45,7 +46,8 @@ class Coarsener {
         input_(input),
         origin_(origin),
         prm_(params),
-        buckets_(p, t, std::max(params.max_edge, 1e-300)) {
+        buckets_(p, t, std::max(params.max_edge, 1e-300)),
+        batch_made_(std::max(params.max_edge, 1e-300)) {
     alive_.assign(t.size(), 1);
     vertex_alive_.assign(p.size(), 1);
     vf_ = to_vectors(vertex_triangle_lists(p.size(), t));
@@ -358,15 +360,12 @@ class Coarsener {
     });
     FillVector<Owned> owned = radix_sort_joined(
         parts, [](const Owned& o) { return o.block; }, bits_for(numbers.count));
-    std::vector<Block> blocks;
-    std::vector<size_t> starts;
-    for (size_t i = 0; i < owned.size(); ++i)
-      if (i == 0 || owned[i].block != owned[i - 1].block) {
-        const auto k = numbers.point(owned[i].block);
-        blocks.emplace_back().key = {k[0], k[1], k[2]};
-        starts.push_back(i);
-      }
-    starts.push_back(owned.size());
+    const std::vector<size_t> starts = run_starts(owned, [](const Owned& o) { return o.block; });
+    std::vector<Block> blocks(starts.size() - 1);
+    for (size_t b = 0; b + 1 < starts.size(); ++b) {
+      const auto k = numbers.point(owned[starts[b]].block);
+      blocks[b].key = {k[0], k[1], k[2]};
+    }
     tbb::parallel_for(size_t(0), blocks.size(), [&](size_t b) {
       std::vector<Entry>& run = blocks[b].edges;
       run.reserve(starts[b + 1] - starts[b]);
@@ -597,29 +596,18 @@ class Coarsener {
   bool clear_of_batch(const Plan& pl) {
     for (const Tri& n : pl.fresh) {
       const Box3 b = box_of(n);
-      bool hit = false;
-      for_batch_cells(b, [&](const GridKey& k) {
-        auto it = batch_made_.find(k);
-        if (hit || it == batch_made_.end()) return;
-        for (uint32_t g : it->second) {
-          if (hit || !alive_[g] || made_in_[g] != batch_id_) continue;
+      const bool hit = batch_made_.for_lists(b, [&](const std::vector<uint32_t>& list) {
+        for (uint32_t g : list) {
+          if (!alive_[g] || made_in_[g] != batch_id_) continue;
           const Tri& other = t_[g];
           if (other[0] == pl.u || other[1] == pl.u || other[2] == pl.u || !b.overlaps(box_of(other))) continue;
-          hit = check::triangle_pair_intersects(p_, n, other);
+          if (check::triangle_pair_intersects(p_, n, other)) return true;
         }
+        return false;
       });
       if (hit) return false;
     }
     return true;
-  }
-  // Coarse cells (the longest edge wide) that a box covers.
-  template <typename F>
-  void for_batch_cells(const Box3& b, F&& fn) const {
-    const double inv = 1.0 / std::max(prm_.max_edge, 1e-300);
-    const GridKey lo = grid_key(b.lo, inv), hi = grid_key(b.hi, inv);
-    for (int64_t x = lo.x; x <= hi.x; ++x)
-      for (int64_t y = lo.y; y <= hi.y; ++y)
-        for (int64_t z = lo.z; z <= hi.z; ++z) fn(GridKey{x, y, z});
   }
 
   // Applies a checked collapse; `stamp` marks the nodes whose faces change. The edges it
@@ -647,7 +635,7 @@ class Coarsener {
       t_[pl.moved[i]] = pl.fresh[i];
       if (in_batch) {
         made_in_[pl.moved[i]] = batch_id_;
-        for_batch_cells(box_of(pl.fresh[i]), [&](const GridKey& k) { batch_made_[k].push_back(pl.moved[i]); });
+        batch_made_.for_cells(box_of(pl.fresh[i]), [&](const GridKey& k) { batch_made_.add(k, pl.moved[i]); });
       }
       vf_[pl.v].push_back(pl.moved[i]);
       buckets_.move(pl.moved[i], in_batch);
@@ -741,8 +729,8 @@ class Coarsener {
   std::vector<uint64_t> changed_in_;     // per node: the last event that changed its faces
   std::vector<Refusal> refusals_;        // this pass's
   std::vector<Entry> start_edges_;       // the first pass's edges
-  std::unordered_map<GridKey, std::vector<uint32_t>, GridKeyHash> batch_made_;  // the batch's new triangles
-  struct Marks {  // per thread: bucket marks and plan()'s scratch lists
+  CellLists<> batch_made_;               // the batch's new triangles, in cells the longest edge wide
+  struct Marks {                         // per thread: bucket marks and plan()'s scratch lists
     std::vector<uint32_t> seen;
     uint32_t stamp = 0;
     std::vector<uint32_t> nu, nv;

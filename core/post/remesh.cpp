@@ -13,6 +13,7 @@
 #include "common/edge_key.h"
 #include "common/float_round.h"
 #include "common/grid_key.h"
+#include "common/cell_lists.h"
 #include "common/triangle_buckets.h"
 #include "common/vec.h"
 #include "post/region_fill.h"
@@ -72,9 +73,8 @@ class Remesher {
     for (const auto& [a, b] : s.feature_edges) feature_edges_.insert(edge_key(a, b));
     vf_ = to_vectors(vertex_triangle_lists(s.points.size(), s.triangles));
     // Feature samples bucketed, to find those near a region.
-    feature_cell_ = 2.0 * *std::max_element(s.cell_size.begin(), s.cell_size.end());
-    for (uint32_t i = 0; i < ref.feature_samples.size(); ++i)
-      features_[grid_key(ref.feature_samples[i] + ref.origin, 1.0 / feature_cell_)].push_back(i);
+    features_ = CellLists<>(2.0 * *std::max_element(s.cell_size.begin(), s.cell_size.end()));
+    for (uint32_t i = 0; i < ref.feature_samples.size(); ++i) features_.add(ref.feature_samples[i] + ref.origin, i);
   }
 
   RemeshStats run(ProgressSink* progress) {
@@ -529,18 +529,18 @@ class Remesher {
       if (now > std::max(was, prm_.max_deviation) + eps) return out.far_why = "the input moves away from it", out;
     }
     const double tolerance = th.feature_tolerance * ref_.finest_size;
-    const GridKey lo = grid_key(box.lo, 1.0 / feature_cell_), hi = grid_key(box.hi, 1.0 / feature_cell_);
-    for (int64_t x = lo.x - 1; x <= hi.x + 1; ++x)
-      for (int64_t y = lo.y - 1; y <= hi.y + 1; ++y)
-        for (int64_t z = lo.z - 1; z <= hi.z + 1; ++z) {
-          auto it = features_.find({x, y, z});
-          if (it == features_.end()) continue;
-          for (uint32_t i : it->second) {
+    const bool lost = features_.for_lists(
+        box,
+        [&](const std::vector<uint32_t>& list) {
+          for (uint32_t i : list) {
             const Vec3 q = ref_.feature_samples[i] + ref_.origin;
             const double was = std::sqrt(old_index.squared_distance(q)), now = std::sqrt(new_index.squared_distance(q));
-            if (now > std::max(was, tolerance) + eps) return out.far_why = "a sharp edge of the input gets lost", out;
+            if (now > std::max(was, tolerance) + eps) return true;
           }
-        }
+          return false;
+        },
+        1);
+    if (lost) out.far_why = "a sharp edge of the input gets lost";
     return out;
   }
 
@@ -630,8 +630,7 @@ class Remesher {
     return mark_;
   }
   std::unordered_set<uint64_t> feature_edges_;
-  double feature_cell_ = 1;
-  std::unordered_map<GridKey, std::vector<uint32_t>, GridKeyHash> features_;
+  CellLists<> features_;  // the input's sharp-edge samples
   RemeshStats stats_;
 };
 

@@ -11,6 +11,7 @@
 #include "common/edge_key.h"
 #include "common/grid_key.h"
 #include "common/float_round.h"
+#include "common/cell_lists.h"
 #include "common/triangle_buckets.h"
 #include "common/vec.h"
 
@@ -51,9 +52,8 @@ class SliverRemover {
       if (std::find(feature_[a].begin(), feature_[a].end(), b) == feature_[a].end())
         feature_[a].push_back(b), feature_[b].push_back(a);
     }
-    sample_cell_ = bucket_cell(s_);
-    for (uint32_t i = 0; i < ref_.feature_samples.size(); ++i)
-      samples_[cell_of(ref_.feature_samples[i] + ref_.origin)].push_back(i);
+    samples_ = CellLists<>(bucket_cell(s_));
+    for (uint32_t i = 0; i < ref_.feature_samples.size(); ++i) samples_.add(ref_.feature_samples[i] + ref_.origin, i);
     cos_flat_ = std::cos(prm_.flat_angle_deg * kDeg);
     cos_turn_ = std::cos(prm_.max_normal_turn_deg * kDeg);
   }
@@ -100,11 +100,6 @@ class SliverRemover {
     return false;
   }
 
-  GridKey cell_of(const Vec3& p) const {
-    return {int64_t(std::floor(p[0] / sample_cell_)), int64_t(std::floor(p[1] / sample_cell_)),
-            int64_t(std::floor(p[2] / sample_cell_))};
-  }
-
   // The input's sharp edges near the change stay as near the surface as they were (or within
   // the feature tolerance): each sample within reach of the old triangles is as near the new ones.
   bool keeps_sharp_edges(const Change& c, const std::vector<check::Corners>& made_at) const {
@@ -113,13 +108,10 @@ class SliverRemover {
     for (uint32_t f : c.slots)
       for (uint32_t v : s_.triangles[f]) box.add(s_.points[v]);
     const double reach = 4 * prm_.feature_tolerance;
-    const GridKey lo = cell_of(box.lo - Vec3{reach, reach, reach}), hi = cell_of(box.hi + Vec3{reach, reach, reach});
-    for (int64_t x = lo.x; x <= hi.x; ++x)
-      for (int64_t y = lo.y; y <= hi.y; ++y)
-        for (int64_t z = lo.z; z <= hi.z; ++z) {
-          const auto it = samples_.find(GridKey{x, y, z});
-          if (it == samples_.end()) continue;
-          for (uint32_t i : it->second) {
+    const Vec3 r{reach, reach, reach};
+    const bool lost = samples_.for_lists(
+        samples_.cell_of(box.lo - r), samples_.cell_of(box.hi + r), [&](const std::vector<uint32_t>& list) {
+          for (uint32_t i : list) {
             const Vec3 q = ref_.feature_samples[i] + ref_.origin;
             if (box.squared_distance(q) > reach * reach) continue;
             double before = INFINITY, after = INFINITY;
@@ -132,10 +124,11 @@ class SliverRemover {
             if (before > reach) continue;  // held by other triangles, or out of reach
             for (const auto& at : made_at)
               after = std::min(after, norm2(q - closest_on_triangle(q, at[0], at[1], at[2])));
-            if (std::sqrt(after) > std::max(before, prm_.feature_tolerance)) return false;
+            if (std::sqrt(after) > std::max(before, prm_.feature_tolerance)) return true;
           }
-        }
-    return true;
+          return false;
+        });
+    return !lost;
   }
 
   Vec3 at(uint32_t v, const Change& c) const { return v == c.moved ? c.to : s_.points[v]; }
@@ -522,8 +515,7 @@ class SliverRemover {
   double cos_flat_ = 1, cos_turn_ = 1;
   int round_ = 0;
   std::vector<int> touched_;  // per node: the last round that changed a triangle at it
-  double sample_cell_ = 1;
-  std::unordered_map<GridKey, std::vector<uint32_t>, GridKeyHash> samples_;  // sharp-edge samples by cell
+  CellLists<> samples_;       // the input's sharp-edge samples
   Change change_;
   SliverRemovalStats stats_;
 };
