@@ -101,6 +101,14 @@ TEST_P(SliverRemovalWrap, FewSliversAndNoFartherFromTheInput) {
   EXPECT_LE(b.report.input_to_output.mean, 1.02 * a.report.input_to_output.mean + eps);
   EXPECT_LE(b.report.sharp_edges_to_output.mean, 1.02 * a.report.sharp_edges_to_output.mean + eps);
   EXPECT_LE(b.report.quality.after.lost_feature_samples, a.report.quality.after.lost_feature_samples);
+  // The report says what it did: the slivers it left are the output's, it ran only when asked.
+  const SliverRemovalReport& r = b.report.quality.sliver_removal;
+  EXPECT_TRUE(r.ran);
+  EXPECT_FALSE(a.report.quality.sliver_removal.ran);
+  EXPECT_EQ(r.target_angle_deg, 10.0);
+  EXPECT_EQ(r.slivers_after, size_t(std::lround(share_on * double(b.surface.triangles.size()))));
+  EXPECT_LT(r.slivers_after, r.slivers_before);
+  EXPECT_GT(r.flips + r.collapses + r.moves, 0u);
 }
 
 INSTANTIATE_TEST_SUITE_P(RealMeshes, SliverRemovalWrap, ::testing::Values("fandisk.obj", "thingi_65004.stl"));

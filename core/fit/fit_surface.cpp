@@ -1,5 +1,6 @@
 #include "fit/fit_surface.h"
 
+#include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
@@ -332,6 +333,8 @@ FittedSurface fit_to_input(const extract::LatticeSurface& surf, const grid::Adap
     for (uint32_t f : invalid_triangles(p, out.triangles, min_area2, &complete)) flag_triangle(f, flag);
   };
   TriangleBuckets buckets(p, out.triangles, 2.0 * g.base_size());
+  tbb::enumerable_thread_specific<std::pair<std::vector<uint32_t>, uint32_t>> bucket_marks;  // see for_each_in_box
+  tbb::enumerable_thread_specific<std::vector<uint32_t>> offending;  // triangles the local check found
   auto local_check = [&](const std::vector<uint32_t>& moved, std::vector<uint8_t>& flag) {
     for (uint32_t v : moved) nodes.update(v);
     for (uint32_t v : moved)
@@ -341,19 +344,28 @@ FittedSurface fit_to_input(const extract::LatticeSurface& surf, const grid::Adap
     std::sort(around.begin(), around.end());
     around.erase(std::unique(around.begin(), around.end()), around.end());
     for (uint32_t f : around) buckets.update(f);
-    for (uint32_t f : around) {
-      const Tri& tri = out.triangles[f];
-      if (norm(area_vector(p[tri[0]], p[tri[1]], p[tri[2]])) < min_area2 || check::triangle_is_degenerate(p, tri)) {
-        flag_triangle(f, flag);
-        continue;
-      }
-      buckets.for_each_candidate(f, [&](uint32_t other) {
-        if (!check::triangle_is_degenerate(p, out.triangles[other]) &&
-            check::triangle_pair_intersects(p, tri, out.triangles[other])) {
-          flag_triangle(f, flag);
-          flag_triangle(other, flag);
+    // The tests in parallel (the buckets only read, each thread with its own marks); the
+    // offending triangles are flagged afterwards, so the flags do not depend on the threads.
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, around.size(), 32), [&](const tbb::blocked_range<size_t>& r) {
+      auto& [seen, stamp] = bucket_marks.local();
+      std::vector<uint32_t>& bad = offending.local();
+      for (size_t i = r.begin(); i != r.end(); ++i) {
+        const uint32_t f = around[i];
+        const Tri& tri = out.triangles[f];
+        if (norm(area_vector(p[tri[0]], p[tri[1]], p[tri[2]])) < min_area2 || check::triangle_is_degenerate(p, tri)) {
+          bad.push_back(f);
+          continue;
         }
-      });
+        buckets.for_each_in_box(buckets.box(f), seen, stamp, [&](uint32_t other) {
+          if (other != f && !check::triangle_is_degenerate(p, out.triangles[other]) &&
+              check::triangle_pair_intersects(p, tri, out.triangles[other]))
+            bad.push_back(f), bad.push_back(other);
+        });
+      }
+    });
+    for (std::vector<uint32_t>& bad : offending) {
+      for (uint32_t f : bad) flag_triangle(f, flag);
+      bad.clear();
     }
   };
 

@@ -57,8 +57,13 @@ void post_process(WrapRun& run) {
   if (run.params.remove_slivers) {  // flips, collapses and tangential moves, held to the rebuilds' tolerance
     StageTimer timer("slivers", run.report.stages);
     const post::RemeshParams rp = remesh_params(run.params, run.base, run.refined.grid->fine_size());
-    post::remove_slivers(run.surface, run.quality_ref,
-                         post::sliver_removal_params(rp.max_deviation, rp.offset, rp.float_coordinates));
+    const post::SliverRemovalParams sp = post::sliver_removal_params(rp.max_deviation, rp.offset, rp.float_coordinates);
+    const post::SliverRemovalStats st = post::remove_slivers(run.surface, run.quality_ref, sp);
+    SliverRemovalReport& out = run.report.quality.sliver_removal;
+    out.ran = true, out.target_angle_deg = sp.target_angle_deg;
+    out.slivers_before = st.slivers_before, out.slivers_after = st.slivers_after;
+    out.flips = st.flips, out.collapses = st.collapses, out.moves = st.moves;
+    out.refusals = st.refusals;
   }
 
   run.result.surface = run.labelled_surface();

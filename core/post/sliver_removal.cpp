@@ -248,7 +248,6 @@ class SliverRemover {
       const double old_angle = min_angle_deg(oa, ob, oc);
       old_min = std::min(old_min, old_angle);
       old_bad += old_angle < prm_.target_angle_deg;
-      sample(oa, ob, oc, old_d);
       if (c.dies[i]) continue;
       const Tri& t = c.tris[i];
       const check::Corners at = {this->at(t[0], c), this->at(t[1], c), this->at(t[2], c)};
@@ -265,6 +264,11 @@ class SliverRemover {
     // The smallest angle grows; or, with a sliver next to it that stays as it is, it does not
     // shrink and fewer triangles are left under the target.
     if (new_min < old_min + prm_.min_gain_deg && !(new_min >= old_min && new_bad < old_bad)) return refuse("no gain");
+    // Distances last of the local checks: they ask the input's index, the rest reads the wrap.
+    for (uint32_t f : c.slots) {
+      const Tri& o = s_.triangles[f];
+      sample(s_.points[o[0]], s_.points[o[1]], s_.points[o[2]], old_d);
+    }
     for (size_t i = 0; i < made.size(); ++i) sample(made_at[i][0], made_at[i][1], made_at[i][2], new_d);
     if (new_d.worst > std::max(prm_.max_deviation, old_d.worst)) return refuse("far");
     // On average no farther from the input than before (a tenth of the bound for rounding).

@@ -95,6 +95,16 @@ struct QualityCounts {
   double max_normal_deviation_deg = 0;
 };
 
+// Stage 4's sliver removal (after the rebuilds): triangles under its target angle before and
+// after, the operations it applied, and why the others were refused (the first check failed).
+struct SliverRemovalReport {
+  bool ran = false;
+  double target_angle_deg = 0;
+  size_t slivers_before = 0, slivers_after = 0;  // triangles
+  size_t flips = 0, collapses = 0, moves = 0;
+  std::map<std::string, size_t> refusals;
+};
+
 // Stage 4: the quality analysis before and after the post-processing (remeshing of bad regions
 // and, when anything still intersects, the intersection repair), and what each step did.
 struct QualityReport {
@@ -104,6 +114,7 @@ struct QualityReport {
   size_t remeshed_by_ear_clipping = 0;     // rebuilt by the fallback
   size_t restored = 0;                     // rebuilt, but the rebuild was refused: put back as it was
   std::map<std::string, size_t> refusals;  // why rebuilds were refused
+  SliverRemovalReport sliver_removal;
   // Intersection repair (spec, second paper) on the wrap when anything still intersected.
   size_t repair_runs = 0;
   size_t intersecting_before_repair = 0, intersecting_after_repair = 0;  // triangles
