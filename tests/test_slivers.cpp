@@ -111,4 +111,5 @@ TEST_P(SliverRemovalWrap, FewSliversAndNoFartherFromTheInput) {
   EXPECT_GT(r.flips + r.collapses + r.moves, 0u);
 }
 
-INSTANTIATE_TEST_SUITE_P(RealMeshes, SliverRemovalWrap, ::testing::Values("fandisk.obj", "thingi_65004.stl"));
+INSTANTIATE_TEST_SUITE_P(RealMeshes, SliverRemovalWrap,
+                         ::testing::Values("fandisk.obj", "thingi_65004.stl", "suzanne.ply"));

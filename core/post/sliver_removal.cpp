@@ -207,15 +207,20 @@ class SliverRemover {
 
   double distance_to_input(const Vec3& q) const { return std::sqrt(ref_.closest(q - ref_.origin).squared_distance); }
 
+  // Distances to the input: the largest, and the mean over the patch's area (a sliver, with
+  // hardly any area, hardly counts: removing one that lies on the input's edge does not make
+  // the rest look farther). Without any area, the plain mean.
   struct Spread {
-    double worst = 0, sum = 0;
+    double worst = 0, sum = 0, area = 0, plain_sum = 0;
     size_t n = 0;
+    double mean() const { return area > 0 ? sum / area : n ? plain_sum / double(n) : 0.0; }
   };
   // Distances to the input of a triangle's centroid and edge midpoints.
   void sample(const Vec3& a, const Vec3& b, const Vec3& c, Spread& s) const {
+    const double quarter = 0.25 * norm(area_vector(a, b, c));
     for (const Vec3& q : {(a + b + c) * (1.0 / 3.0), (a + b) * 0.5, (b + c) * 0.5, (c + a) * 0.5}) {
       const double d = distance_to_input(q);
-      s.worst = std::max(s.worst, d), s.sum += d, ++s.n;
+      s.worst = std::max(s.worst, d), s.sum += quarter * d, s.area += quarter, s.plain_sum += d, ++s.n;
     }
   }
 
@@ -272,9 +277,7 @@ class SliverRemover {
     for (size_t i = 0; i < made.size(); ++i) sample(made_at[i][0], made_at[i][1], made_at[i][2], new_d);
     if (new_d.worst > std::max(prm_.max_deviation, old_d.worst)) return refuse("far");
     // On average no farther from the input than before (a tenth of the bound for rounding).
-    if (new_d.n &&
-        new_d.sum / double(new_d.n) > old_d.sum / double(std::max<size_t>(1, old_d.n)) + 0.1 * prm_.max_deviation)
-      return refuse("farther on average");
+    if (new_d.mean() > old_d.mean() + 0.1 * prm_.max_deviation) return refuse("farther on average");
     if (!keeps_sharp_edges(c, made_at)) return refuse("sharp edge farther");
     // No new triangle meets another: among themselves, then the rest of the surface.
     for (size_t i = 0; i < made.size(); ++i)
