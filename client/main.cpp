@@ -73,9 +73,9 @@ void print_repair_report(const std::string& output, const RepairReport& r) {
       "%zu fixed by uniting bodies, %zu left unfixed\n",
       r.regions_found, r.fixed_by_local, r.fixed_by_refill, r.fixed_by_union, r.left_unfixed);
   std::printf(
-      "  local operations: %zu iterations, %zu vertex shifts, %zu triangle shifts; refill: %zu iterations, "
-      "%zu refills, %zu refused\n",
-      r.local_iterations_run, r.vertex_shifts, r.triangle_shifts, r.refill_iterations_run, r.refills,
+      "  local operations: %zu iterations, %zu vertex shifts, %zu triangle shifts, %zu untangles; refill: %zu "
+      "iterations, %zu refills, %zu refused\n",
+      r.local_iterations_run, r.vertex_shifts, r.triangle_shifts, r.untangles, r.refill_iterations_run, r.refills,
       r.refill_failures);
   for (const auto& [why, count] : r.refusals) std::printf("  refused %zux: %s\n", count, why.c_str());
   if (r.cracks_stitched > 0)

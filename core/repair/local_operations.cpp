@@ -246,20 +246,28 @@ void measure_move(const std::vector<Vec3>& points, const std::vector<Tri>& trian
   Vec3 origin{0, 0, 0};
   for (const auto& [v, pos] : move.positions) origin = origin + points[v];
   origin = origin * (1.0 / double(std::max<size_t>(1, move.positions.size())));
-  double area_before = 0, area_after = 0, volume = 0;
+  double area_before = 0, area_after = 0, half_squares = 0, volume = 0;
+  auto longest2 = [](const Vec3& a, const Vec3& b, const Vec3& c) {
+    return std::max({norm2(b - a), norm2(c - b), norm2(a - c)});
+  };
   for (uint32_t t : triangles_moved(faces, move)) {
     const Tri& tri = triangles[t];
     const Vec3 &a = points[tri[0]], &b = points[tri[1]], &c = points[tri[2]];
     const Vec3 &a2 = moved_point(tri[0]), &b2 = moved_point(tri[1]), &c2 = moved_point(tri[2]);
     area_before += 0.5 * norm(area_vector(a, b, c));
     area_after += 0.5 * norm(area_vector(a2, b2, c2));
+    half_squares += 0.25 * std::max(longest2(a, b, c), longest2(a2, b2, c2));
     // Signed volume of the cone from `origin`: its change is the volume the move sweeps.
     volume +=
         dot(a2 - origin, cross(b2 - origin, c2 - origin)) / 6 - dot(a - origin, cross(b - origin, c - origin)) / 6;
   }
   move.volume_change = std::fabs(volume);
-  double hi = std::max(area_before, area_after);
-  move.area_ratio = hi > 0 ? std::min(area_before, area_after) / hi : 1.0;
+  move.area_ratio = area_change_ratio(area_before, area_after, half_squares);
+}
+
+double area_change_ratio(double before, double after, double half_squares) {
+  const double hi = std::max({before, after, half_squares});
+  return hi > 0 ? 1 - std::fabs(after - before) / hi : 1.0;
 }
 
 }  // namespace vdbwrap::local_repair

@@ -13,11 +13,11 @@ namespace vdbwrap::local_repair {
 
 // New positions for some vertices, with what the queue is sorted and filtered by.
 struct Move {
-  enum class Kind { VertexShift, TriangleShift };
+  enum class Kind { VertexShift, TriangleShift, Untangle };  // Untangle: untangle.h
   Kind kind = Kind::VertexShift;
   std::vector<std::pair<uint32_t, Vec3>> positions;  // vertex, new position
   double volume_change = 0;                          // |volume swept by the modified triangles|
-  double area_ratio = 1;                             // r_S: min/max area of the modified triangles, before and after
+  double area_ratio = 1;                             // r_S (area_change_ratio) of the modified triangles
   bool primary = true;  // the paper's choice; others are tried after it (see plan_vertex_shifts)
 };
 
@@ -67,6 +67,14 @@ std::vector<Move> plan_triangle_shifts(const std::vector<Vec3>& points, const st
                                        const std::vector<uint32_t>& region,
                                        const std::vector<check::TrianglePair>& pairs,
                                        const std::vector<Crossing>& crossings, const LocalParams& params);
+
+// The paper's r_S, min/max of the modified triangles' area before and after, written as
+// 1 - |after - before| / max(before, after), with the area of the same triangles as half-squares
+// of their longest edges (`half_squares`) in the denominator when it is larger. Triangles at
+// least as fat as a half-square keep the paper's ratio; for needles the change is measured
+// against their length: moving a needle's apex sideways by a fraction of its short edge halves
+// or doubles its area while the surface moves less than it would on a well-shaped triangle.
+double area_change_ratio(double before, double after, double half_squares);
 
 // Fills volume_change and area_ratio from the triangles around the moved vertices.
 void measure_move(const std::vector<Vec3>& points, const std::vector<Tri>& triangles, const VertexFaces& faces,

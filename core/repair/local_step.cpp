@@ -1,6 +1,7 @@
-// Part 1 of the repair: per region a queue of local operations (vertex and triangle shifts,
-// planned by local_operations.cpp), tried on all regions at once, round by round, each kept
-// or undone by judge().
+// Part 1 of the repair: per cluster of intersecting triangles (regions.h, group_clusters) a
+// queue of local operations (vertex and triangle shifts, planned by local_operations.cpp, then
+// untanglings, untangle.cpp), tried on all clusters at once, round by round, each kept or
+// undone by judge().
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
@@ -14,6 +15,7 @@
 #include "repair/judge.h"
 #include "repair/local_operations.h"
 #include "repair/steps.h"
+#include "repair/untangle.h"
 
 namespace vdbwrap::local_repair {
 namespace {
@@ -38,10 +40,13 @@ RegionPlan plan_region(const Work& w, const VertexFaces& faces, std::vector<uint
   std::vector<Move> moves = plan_vertex_shifts(w.points, w.tris, plan.triangles, crossings, lp, 8);
   for (Move& m : plan_triangle_shifts(w.points, w.tris, plan.triangles, pairs, crossings, lp))
     moves.push_back(std::move(m));
-  // A move reaching beyond --max-deviation (from where its vertices started) is also tried
-  // cut short at the bound, after the others: it often still clears the crossing.
+  for (Move& m : plan_untangling(w.points, w.tris, faces, plan.triangles, crossings)) moves.push_back(std::move(m));
+  // A shift reaching beyond --max-deviation (from where its vertices started) is also tried
+  // cut short at the bound, after the others: it often still clears the crossing. (Not an
+  // untangling: cut short, it no longer puts the vertices between their neighbours.)
   const size_t planned = moves.size();
   for (size_t i = 0; i < planned; ++i) {
+    if (moves[i].kind == Move::Kind::Untangle) continue;
     bool far = false;
     for (const auto& [v, pos] : moves[i].positions) far |= norm(pos - w.origin[v]) > max_dev;
     if (!far) continue;
@@ -97,7 +102,7 @@ void run_local(Work& w, const RepairParams& params, const LocalParams& lp, doubl
     start_round(progress, "repair: local operations", iter, params.local_iterations, w.pairs.size());
     report.local_iterations_run = size_t(iter + 1);
     const VertexFaces faces = vertex_faces(w.points.size(), w.tris);
-    auto regions = group_regions(w.tris, triangles_of(w.pairs), w.pairs);
+    auto regions = group_clusters(w.tris, triangles_of(w.pairs), w.pairs);
     std::vector<RegionPlan> plans(regions.size());
     tbb::parallel_for(size_t(0), regions.size(),
                       [&](size_t i) { plans[i] = plan_region(w, faces, std::move(regions[i]), lp, params, max_dev); });
@@ -106,18 +111,25 @@ void run_local(Work& w, const RepairParams& params, const LocalParams& lp, doubl
       if (p.area_refused) report.refusals["local operation: area criterion (eps_S)"] += p.area_refused;
     }
     std::vector<uint8_t> done(plans.size(), 0);
+    std::vector<size_t> next(plans.size(), 0);  // per cluster: its next operation
     size_t accepted_this_iteration = 0;
-    size_t longest = 0;
-    for (const auto& p : plans) longest = std::max(longest, p.queue.size());
-    // Round k applies each unresolved region's k-th operation, all regions at once.
-    for (size_t k = 0; k < longest; ++k) {
+    // Each round applies each unresolved cluster's next operation, all clusters at once. Clusters
+    // of one region may share a vertex (a fan's hub): a move touching a vertex another move of
+    // the round already moves waits for the next round, so that each can be undone alone.
+    for (;;) {
       check_cancel(progress);
-      std::vector<size_t> who;
+      std::vector<size_t> who, op;
       std::vector<Trial> trials;
       std::vector<std::vector<std::pair<uint32_t, Vec3>>> saved;
+      std::unordered_set<uint32_t> claimed;
       for (size_t i = 0; i < plans.size(); ++i) {
-        if (done[i] || k >= plans[i].queue.size()) continue;
-        const Move& m = plans[i].queue[k];
+        if (done[i] || next[i] >= plans[i].queue.size()) continue;
+        const Move& m = plans[i].queue[next[i]];
+        bool free = true;
+        for (const auto& [v, pos] : m.positions) free &= claimed.count(v) == 0;
+        if (!free) continue;
+        for (const auto& [v, pos] : m.positions) claimed.insert(v);
+        op.push_back(next[i]++);
         Trial t;
         t.changed = triangles_moved(faces, m);
         t.watched = t.changed;
@@ -131,7 +143,7 @@ void run_local(Work& w, const RepairParams& params, const LocalParams& lp, doubl
       for (const auto& t : trials) all_changed.insert(all_changed.end(), t.changed.begin(), t.changed.end());
       const auto degenerate_before = degenerate_among(w, all_changed);
       for (size_t j = 0; j < who.size(); ++j)
-        for (const auto& [v, pos] : plans[who[j]].queue[k].positions) {
+        for (const auto& [v, pos] : plans[who[j]].queue[op[j]].positions) {
           saved[j].push_back({v, w.points[v]});
           w.points[v] = pos;
         }
@@ -148,10 +160,17 @@ void run_local(Work& w, const RepairParams& params, const LocalParams& lp, doubl
         for (uint32_t t : trials[j].changed) w.touched[t] = 1;
         done[who[j]] = 1;
         ++accepted_this_iteration;
-        if (plans[who[j]].queue[k].kind == Move::Kind::VertexShift)
-          ++report.vertex_shifts;
-        else
-          ++report.triangle_shifts;
+        switch (plans[who[j]].queue[op[j]].kind) {
+          case Move::Kind::VertexShift:
+            ++report.vertex_shifts;
+            break;
+          case Move::Kind::TriangleShift:
+            ++report.triangle_shifts;
+            break;
+          case Move::Kind::Untangle:
+            ++report.untangles;
+            break;
+        }
       }
       w.update_pairs(changed, found);
     }

@@ -1,12 +1,15 @@
-// Regions of intersecting triangles: union-find over shared vertices and intersecting pairs.
+// Regions of intersecting triangles: union-find over shared vertices (clusters: shared edges)
+// and intersecting pairs.
 #include "repair/regions.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <numeric>
 #include <unordered_map>
 
+#include "common/edge_key.h"
 #include "common/vec.h"
 
 namespace vdbwrap::local_repair {
@@ -54,9 +57,13 @@ std::vector<uint32_t> triangles_of(const std::vector<check::TrianglePair>& pairs
   return out;
 }
 
-std::vector<std::vector<uint32_t>> group_regions(const std::vector<Tri>& all, const std::vector<uint32_t>& triangles,
-                                                 const std::vector<check::TrianglePair>& pairs) {
-  // Union-find over the listed triangles; vertices link the triangles that use them.
+namespace {
+
+// Union-find over the listed triangles: those with a common key (`keys_of`) and the pairs are
+// joined.
+template <class Keys>
+std::vector<std::vector<uint32_t>> group_by(const std::vector<Tri>& all, const std::vector<uint32_t>& triangles,
+                                            const std::vector<check::TrianglePair>& pairs, const Keys& keys_of) {
   std::unordered_map<uint32_t, uint32_t> slot;
   slot.reserve(triangles.size() * 2);
   for (uint32_t i = 0; i < triangles.size(); ++i) slot.emplace(triangles[i], i);
@@ -67,10 +74,10 @@ std::vector<std::vector<uint32_t>> group_regions(const std::vector<Tri>& all, co
     return x;
   };
   auto unite = [&](uint32_t a, uint32_t b) { parent[find(a)] = find(b); };
-  std::unordered_map<uint32_t, uint32_t> first_at_vertex;
+  std::unordered_map<uint64_t, uint32_t> first_with_key;
   for (uint32_t i = 0; i < triangles.size(); ++i)
-    for (uint32_t v : all[triangles[i]]) {
-      auto [it, added] = first_at_vertex.emplace(v, i);
+    for (uint64_t key : keys_of(all[triangles[i]])) {
+      auto [it, added] = first_with_key.emplace(key, i);
       if (!added) unite(i, it->second);
     }
   for (const auto& p : pairs) {
@@ -87,6 +94,20 @@ std::vector<std::vector<uint32_t>> group_regions(const std::vector<Tri>& all, co
   for (auto& r : regions) std::sort(r.begin(), r.end());
   std::sort(regions.begin(), regions.end());
   return regions;
+}
+
+}  // namespace
+
+std::vector<std::vector<uint32_t>> group_regions(const std::vector<Tri>& all, const std::vector<uint32_t>& triangles,
+                                                 const std::vector<check::TrianglePair>& pairs) {
+  return group_by(all, triangles, pairs, [](const Tri& t) { return std::array<uint64_t, 3>{t[0], t[1], t[2]}; });
+}
+
+std::vector<std::vector<uint32_t>> group_clusters(const std::vector<Tri>& all, const std::vector<uint32_t>& triangles,
+                                                  const std::vector<check::TrianglePair>& pairs) {
+  return group_by(all, triangles, pairs, [](const Tri& t) {
+    return std::array<uint64_t, 3>{edge_key(t[0], t[1]), edge_key(t[1], t[2]), edge_key(t[2], t[0])};
+  });
 }
 
 std::vector<uint32_t> grow_ring(const std::vector<Tri>& all, const VertexFaces& faces,

@@ -30,6 +30,13 @@ size_t edge_use(const std::vector<Tri>& triangles, const VertexFaces& faces, uin
 std::vector<std::vector<uint32_t>> group_regions(const std::vector<Tri>& all, const std::vector<uint32_t>& triangles,
                                                  const std::vector<check::TrianglePair>& pairs);
 
+// Finer groups for planning local operations: two triangles are in one cluster when they share
+// an edge or form one of `pairs`. A fan's hub (a pole, a cap's centre) joins all the needles
+// around it into one region; folds far apart on the fan are separate clusters, each with moves
+// of its own. Clusters and their triangles are sorted.
+std::vector<std::vector<uint32_t>> group_clusters(const std::vector<Tri>& all, const std::vector<uint32_t>& triangles,
+                                                  const std::vector<check::TrianglePair>& pairs);
+
 // The triangles of the pairs (each once, sorted); (t, t) entries for degenerate ones count.
 std::vector<uint32_t> triangles_of(const std::vector<check::TrianglePair>& pairs);
 

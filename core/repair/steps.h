@@ -27,8 +27,9 @@ namespace vdbwrap::local_repair {
 // Nothing moves by more than `tol`.
 void run_stitch(Work& w, double tol, RepairReport& report);
 
-// Part 1: per region, vertex and triangle shifts tried by increasing volume change, all
-// regions at once, for at most params.local_iterations rounds. No vertex leaves `max_dev`
+// Part 1: per cluster of intersecting triangles (edge-connected), vertex and triangle shifts
+// tried by increasing volume change, then untanglings, all clusters at once, for at most
+// params.local_iterations rounds. No vertex leaves `max_dev`
 // of where it started.
 void run_local(Work& w, const RepairParams& params, const LocalParams& lp, double max_dev, RepairReport& report,
                ProgressSink* progress);

@@ -70,6 +70,7 @@ struct RepairReport {
   std::vector<RepairRegion> unfixed;  // the regions of intersecting triangles left in the output
 
   size_t local_iterations_run = 0, vertex_shifts = 0, triangle_shifts = 0;
+  size_t untangles = 0;  // needle untangling moves kept (repair/untangle.h)
   size_t refill_iterations_run = 0, refills = 0, refill_failures = 0;
   // Regions refilled after their triangles near the intersections were bisected (edges down to
   // a third of --max-deviation; geometry unchanged), and the triangles that added.
