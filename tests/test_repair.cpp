@@ -499,6 +499,7 @@ TEST(Repair, IsotropicSphereWithNoiseEverywhereIsFullyRepaired) {
   ASSERT_GE(before.intersecting_pairs, 10u);
   RepairParams p;
   p.max_deviation = Length{2.0, true};
+  p.local_iterations = 0;  // part 1 alone clears these folds: they are left to part 2 here
   RepairResult r = repair(m, p);
   print(r.report, "noisy sphere");
   EXPECT_GE(r.report.regions_found, 5u);
@@ -657,7 +658,7 @@ TEST(Repair, TessellatedMeshWithSeveralLocalDefectsMeetsTheTargets) {
   RepairResult r = repair(m, RepairParams{});
   print(r.report, "tessellated");
   ASSERT_EQ(r.report.regions_found, 4u);
-  EXPECT_GT(r.report.fixed_by_refill, 0u);  // the fold needs part 2
+  EXPECT_EQ(r.report.left_unfixed, 0u);
   EXPECT_GE(double(r.report.fixed_by_local + r.report.fixed_by_refill), 0.9 * double(r.report.regions_found));
   EXPECT_LE(r.report.deviation, 0.0086);
   EXPECT_LE(border_edges(r.mesh), before.border_edges);
@@ -734,6 +735,7 @@ TEST(Repair, SameInputGivesTheSameOutputWhateverTheThreads) {
       RepairParams p;
       p.threads = threads;
       p.float_coordinates = floats;
+      p.local_iterations = 1;  // part 1 fixes the dent; the pin and the fold are left to part 2
       runs.push_back(repair(m, p));
     }
     ASSERT_GE(runs[0].report.regions_found, 3u);
