@@ -43,6 +43,12 @@ void WrapOptions::add_to(CLI::App* cmd, const std::string& threads_help) {
                     "base cell from the input there (the wrap's held-back nodes stay within a base cell)")
           ->group("Size");
   bindings_.push_back({fc, [this](WrapParams& p) { p.refine_far_cells = refine_far_cells_; }});
+  CLI::Option* hb =
+      cmd->add_flag("--refine-held-back,!--no-refine-held-back", refine_held_back_,
+                    "Where the projection held nodes back more than a base cell from the input, refine the cells "
+                    "around them to the finest level and fit again (the outside volume)")
+          ->group("Size");
+  bindings_.push_back({hb, [this](WrapParams& p) { p.refine_held_back = refine_held_back_; }});
   bind(cmd, "--volume", volume_,
        "Volume to wrap: outside (around the input), inside (the largest volume it encloses), or the volume(s) "
        "holding seed points X,Y,Z (several separated by ';'); a seed point's volume reaching the outside is a leak",

@@ -40,6 +40,7 @@ class WrapOptions {
   bool sliver_removal_ = false;
   bool two_sided_sheets_ = false;
   bool refine_far_cells_ = false;
+  bool refine_held_back_ = false;
 };
 
 }  // namespace vdbwrap::cli

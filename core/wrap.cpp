@@ -15,6 +15,8 @@ WrapResult run_pipeline(const Mesh& input, const WrapParams& params, ProgressSin
   pipeline::diagnose_input(run);
   pipeline::prepare_input(run);
   pipeline::build_volume(run);
+  pipeline::project_lattice(run);
+  pipeline::refine_where_held_back(run);
   pipeline::fit_surface(run);
   pipeline::post_process(run);
   pipeline::validate_surface(run);

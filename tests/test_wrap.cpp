@@ -163,3 +163,24 @@ TEST(Wrap, SinglePrecisionOutputStaysValidWhenWrittenAsBinaryStl) {
     EXPECT_TRUE(v.ok) << name << ": " << v.why;
   }
 }
+
+TEST(Wrap, RefineHeldBackBringsTheFarthestPointWithinABaseCell) {
+  // quadknot.obj at 1 %: the validity loop holds a few nodes back at corners of level-0 cells,
+  // 1.6 base cells off the input. Refined around them and fitted again, the wrap's farthest
+  // point is within a base cell, and no farther on average.
+  const Mesh input = io::read_mesh(data_path("quadknot.obj"));
+  WrapParams off;
+  off.base_size = Length{1, true};
+  WrapParams on = off;
+  on.refine_held_back = true;
+  const WrapResult a = wrap(input, off), b = wrap(input, on);
+  for (const WrapResult* r : {&a, &b}) {
+    auto v = valid_closed_surface(r->surface);
+    EXPECT_TRUE(v.ok) << v.why;
+  }
+  EXPECT_EQ(a.report.nodes_held_back_far_first_fit, 0u);  // not looked for when off
+  EXPECT_GT(b.report.nodes_held_back_far_first_fit, 0u);
+  EXPECT_GT(a.report.output_to_input.max, a.report.base_size) << "the case no longer needs the refit";
+  EXPECT_LE(b.report.output_to_input.max, b.report.base_size);
+  EXPECT_LE(b.report.output_to_input.mean, 1.02 * a.report.output_to_input.mean);
+}

@@ -8,6 +8,7 @@
 #include <cmath>
 #include <unordered_map>
 
+#include "common/cell_lists.h"
 #include "common/closest_point.h"
 #include "common/dense_numbers.h"
 #include "common/fill_vector.h"
@@ -278,6 +279,22 @@ RefineResult build_refined_grid(const prep::PreparedInput& in, const RefineCrite
     return false;
   };
 
+  CellLists<> near_points(std::max(params.near_reach, base));
+  for (uint32_t i = 0; i < params.refine_near.size(); ++i) near_points.add(params.refine_near[i], i);
+  auto near_a_point = [&](const Vec3& lo, double h) {
+    Box3 cell;
+    cell.add(lo), cell.add(lo + Vec3{h, h, h});
+    const double r2 = params.near_reach * params.near_reach;
+    return near_points.for_lists(
+        cell,
+        [&](const std::vector<uint32_t>& list) {
+          for (uint32_t i : list)
+            if (cell.squared_distance(params.refine_near[i]) <= r2) return true;
+          return false;
+        },
+        1);
+  };
+
   for (int level = 0; level <= levels; ++level) {
     if (progress) {
       if (progress->cancelled()) throw Error(ErrorKind::Cancelled, "cancelled");
@@ -342,6 +359,7 @@ RefineResult build_refined_grid(const prep::PreparedInput& in, const RefineCrite
           }
         }
         if (!split && criteria && far2 > 0) split = has_far_point(ct.tris, lo, h);
+        if (!split && criteria && !near_points.empty()) split = near_a_point(lo, h);
         if (!split && contact && in_contact()) {
           if (level < sc.contact_level)
             split = true;

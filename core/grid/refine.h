@@ -28,6 +28,11 @@ struct RefineCriteria {
   // base cells from the cell's own triangles: refine (0: off). The wrap's held-back nodes sit on
   // such points, up to a cell diagonal off the input.
   double far_point_cells = 0;
+  // Points (local frame) where a first fit held wrap nodes back far from the input: a touched
+  // cell within `near_reach` of one is refined to the criteria's depth, so the lattice nodes
+  // there start near the input.
+  std::vector<Vec3> refine_near;
+  double near_reach = 0;
 };
 
 // base_size in model units. The grid pads the input's bounding box by `padding` level-0

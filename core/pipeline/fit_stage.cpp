@@ -55,23 +55,52 @@ void coarsen(WrapRun& run) {
 
 }  // namespace
 
-void fit_surface(WrapRun& run) {
+void project_lattice(WrapRun& run) {
   WrapReport& report = run.report;
   const mesh::SurfaceIndex& index = run.index();
   StageTimer timer("project", report.stages);
   const std::vector<fit::FeatureCurve>& curves = run.curves_builder->get();
-  for (const fit::FeatureCurve& c : curves) {  // WrapResult::feature_curves, in model coordinates
-    std::vector<Vec3>& out = run.result.feature_curves.emplace_back();
-    for (const Vec3& p : c.points) out.push_back(p + run.prepared.origin);
-  }
+  if (run.result.feature_curves.empty())
+    for (const fit::FeatureCurve& c : curves) {  // WrapResult::feature_curves, in model coordinates
+      std::vector<Vec3>& out = run.result.feature_curves.emplace_back();
+      for (const Vec3& p : c.points) out.push_back(p + run.prepared.origin);
+    }
   run.fitted = fit::fit_to_input(run.lattice, *run.refined.grid, index, curves, run.prepared.origin,
                                  fit_params(run.params), run.progress);
   report_snapping(report, run.fitted);
   const std::string two_sided = fit::describe_two_sided(run.fitted.two_sided, run.prepared, report.two_sided);
   if (run.progress && !two_sided.empty()) run.progress->progress("project", 1.0, two_sided);
-  if (!curves.empty() && run.fitted.valid) insert_feature_nodes(run, curves);
+}
 
-  report.triangles_before_coarsening = run.fitted.triangles.size();
+void refine_where_held_back(WrapRun& run) {
+  // Only around the outside: a finer grid can open a passage, and for a seed point or the
+  // inside volume that would turn a result into a leak.
+  if (!run.params.refine_held_back || run.params.volume != VolumeChoice::Outside) return;
+  const mesh::SurfaceIndex& index = run.index();
+  const double far2 = run.base * run.base;
+  // A refit can hold back nodes of its own elsewhere: their places join the next one.
+  for (int refit = 0; refit < kMostHeldBackRefits; ++refit) {
+    size_t far = 0;
+    for (const Vec3& p : run.fitted.held_back_points) {
+      const Vec3 local = p - run.prepared.origin;
+      if (index.squared_distance(local) > far2) run.refine_near.push_back(local), ++far;
+    }
+    if (refit == 0) run.report.nodes_held_back_far_first_fit = far;
+    if (far == 0) return;
+    if (run.progress)
+      run.progress->progress(
+          "project", 1.0,
+          std::to_string(far) +
+              " nodes held back over a base cell from the input: refining around them, fitting again");
+    build_volume(run);
+    project_lattice(run);
+  }
+}
+
+void fit_surface(WrapRun& run) {
+  const std::vector<fit::FeatureCurve>& curves = run.curves_builder->get();
+  if (!curves.empty() && run.fitted.valid) insert_feature_nodes(run, curves);
+  run.report.triangles_before_coarsening = run.fitted.triangles.size();
   if (run.params.coarsen_tolerance > 0) coarsen(run);
   run.check_cancel();
 }

@@ -13,8 +13,13 @@ void prepare_input(WrapRun& run);
 // Stage 2: size controls, the refined grid, the flood fill (the chosen volume, gap closure,
 // leaks), and the volume's manifold lattice surface.
 void build_volume(WrapRun& run);
-// Stage 3: projection onto the input with feature snapping, nodes inserted on missed feature
-// curves, coarsening of flat parts.
+// Stage 3: the lattice surface projected onto the input, with feature snapping.
+void project_lattice(WrapRun& run);
+// Where that held nodes back more than a base cell from the input (at corners of coarse
+// cells), stage 2 again with the cells around them refined to the finest level, and the
+// projection again (refine_held_back; the outside volume only).
+void refine_where_held_back(WrapRun& run);
+// Stage 3, end: nodes inserted on missed feature curves, coarsening of flat parts.
 void fit_surface(WrapRun& run);
 // Stage 4: quality analysis, remeshing of bad regions, intersection repair where anything
 // still intersects, sliver removal; then the part labels of the output.

@@ -78,11 +78,16 @@ void build_volume(WrapRun& run) {
 
   // The nearest-point index: for the clearance of gap closure and leaks, then projection. Its
   // build is serial in part (CGAL's tree): it overlaps the refinement and the flood fill.
-  run.index_builder = std::make_unique<InBackground<std::unique_ptr<mesh::SurfaceIndex>>>(
-      [&prepared] { return std::make_unique<mesh::SurfaceIndex>(prepared.mesh.points, prepared.mesh.triangles); });
+  // (A second build, around held-back nodes, keeps the index and the curves of the first.)
+  if (!run.index_builder)
+    run.index_builder = std::make_unique<InBackground<std::unique_ptr<mesh::SurfaceIndex>>>(
+        [&prepared] { return std::make_unique<mesh::SurfaceIndex>(prepared.mesh.points, prepared.mesh.triangles); });
   {
     StageTimer timer("refine", report.stages);
-    run.refined = grid::build_refined_grid(prepared, refine_criteria(run.params), run.base, run.controls, run.progress);
+    grid::RefineCriteria criteria = refine_criteria(run.params);
+    criteria.refine_near = run.refine_near;
+    criteria.near_reach = kHeldBackRefineReach * run.base;
+    run.refined = grid::build_refined_grid(prepared, criteria, run.base, run.controls, run.progress);
   }
   report.cells_per_level = run.refined.touched_per_level;
   if (run.controls.contact()) report_contacts(run);
@@ -91,9 +96,11 @@ void build_volume(WrapRun& run) {
   // The input's feature curves (serial), beside the flood fill (serial too).
   const bool snap = run.params.snap_features;
   const double corner_angle = run.params.corner_angle_deg;
-  run.curves_builder = std::make_unique<InBackground<std::vector<fit::FeatureCurve>>>([&prepared, snap, corner_angle] {
-    return snap ? fit::build_feature_curves(prepared, corner_angle) : std::vector<fit::FeatureCurve>();
-  });
+  if (!run.curves_builder)
+    run.curves_builder =
+        std::make_unique<InBackground<std::vector<fit::FeatureCurve>>>([&prepared, snap, corner_angle] {
+          return snap ? fit::build_feature_curves(prepared, corner_angle) : std::vector<fit::FeatureCurve>();
+        });
   choose_volume(run);
   run.check_cancel();
 

@@ -46,6 +46,9 @@ struct WrapRun {
   int32_t label = 0;
   std::vector<grid::Coord> anchors;
   extract::LatticeSurface lattice;
+  // Points (local frame) around which the grid is refined to the finest level: where a first
+  // fit held nodes back far from the input (see refine_where_held_back).
+  std::vector<Vec3> refine_near;
   // Started in the background when their inputs exist, waited for when first needed.
   std::unique_ptr<InBackground<std::unique_ptr<mesh::SurfaceIndex>>> index_builder;
   std::unique_ptr<InBackground<std::vector<fit::FeatureCurve>>> curves_builder;

@@ -40,6 +40,7 @@ TEST(ParamsMapping, RoundTripsEveryFieldAndRefusesOutOfRange) {
   p.remove_slivers = !vdbwrap::WrapParams().remove_slivers;
   p.two_sided_sheets = !vdbwrap::WrapParams().two_sided_sheets;
   p.refine_far_cells = !vdbwrap::WrapParams().refine_far_cells;
+  p.refine_held_back = !vdbwrap::WrapParams().refine_held_back;
   p.corner_angle_deg = 55;
   p.compute_distances = false;
   vdbwrap::WrapParams q = vdbwrap::api::to_wrap_params(vdbwrap::api::to_proto(p));
@@ -61,6 +62,7 @@ TEST(ParamsMapping, RoundTripsEveryFieldAndRefusesOutOfRange) {
   EXPECT_EQ(q.remove_slivers, p.remove_slivers);
   EXPECT_EQ(q.two_sided_sheets, p.two_sided_sheets);
   EXPECT_EQ(q.refine_far_cells, p.refine_far_cells);
+  EXPECT_EQ(q.refine_held_back, p.refine_held_back);
   EXPECT_EQ(q.corner_angle_deg, 55);
   EXPECT_FALSE(q.compute_distances);
   // The voxel-stage controls (issue 5), through the API and back.

@@ -101,6 +101,10 @@ struct WrapParams {
   // Refine a cell the input passes through when a point of its boundary lies more than a base
   // cell from its triangles: held-back nodes then stay within a base cell of the input.
   bool refine_far_cells = false;
+  // Where the projection held wrap nodes back more than a base cell from the input (at corners
+  // of coarse cells), refine the cells around them to the finest level and fit again. Off by
+  // default: the refit costs stage 2 and the projection again (see docs/cli.md).
+  bool refine_held_back = false;
 
   // Projection (spec stage 3).
   double weld_tolerance = 1e-7;   // fraction of the diagonal under which vertices merge
