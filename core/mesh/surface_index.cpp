@@ -185,6 +185,11 @@ CGAL::Bbox_3 box_of(const Vec3& a, const Vec3& b, const Vec3& c) {
   return {std::min({a[0], b[0], c[0]}), std::min({a[1], b[1], c[1]}), std::min({a[2], b[2], c[2]}),
           std::max({a[0], b[0], c[0]}), std::max({a[1], b[1], c[1]}), std::max({a[2], b[2], c[2]})};
 }
+// The median (the upper one for an even count); reorders `v`.
+double median(std::vector<double>& v) {
+  std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+  return v[v.size() / 2];
+}
 double diagonal(const CGAL::Bbox_3& b) {
   return std::sqrt(std::pow(b.xmax() - b.xmin(), 2) + std::pow(b.ymax() - b.ymin(), 2) +
                    std::pow(b.zmax() - b.zmin(), 2));
@@ -556,7 +561,7 @@ SurfaceIndex::SurfaceIndex(const std::vector<Vec3>& points, const std::vector<Tr
   Store& store = impl_->store;
   store.triangles.resize(triangles.size());
   store.frames.resize(triangles.size());
-  std::vector<double> sizes(triangles.size());
+  std::vector<double> sizes(triangles.size()), widths(triangles.size());
   const CGAL::Bbox_3 all = tbb::parallel_reduce(
       tbb::blocked_range<size_t>(0, triangles.size(), 4096), CGAL::Bbox_3(),
       [&](const tbb::blocked_range<size_t>& r, CGAL::Bbox_3 part) {
@@ -566,15 +571,22 @@ SurfaceIndex::SurfaceIndex(const std::vector<Vec3>& points, const std::vector<Tr
           store.frames[f] = frame_of(a, b, c);
           const CGAL::Bbox_3 box = box_of(a, b, c);
           sizes[f] = diagonal(box);
+          widths[f] = std::sqrt(norm(area_vector(a, b, c)));
           part += box;
         }
         return part;
       },
       [](const CGAL::Bbox_3& x, const CGAL::Bbox_3& y) { return x + y; });
   if (triangles.empty()) return;
-  // Pieces about twice the typical triangle: the typical one stays whole.
-  std::nth_element(sizes.begin(), sizes.begin() + sizes.size() / 2, sizes.end());
-  const double size = 2 * sizes[sizes.size() / 2];
+  // Pieces about twice the typical triangle: the typical one stays whole. Where most triangles
+  // are needles (a long part tessellated by a few rings), the typical box is a needle's length
+  // and nothing would be cut: each needle's box covers the part's width over its length, and a
+  // query near the part tested them all. The size is then set by the triangles' areas (the
+  // side of a square of twice the area: a well-shaped triangle's box diagonal is less than
+  // twice that, so meshes of such triangles keep the size of their boxes). Not below a 64th of
+  // the typical box, so that flat triangles cannot shrink the cells to nothing.
+  const double typical = median(sizes);
+  const double size = 2 * std::max(std::min(typical, 2 * median(widths)), typical / 64);
   const double span = std::max({all.xmax() - all.xmin(), all.ymax() - all.ymin(), all.zmax() - all.zmin()});
   const CellGrid grid({all.xmin(), all.ymin(), all.zmin()}, {all.xmax(), all.ymax(), all.zmax()},
                       std::max(size, span / double(1 << 20)));

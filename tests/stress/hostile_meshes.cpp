@@ -3,6 +3,7 @@
 // seed gives the same files with any standard library.
 #include "hostile_meshes.h"
 
+#include <array>
 #include <cmath>
 #include <cstring>
 #include <functional>
@@ -477,6 +478,104 @@ HostileMesh long_thin(int scale, uint32_t seed) {
   return finish("long_thin", scale, seed, m, "stl", f.apply({0, 0, 0}));
 }
 
+// A slender profiled bar, as CAD exports one: the profile (a star of `teeth` teeth, every tip
+// and root a sharp corner, the flanks curved in `flank` segments) swept along z from z0 to z1
+// through `stations` rings, turning by `twist` radians from one ring to the next, and capped by
+// fans; with `bore` > 0, a round bore of that radius runs through it (a tube: not star-shaped,
+// its caps are rings). Few rings on a long bar: the side triangles are needles hundreds of times
+// longer than wide, and with the twist their boxes run diagonally across the bar.
+Mesh profiled_bar(double radius, double bore, int teeth, int flank, int stations, double z0, double z1, double twist) {
+  std::vector<std::array<double, 2>> outer, inner;  // counter-clockwise, at the same angles
+  const int per_tooth = 2 * flank;
+  for (int k = 0; k < teeth * per_tooth; ++k) {
+    const double s = double(k % per_tooth) / flank;  // 0 at a tip, 1 at a root, 2 at the next tip
+    const double depth = s <= 1 ? s : 2 - s;
+    const double r = radius * (1 - 0.35 * depth * (2 - depth));  // flanks bulge outward
+    const double a = 2 * M_PI * k / (teeth * per_tooth);
+    outer.push_back({r * std::cos(a), r * std::sin(a)});
+    inner.push_back({bore * std::cos(a), bore * std::sin(a)});
+  }
+  const uint32_t n = uint32_t(outer.size());
+  Mesh m;
+  // Points: the outer ring of each station, then (with a bore) the inner ring of each.
+  auto ring = [&](const std::vector<std::array<double, 2>>& profile) {
+    for (int j = 0; j < stations; ++j) {
+      const double z = z0 + (z1 - z0) * j / (stations - 1), c = std::cos(twist * j), sn = std::sin(twist * j);
+      for (const auto& [x, y] : profile) m.points.push_back({c * x - sn * y, sn * x + c * y, z});
+    }
+  };
+  ring(outer);
+  if (bore > 0) ring(inner);
+  const uint32_t in = stations * n;  // first inner point
+  for (int j = 0; j + 1 < stations; ++j)
+    for (uint32_t k = 0; k < n; ++k) {
+      const uint32_t a = j * n + k, b = j * n + (k + 1) % n, c = a + n, d = b + n;
+      m.triangles.push_back({a, b, d});
+      m.triangles.push_back({a, d, c});
+      if (bore > 0) {  // the bore's wall faces its axis
+        m.triangles.push_back({in + a, in + d, in + b});
+        m.triangles.push_back({in + a, in + c, in + d});
+      }
+    }
+  const uint32_t last = (stations - 1) * n;
+  if (bore > 0) {
+    for (uint32_t k = 0; k < n; ++k) {
+      const uint32_t k1 = (k + 1) % n;
+      m.triangles.push_back({in + k, k1, k});
+      m.triangles.push_back({in + k, in + k1, k1});
+      m.triangles.push_back({in + last + k, last + k, last + k1});
+      m.triangles.push_back({in + last + k, last + k1, in + last + k1});
+    }
+    return m;
+  }
+  const uint32_t bottom = uint32_t(m.points.size()), top = bottom + 1;
+  m.points.push_back({0, 0, z0});
+  m.points.push_back({0, 0, z1});
+  for (uint32_t k = 0; k < n; ++k) {
+    m.triangles.push_back({bottom, (k + 1) % n, k});
+    m.triangles.push_back({top, last + k, last + (k + 1) % n});
+  }
+  return m;
+}
+
+HostileMesh thin_pieces(int scale, uint32_t seed) {
+  Rng rng(seed);
+  // A long, thin assembly of 12 profiled bars (every other one a tube), 1000 long and a few
+  // percent of that across, in three lanes: five and six bars laid end to end, nearly meeting
+  // at their ends, and one bar the whole length in one span (needles a thousand long). Bars of
+  // neighbouring lanes lie a hair apart where their teeth face each other, and one bar reaches
+  // a little into the next lanes. Thousands of sharp edges run along the bars (every tooth's
+  // tip and root) and round their caps.
+  Mesh m;
+  const double lane_radius = 6;  // the lanes' axes are two of these apart
+  const int bars_in_lane[3] = {5, 6, 1};
+  Vec3 inside{0, 0, 0};
+  int bar_number = 0;
+  for (int lane = 0; lane < 3; ++lane) {
+    const double angle = 2 * M_PI * lane / 3, axis = 2 * lane_radius / std::sqrt(3.0);
+    const int bars = bars_in_lane[lane];
+    double z = -500;
+    for (int k = 0; k < bars; ++k, ++bar_number) {
+      const bool last = k + 1 == bars;
+      const double radius = lane_radius * (lane == 0 && k == 1 ? 1.1 : 1 - rng.u(0.001, 0.03));
+      const double length = last ? 500 - z : rng.u(0.8, 1.2) * 1000 / bars;
+      const double gap = last ? 0 : rng.u(0.05, 0.5);  // to the next bar of the lane
+      const int teeth = (6 + int(rng.below(5))) * scale, stations = bars == 1 ? 2 : 2 + int(rng.below(3));
+      const double bore = bar_number % 2 ? 0.4 * radius : 0;
+      const Mesh bar = profiled_bar(radius, bore, teeth, 3, stations, 0, length - gap, rng.u(-0.1, 0.1));
+      Frame f;
+      f.origin = {axis * std::cos(angle), axis * std::sin(angle), z};
+      if (bar_number == 0) inside = add(f.origin, {0, 0, 0.5 * length});  // a solid one
+      append(m, bar, "bar" + std::to_string(bar_number), &f);
+      z += length;
+    }
+  }
+  // The whole assembly tilted, so the bars cross the axes.
+  const Frame tilt = random_frame(rng, {rng.u(-50, 50), rng.u(-50, 50), rng.u(-50, 50)});
+  for (Vec3& p : m.points) p = tilt.apply(p);
+  return finish("thin_pieces", scale, seed, m, "stl", tilt.apply(inside));
+}
+
 HostileMesh tiny_parts(int scale, uint32_t seed) {
   Rng rng(seed);
   // Many separate tetrahedra, 1/1000 of the scene across, some overlapping.
@@ -581,6 +680,7 @@ const std::vector<std::pair<std::string, Maker>>& makers() {
       {"flat", flat},
       {"long_thin", long_thin},
       {"tiny_parts", tiny_parts},
+      {"thin_pieces", thin_pieces},
       {"anisotropic_sphere", anisotropic_sphere},
       {"tiny_coordinates",
        [](int s, uint32_t seed) {
