@@ -543,9 +543,9 @@ HostileMesh thin_pieces(int scale, uint32_t seed) {
   // A long, thin assembly of 12 profiled bars (every other one a tube), 1000 long and a few
   // percent of that across, in three lanes: five and six bars laid end to end, nearly meeting
   // at their ends, and one bar the whole length in one span (needles a thousand long). Bars of
-  // neighbouring lanes lie a hair apart where their teeth face each other, and one bar reaches
-  // a little into the next lanes. Thousands of sharp edges run along the bars (every tooth's
-  // tip and root) and round their caps.
+  // neighbouring lanes lie a hair apart where their teeth face each other, and one thicker bar
+  // reaches into the next lanes (their teeth's tips cross its roots). Thousands of sharp edges run along the bars
+  // (every tooth's tip and root) and round their caps.
   Mesh m;
   const double lane_radius = 6;  // the lanes' axes are two of these apart
   const int bars_in_lane[3] = {5, 6, 1};
@@ -557,7 +557,7 @@ HostileMesh thin_pieces(int scale, uint32_t seed) {
     double z = -500;
     for (int k = 0; k < bars; ++k, ++bar_number) {
       const bool last = k + 1 == bars;
-      const double radius = lane_radius * (lane == 0 && k == 1 ? 1.1 : 1 - rng.u(0.001, 0.03));
+      const double radius = lane_radius * (lane == 0 && k == 1 ? 1.6 : 1 - rng.u(0.001, 0.03));
       const double length = last ? 500 - z : rng.u(0.8, 1.2) * 1000 / bars;
       const double gap = last ? 0 : rng.u(0.05, 0.5);  // to the next bar of the lane
       const int teeth = (6 + int(rng.below(5))) * scale, stations = bars == 1 ? 2 : 2 + int(rng.below(3));
