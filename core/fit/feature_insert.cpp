@@ -342,9 +342,11 @@ class Inserter {
 
   // How to bring the wrap to curve point q when it misses it (read only).
   Plan plan(const Vec3& q, Scratch& scratch) const {
-    // The nearest six edges in reach are all that is tried. Looked for within a quarter of the
-    // reach first: when six are there, they are the nearest six of the whole reach, and a
-    // triangle within the tolerance is there too.
+    // The nearest six edges in reach are all that is tried. Looked for within a quarter, then
+    // half of the reach first: when six are there, they are the nearest six of the whole reach
+    // (every edge that near is found there), and a triangle within the tolerance is there too.
+    // The whole reach holds several times more of the wrap, and its scan was most of the stage
+    // where thousands of curves crowd a thin part.
     const double r = prm_.max_move;
     Plan pl;
     pl.read = box_around(q, r);
@@ -363,13 +365,16 @@ class Inserter {
     }
     // Any triangle within the tolerance was in that box: the wider looks need only the edges.
     look_around(q, 0.25 * r, scratch, false);
+    if (edges.size() < 6) look_around(q, 0.5 * r, scratch, false);
     if (edges.size() < 6) look_around(q, r, scratch, false);
     pl.missed = true;
-    // The nearest edges first: the nearest may fold where the next one does not.
-    std::sort(edges.begin(), edges.end(), [](const Candidate& x, const Candidate& y) {
+    // The nearest edges first: the nearest may fold where the next one does not. (A total
+    // order: the six are the same whatever order the scan found them in.)
+    const size_t tried = std::min<size_t>(edges.size(), 6);
+    std::partial_sort(edges.begin(), edges.begin() + tried, edges.end(), [](const Candidate& x, const Candidate& y) {
       return x.distance != y.distance ? x.distance < y.distance : (x.a != y.a ? x.a < y.a : x.b < y.b);
     });
-    edges.resize(std::min<size_t>(edges.size(), 6));
+    edges.resize(tried);
     for (const Candidate& c : edges) {
       // The node stops `offset` short of the curve, on the side the wrap came from.
       const Vec3 from = lerp(p_[c.a], p_[c.b], c.t);
