@@ -12,7 +12,9 @@ The divisors change alpha wrap's settings (alpha = diag/A, offset = diag/O): a l
 divisor brings its surface as close to the input as vdbwrap's, for a comparison at matched
 distance.
 """
-import argparse, json, math, os, resource, shutil, statistics, struct, subprocess, sys, tempfile, time
+import argparse, json, math, os, resource, shutil, statistics, subprocess, sys, tempfile, time
+
+from mesh_files import read_triangles
 
 root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 ap = argparse.ArgumentParser()
@@ -45,20 +47,9 @@ def timed(cmd):
     return wall, usage.ru_maxrss / 1024.0, subprocess.CompletedProcess(cmd, proc.returncode, out, err)
 
 
-def stl_triangles(path):
-    """The triangles of an STL file (binary or ASCII) as three points each."""
-    data = open(path, "rb").read()
-    if len(data) >= 84 and len(data) == 84 + 50 * struct.unpack_from("<I", data, 80)[0]:
-        n = struct.unpack_from("<I", data, 80)[0]
-        return [struct.unpack_from("<9f", data, 84 + 50 * i + 12) for i in range(n)]
-    values = [float(w) for line in data.decode(errors="replace").splitlines() if line.strip().startswith("vertex")
-              for w in line.split()[1:4]]
-    return [tuple(values[i:i + 9]) for i in range(0, len(values) - 8, 9)]
-
-
 def sliver_share(path, limit_deg=10.0):
     """Share of the triangles whose smallest angle is under limit_deg (degenerate ones count)."""
-    tris = stl_triangles(path)
+    tris = read_triangles(path)
     bad = 0
     for t in tris:
         p = (t[0:3], t[3:6], t[6:9])

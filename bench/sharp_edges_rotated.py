@@ -10,6 +10,8 @@ Reads STL (binary or ASCII) and OBJ (v and f lines); the variants are written as
 """
 import argparse, json, math, os, random, struct, subprocess, sys, tempfile
 
+from mesh_files import read_triangles
+
 root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 ap = argparse.ArgumentParser()
 ap.add_argument("--build", default=os.path.join(root, "build"))
@@ -18,30 +20,6 @@ ap.add_argument("--seed", type=int, default=1)
 ap.add_argument("models", nargs="+")
 args = ap.parse_args()
 vdbwrap = os.path.join(args.build, "client", "vdbwrap")
-
-
-def read_triangles(path):
-    data = open(path, "rb").read()
-    if path.lower().endswith(".obj"):
-        pts, tris = [], []
-        for line in data.decode(errors="replace").splitlines():
-            w = line.split()
-            if not w:
-                continue
-            if w[0] == "v":
-                pts.append(tuple(float(x) for x in w[1:4]))
-            elif w[0] == "f":
-                ids = [int(x.split("/")[0]) for x in w[1:]]
-                ids = [i - 1 if i > 0 else len(pts) + i for i in ids]
-                for k in range(1, len(ids) - 1):  # fan
-                    tris.append(pts[ids[0]] + pts[ids[k]] + pts[ids[k + 1]])
-        return tris
-    if len(data) >= 84 and len(data) == 84 + 50 * struct.unpack_from("<I", data, 80)[0]:
-        n = struct.unpack_from("<I", data, 80)[0]
-        return [struct.unpack_from("<9f", data, 84 + 50 * i + 12) for i in range(n)]
-    v = [float(w) for line in data.decode(errors="replace").splitlines() if line.strip().startswith("vertex")
-         for w in line.split()[1:4]]
-    return [tuple(v[i:i + 9]) for i in range(0, len(v) - 8, 9)]
 
 
 def rotation(rng):
