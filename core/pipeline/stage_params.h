@@ -19,10 +19,8 @@ namespace vdbwrap::pipeline {
 inline constexpr double kMostCellsAcross = 20000;
 // Unresolved contacts listed in the report, one per base cell.
 inline constexpr size_t kMostContactLocations = 100;
-// Refits around nodes held back over a base cell (refine_held_back): each costs stage 2 and the
-// projection again; a second one gained little (a few hundredths of a cell) for its cost.
-inline constexpr int kMostHeldBackRefits = 1;
-// Cells within this many base cells of such a node are refined.
+// Cells within this many base cells of a node held back over a base cell are refined
+// (refine_held_back).
 inline constexpr double kHeldBackRefineReach = 2;
 // Stage 4 samples the input's sharp edges every this fraction of the diagonal.
 inline constexpr double kFeatureSampleSpacing = 1e-3;

@@ -20,6 +20,7 @@ void report_contacts(WrapRun& run) {
   contact.rules = run.params.contact_prevention.size();
   contact.floor = run.controls.contact_floor;
   contact.unresolved_cells = run.refined.unresolved_contacts.size();
+  contact.unresolved_locations.clear();  // a second build (refine_held_back) lists them anew
   // One location per base cell is plenty to find them.
   std::set<std::array<long, 3>> seen;
   for (const Vec3& c : run.refined.unresolved_contacts) {
