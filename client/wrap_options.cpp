@@ -141,6 +141,13 @@ void WrapOptions::add_to(CLI::App* cmd, const std::string& threads_help) {
                     "collapses and tangential moves, held near the input)")
           ->group("Surface fit");
   bindings_.push_back({sr, [this](WrapParams& p) { p.remove_slivers = sliver_removal_; }});
+  CLI::Option* pr =
+      cmd->add_flag("--proximity-refinement,!--no-proximity-refinement", proximity_refinement_,
+                    "Where the wrap is still over 3/4 of a base cell from the input (nodes held back at coarse "
+                    "cells, faces bridging concave corners), move nodes onto the input and split far edges, each "
+                    "edit checked")
+          ->group("Surface fit");
+  bindings_.push_back({pr, [this](WrapParams& p) { p.proximity_refinement = proximity_refinement_; }});
   CLI::Option* ts =
       cmd->add_flag("--two-sided-sheets,!--no-two-sided-sheets", two_sided_sheets_,
                     "Where the volume lies on both sides of an input surface (open sheets, scans with holes), "

@@ -38,6 +38,7 @@ class WrapOptions {
   std::vector<std::string> control_volumes_, part_sizes_, contact_rules_;
   bool no_features_ = false, no_distances_ = false, no_remesh_ = false;
   bool sliver_removal_ = false;
+  bool proximity_refinement_ = false;
   bool two_sided_sheets_ = false;
   bool refine_far_cells_ = false;
   bool refine_held_back_ = false;

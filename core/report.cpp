@@ -91,6 +91,7 @@ json params_json(const WrapParams& p) {
               {"validity_rounds", p.validity_rounds},
               {"remesh", p.remesh},
               {"remove_slivers", p.remove_slivers},
+              {"proximity_refinement", p.proximity_refinement},
               {"two_sided_sheets", p.two_sided_sheets},
               {"float_coordinates", p.float_coordinates}};
 }
@@ -130,6 +131,15 @@ json quality_json(const QualityReport& q, const WrapParams& p) {
                 {"rebuilt_by_ear_clipping", q.remeshed_by_ear_clipping},
                 {"restored", q.restored},
                 {"refusals", q.refusals}}},
+              {"proximity_refinement",
+               {{"enabled", p.proximity_refinement},
+                {"ran", q.proximity_refinement.ran},
+                {"far_distance", q.proximity_refinement.far_distance},
+                {"far_triangles_before", q.proximity_refinement.far_triangles_before},
+                {"far_triangles_after", q.proximity_refinement.far_triangles_after},
+                {"pulls", q.proximity_refinement.pulls},
+                {"splits", q.proximity_refinement.splits},
+                {"refusals", q.proximity_refinement.refusals}}},
               {"sliver_removal",
                {{"enabled", p.remove_slivers},
                 {"ran", q.sliver_removal.ran},

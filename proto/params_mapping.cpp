@@ -133,6 +133,7 @@ WrapParams to_wrap_params(const pb::WrapParameters& in) {
   if (in.has_snap_features()) p.snap_features = in.snap_features();
   if (in.has_remesh()) p.remesh = in.remesh();
   if (in.has_remove_slivers()) p.remove_slivers = in.remove_slivers();
+  if (in.has_proximity_refinement()) p.proximity_refinement = in.proximity_refinement();
   if (in.has_two_sided_sheets()) p.two_sided_sheets = in.two_sided_sheets();
   if (in.has_refine_far_cells()) p.refine_far_cells = in.refine_far_cells();
   if (in.has_refine_held_back()) p.refine_held_back = in.refine_held_back();
@@ -208,6 +209,7 @@ pb::WrapParameters to_proto(const WrapParams& in) {
   out.set_coarsen_tolerance(in.coarsen_tolerance);
   out.set_remesh(in.remesh);
   out.set_remove_slivers(in.remove_slivers);
+  out.set_proximity_refinement(in.proximity_refinement);
   out.set_two_sided_sheets(in.two_sided_sheets);
   out.set_refine_far_cells(in.refine_far_cells);
   out.set_refine_held_back(in.refine_held_back);

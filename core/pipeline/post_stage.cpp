@@ -1,8 +1,10 @@
 // Stage 4: quality analysis of the fitted surface, remeshing of bad regions, the intersection
-// repair where anything still intersects, sliver removal; then the output's part labels.
+// repair where anything still intersects, proximity refinement, sliver removal; then the
+// output's part labels.
 #include "common/stage_timer.h"
 #include "pipeline/stage_params.h"
 #include "pipeline/stages.h"
+#include "post/proximity_refinement.h"
 #include "post/sliver_removal.h"
 
 namespace vdbwrap::pipeline {
@@ -45,6 +47,24 @@ void remesh(WrapRun& run) {
   if (report.quality.before.self_intersecting > 0 || !run.fitted.valid) run.repair_if_intersecting();
 }
 
+// Where the wrap is still far from the input: nodes onto it, far edges split (before the
+// sliver removal, which then works on the triangles the splits made).
+void refine_proximity(WrapRun& run) {
+  StageTimer timer("proximity", run.report.stages);
+  const post::RemeshParams rp = remesh_params(run.params, run.base, run.refined.grid->fine_size());
+  const post::ProximityRefinementParams pp =
+      post::proximity_refinement_params(run.base, rp.offset, 0.5 * rp.max_deviation, rp.float_coordinates);
+  if (run.progress)
+    run.progress->progress("remesh", 1.0,
+                           "bringing the parts of the wrap over 3/4 of a base cell off nearer the input");
+  const post::ProximityRefinementStats st = post::refine_proximity(run.surface, run.quality_ref, pp);
+  ProximityRefinementReport& out = run.report.quality.proximity_refinement;
+  out.ran = true, out.far_distance = pp.far_distance;
+  out.far_triangles_before = st.far_before, out.far_triangles_after = st.far_after;
+  out.pulls = st.pulls, out.splits = st.splits;
+  out.refusals = st.refusals;
+}
+
 }  // namespace
 
 void post_process(WrapRun& run) {
@@ -53,6 +73,8 @@ void post_process(WrapRun& run) {
                                   std::move(fitted.snapped), std::move(fitted.feature_edges)};
   set_quality_reference(run);
   remesh(run);
+  run.check_cancel();
+  if (run.params.proximity_refinement) refine_proximity(run);
   run.check_cancel();
   if (run.params.remove_slivers) {  // flips, collapses and tangential moves, held to the rebuilds' tolerance
     StageTimer timer("slivers", run.report.stages);

@@ -3,57 +3,26 @@
 #include <algorithm>
 #include <cmath>
 #include <initializer_list>
-#include <unordered_map>
-#include <unordered_set>
 
-#include "check/intersections.h"
 #include "common/closest_point.h"
-#include "common/edge_key.h"
-#include "common/grid_key.h"
-#include "common/float_round.h"
-#include "common/cell_lists.h"
-#include "common/triangle_buckets.h"
 #include "common/vec.h"
+#include "post/local_edits.h"
 
 namespace vdbwrap::post {
 namespace {
 
-constexpr uint32_t kNone = UINT32_MAX;
 constexpr double kDeg = M_PI / 180.0;
 
-// A change weighed before it is made: triangle slots get new corners (or die), and at most
-// one point moves.
-struct Change {
-  std::vector<uint32_t> slots;
-  std::vector<Tri> tris;      // tris[i] replaces slots[i]
-  std::vector<uint8_t> dies;  // slot i is removed
-  uint32_t moved = kNone;
-  Vec3 to{0, 0, 0};
-  void clear() { slots.clear(), tris.clear(), dies.clear(), moved = kNone; }
-  void add(uint32_t slot, const Tri& t, bool die = false) {
-    slots.push_back(slot), tris.push_back(t), dies.push_back(die);
-  }
-};
+LocalEditBounds edit_bounds(const SliverRemovalParams& p) {
+  LocalEditBounds b;
+  b.offset = p.offset, b.feature_tolerance = p.feature_tolerance, b.float_coordinates = p.float_coordinates;
+  return b;
+}
 
-class SliverRemover {
+class SliverRemover : LocalEdits {
  public:
   SliverRemover(PostSurface& s, const QualityReference& ref, const SliverRemovalParams& prm)
-      : s_(s), ref_(ref), prm_(prm), buckets_(s.points, s.triangles, bucket_cell(s)) {
-    s_.locked.resize(s_.points.size(), 0);
-    s_.cell_size.resize(s_.points.size(), 0);
-    alive_.assign(s_.triangles.size(), 1);
-    touched_.assign(s_.points.size(), -2);
-    vt_.resize(s_.points.size());
-    for (uint32_t f = 0; f < s_.triangles.size(); ++f)
-      for (uint32_t v : s_.triangles[f]) vt_[v].push_back(f);
-    feature_.resize(s_.points.size());
-    for (const auto& [a, b] : s_.feature_edges) {
-      if (a == b || a >= feature_.size() || b >= feature_.size() || !is_edge(a, b)) continue;
-      if (std::find(feature_[a].begin(), feature_[a].end(), b) == feature_[a].end())
-        feature_[a].push_back(b), feature_[b].push_back(a);
-    }
-    samples_ = CellLists<>(bucket_cell(s_));
-    for (uint32_t i = 0; i < ref_.feature_samples.size(); ++i) samples_.add(ref_.feature_samples[i] + ref_.origin, i);
+      : LocalEdits(s, ref, edit_bounds(prm)), prm_(prm) {
     cos_flat_ = std::cos(prm_.flat_angle_deg * kDeg);
     cos_turn_ = std::cos(prm_.max_normal_turn_deg * kDeg);
   }
@@ -82,62 +51,11 @@ class SliverRemover {
     }
     stats_.slivers_after = slivers().size();
     if (stats_.flips + stats_.collapses + stats_.moves > 0) compact();
+    stats_.refusals = refusals();
     return stats_;
   }
 
  private:
-  static double bucket_cell(const PostSurface& s) {
-    // Three mean edges: most triangles fall in one or two buckets.
-    double sum = 0;
-    size_t n = 0;
-    for (size_t f = 0; f < s.triangles.size(); f += 7, ++n)
-      sum += norm(s.points[s.triangles[f][1]] - s.points[s.triangles[f][0]]);
-    return n && sum > 0 ? 3 * sum / double(n) : 1.0;
-  }
-
-  bool refuse(const char* why) {
-    ++stats_.refusals[why];
-    return false;
-  }
-
-  // The input's sharp edges near the change stay as near the surface as they were (or within
-  // the feature tolerance): each sample within reach of the old triangles is as near the new ones.
-  bool keeps_sharp_edges(const Change& c, const std::vector<check::Corners>& made_at) const {
-    if (samples_.empty()) return true;
-    Box3 box;
-    for (uint32_t f : c.slots)
-      for (uint32_t v : s_.triangles[f]) box.add(s_.points[v]);
-    const double reach = 4 * prm_.feature_tolerance;
-    const Vec3 r{reach, reach, reach};
-    const bool lost = samples_.for_lists(
-        samples_.cell_of(box.lo - r), samples_.cell_of(box.hi + r), [&](const std::vector<uint32_t>& list) {
-          for (uint32_t i : list) {
-            const Vec3 q = ref_.feature_samples[i] + ref_.origin;
-            if (box.squared_distance(q) > reach * reach) continue;
-            double before = INFINITY, after = INFINITY;
-            for (uint32_t f : c.slots) {
-              const Tri& o = s_.triangles[f];
-              before = std::min(before,
-                                norm2(q - closest_on_triangle(q, s_.points[o[0]], s_.points[o[1]], s_.points[o[2]])));
-            }
-            before = std::sqrt(before);
-            if (before > reach) continue;  // held by other triangles, or out of reach
-            for (const auto& at : made_at)
-              after = std::min(after, norm2(q - closest_on_triangle(q, at[0], at[1], at[2])));
-            if (std::sqrt(after) > std::max(before, prm_.feature_tolerance)) return true;
-          }
-          return false;
-        });
-    return !lost;
-  }
-
-  Vec3 at(uint32_t v, const Change& c) const { return v == c.moved ? c.to : s_.points[v]; }
-
-  double min_angle(uint32_t f) const {
-    const Tri& t = s_.triangles[f];
-    return min_angle_deg(s_.points[t[0]], s_.points[t[1]], s_.points[t[2]]);
-  }
-
   // Live triangles under the target angle, the worst first.
   std::vector<uint32_t> slivers() const {
     std::vector<std::pair<double, uint32_t>> bad;
@@ -150,78 +68,6 @@ class SliverRemover {
     std::vector<uint32_t> out;
     for (const auto& b : bad) out.push_back(b.second);
     return out;
-  }
-
-  // A node that must not move or vanish: snapped onto a feature curve, or on a traced feature edge.
-  bool fixed(uint32_t v) const { return s_.locked[v] || !feature_[v].empty(); }
-  bool feature_edge(uint32_t a, uint32_t b) const {
-    return std::find(feature_[a].begin(), feature_[a].end(), b) != feature_[a].end();
-  }
-  bool is_edge(uint32_t a, uint32_t b) const {
-    for (uint32_t f : vt_[a]) {
-      const Tri& t = s_.triangles[f];
-      if (t[0] == b || t[1] == b || t[2] == b) return true;
-    }
-    return false;
-  }
-
-  void neighbours(uint32_t v, std::vector<uint32_t>& out) const {
-    out.clear();
-    for (uint32_t f : vt_[v])
-      for (uint32_t w : s_.triangles[f])
-        if (w != v) out.push_back(w);
-    std::sort(out.begin(), out.end());
-    out.erase(std::unique(out.begin(), out.end()), out.end());
-  }
-
-  // The two triangles on edge (a, b): the one with a -> b first. False unless there are exactly two.
-  bool edge_triangles(uint32_t a, uint32_t b, uint32_t& ab, uint32_t& ba) const {
-    ab = ba = kNone;
-    int count = 0;
-    for (uint32_t f : vt_[a]) {
-      const Tri& t = s_.triangles[f];
-      for (int i = 0; i < 3; ++i) {
-        if (t[i] == a && t[(i + 1) % 3] == b) ab = f, ++count;
-        if (t[i] == b && t[(i + 1) % 3] == a) ba = f, ++count;
-      }
-    }
-    return count == 2 && ab != kNone && ba != kNone;
-  }
-
-  static uint32_t third(const Tri& t, uint32_t a, uint32_t b) {
-    for (uint32_t v : t)
-      if (v != a && v != b) return v;
-    return kNone;
-  }
-
-  // The input's nearest point to q (output frame), the node placed the wrap's offset off it on
-  // q's side; q itself when the input is not near (a bridge over a gap stays a bridge).
-  Vec3 onto_input(const Vec3& q, double cell) const {
-    decltype(ref_.closest(q)) hit;  // the index's Hit
-    if (!ref_.closest_within(q - ref_.origin, 0.5 * cell, hit)) return prm_.float_coordinates ? round_to_float(q) : q;
-    const Vec3 foot = hit.point + ref_.origin;
-    const double d = norm(q - foot);
-    Vec3 p = d > 1e-9 * cell ? foot + (q - foot) * (std::min(prm_.offset, d) / d) : foot;
-    return prm_.float_coordinates ? round_to_float(p) : p;
-  }
-
-  double distance_to_input(const Vec3& q) const { return std::sqrt(ref_.closest(q - ref_.origin).squared_distance); }
-
-  // Distances to the input: the largest, and the mean over the patch's area (a sliver, with
-  // hardly any area, hardly counts: removing one that lies on the input's edge does not make
-  // the rest look farther). Without any area, the plain mean.
-  struct Spread {
-    double worst = 0, sum = 0, area = 0, plain_sum = 0;
-    size_t n = 0;
-    double mean() const { return area > 0 ? sum / area : n ? plain_sum / double(n) : 0.0; }
-  };
-  // Distances to the input of a triangle's centroid and edge midpoints.
-  void sample(const Vec3& a, const Vec3& b, const Vec3& c, Spread& s) const {
-    const double quarter = 0.25 * norm(area_vector(a, b, c));
-    for (const Vec3& q : {(a + b + c) * (1.0 / 3.0), (a + b) * 0.5, (b + c) * 0.5, (c + a) * 0.5}) {
-      const double d = distance_to_input(q);
-      s.worst = std::max(s.worst, d), s.sum += quarter * d, s.area += quarter, s.plain_sum += d, ++s.n;
-    }
   }
 
   // Is the change an improvement that keeps the surface valid and near the input?
@@ -280,52 +126,8 @@ class SliverRemover {
     if (new_d.mean() > old_d.mean() + 0.1 * prm_.max_deviation) return refuse("farther on average");
     if (!keeps_sharp_edges(c, made_at)) return refuse("sharp edge farther");
     // No new triangle meets another: among themselves, then the rest of the surface.
-    for (size_t i = 0; i < made.size(); ++i)
-      for (size_t j = i + 1; j < made.size(); ++j)
-        if (check::triangle_pair_intersects(made_at[i], made[i], made_at[j], made[j])) return refuse("folds");
-    std::unordered_set<uint32_t> replaced(c.slots.begin(), c.slots.end());
-    for (size_t i = 0; i < made.size(); ++i) {
-      Box3 box;
-      for (const Vec3& p : made_at[i]) box.add(p);
-      bool hit = false;
-      buckets_.for_each_in_box(box, [&](uint32_t g) {
-        if (hit || !alive_[g] || replaced.count(g)) return;
-        const Tri& o = s_.triangles[g];
-        const check::Corners og = {s_.points[o[0]], s_.points[o[1]], s_.points[o[2]]};
-        hit = check::triangle_pair_intersects(made_at[i], made[i], og, o);
-      });
-      if (hit) return refuse("intersects");
-    }
+    if (const char* why = breaks_surface(c, made, made_at)) return refuse(why);
     return true;
-  }
-
-  // Did node v or a neighbour change in this round or the one before?
-  bool changed_near(uint32_t v) const {
-    if (touched_[v] + 1 >= round_) return true;
-    for (uint32_t f : vt_[v])
-      for (uint32_t w : s_.triangles[f])
-        if (touched_[w] + 1 >= round_) return true;
-    return false;
-  }
-
-  void apply(const Change& c) {
-    if (c.moved != kNone) s_.points[c.moved] = c.to;
-    for (size_t i = 0; i < c.slots.size(); ++i)
-      for (uint32_t v : s_.triangles[c.slots[i]]) touched_[v] = round_;
-    for (size_t i = 0; i < c.slots.size(); ++i) {
-      const uint32_t f = c.slots[i];
-      for (uint32_t v : s_.triangles[f]) {
-        auto& list = vt_[v];
-        list.erase(std::remove(list.begin(), list.end(), f), list.end());
-      }
-      if (c.dies[i]) {
-        alive_[f] = 0;
-        continue;
-      }
-      s_.triangles[f] = c.tris[i];
-      for (uint32_t v : c.tris[i]) vt_[v].push_back(f);
-      buckets_.move(f, true);
-    }
   }
 
   // A sliver is fixed by the first operation that passes: a cap (an angle over 100 degrees)
@@ -498,32 +300,11 @@ class SliverRemover {
     const Vec3 &a = s_.points[feature_[v][0]], &b = s_.points[feature_[v][1]], p = s_.points[v];
     if (to_segment(p, a, b) > prm_.feature_tolerance) return false;
     const Vec3 middle = (a + b) * 0.5;
-    auto stored = [&](const Vec3& x) { return prm_.float_coordinates ? round_to_float(x) : x; };
     return move_to_first_acceptable(v, {stored(middle), stored((p + middle) * 0.5)});
   }
 
-  // Live triangles and the points they use, with their data.
-  void compact() {
-    std::vector<uint32_t> remap;
-    PostSurface out = live_part(s_, alive_, remap);
-    for (uint32_t a = 0; a < feature_.size(); ++a)
-      for (uint32_t b : feature_[a])
-        if (a < b && remap[a] != kNone && remap[b] != kNone) out.feature_edges.push_back({remap[a], remap[b]});
-    s_ = std::move(out);
-  }
-
-  PostSurface& s_;
-  const QualityReference& ref_;
   SliverRemovalParams prm_;
-  TriangleBuckets buckets_;
-  std::vector<uint8_t> alive_;
-  std::vector<std::vector<uint32_t>> vt_;       // live triangles at each node
-  std::vector<std::vector<uint32_t>> feature_;  // traced feature edges at each node
   double cos_flat_ = 1, cos_turn_ = 1;
-  int round_ = 0;
-  std::vector<int> touched_;  // per node: the last round that changed a triangle at it
-  CellLists<> samples_;       // the input's sharp-edge samples
-  Change change_;
   SliverRemovalStats stats_;
 };
 

@@ -38,6 +38,7 @@ TEST(ParamsMapping, RoundTripsEveryFieldAndRefusesOutOfRange) {
   p.snap_features = !vdbwrap::WrapParams().snap_features;
   p.remesh = !vdbwrap::WrapParams().remesh;
   p.remove_slivers = !vdbwrap::WrapParams().remove_slivers;
+  p.proximity_refinement = !vdbwrap::WrapParams().proximity_refinement;
   p.two_sided_sheets = !vdbwrap::WrapParams().two_sided_sheets;
   p.refine_far_cells = !vdbwrap::WrapParams().refine_far_cells;
   p.refine_held_back = !vdbwrap::WrapParams().refine_held_back;
@@ -60,6 +61,7 @@ TEST(ParamsMapping, RoundTripsEveryFieldAndRefusesOutOfRange) {
   EXPECT_EQ(q.snap_features, p.snap_features);
   EXPECT_EQ(q.remesh, p.remesh);
   EXPECT_EQ(q.remove_slivers, p.remove_slivers);
+  EXPECT_EQ(q.proximity_refinement, p.proximity_refinement);
   EXPECT_EQ(q.two_sided_sheets, p.two_sided_sheets);
   EXPECT_EQ(q.refine_far_cells, p.refine_far_cells);
   EXPECT_EQ(q.refine_held_back, p.refine_held_back);

@@ -133,6 +133,10 @@ struct WrapParams {
   // Stage 4: triangles with an angle under 10 degrees left after the rebuilds are removed by edge
   // flips, collapses and tangential moves checked against the input.
   bool remove_slivers = true;
+  // Stage 4, before the sliver removal: where the wrap is still over 3/4 of a base cell from the
+  // input (nodes held back at coarse cells, faces bridging concave corners), nodes are moved onto
+  // the input and far edges split, each edit checked against the input and the surface.
+  bool proximity_refinement = true;
   QualityThresholds quality;  // what counts as a defect (fixed; listed in the report)
 
   // The output will be stored in single precision (binary STL): coordinates are rounded to

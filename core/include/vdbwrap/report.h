@@ -105,6 +105,16 @@ struct SliverRemovalReport {
   std::map<std::string, size_t> refusals;
 };
 
+// Stage 4's proximity refinement (before the sliver removal): triangles with a point farther
+// than its distance from the input before and after, the edits applied, and why others were refused.
+struct ProximityRefinementReport {
+  bool ran = false;
+  double far_distance = 0;  // model units
+  size_t far_triangles_before = 0, far_triangles_after = 0;
+  size_t pulls = 0, splits = 0;  // nodes moved onto the input; edges split
+  std::map<std::string, size_t> refusals;
+};
+
 // Stage 4: the quality analysis before and after the post-processing (remeshing of bad regions
 // and, when anything still intersects, the intersection repair), and what each step did.
 struct QualityReport {
@@ -114,6 +124,7 @@ struct QualityReport {
   size_t remeshed_by_ear_clipping = 0;     // rebuilt by the fallback
   size_t restored = 0;                     // rebuilt, but the rebuild was refused: put back as it was
   std::map<std::string, size_t> refusals;  // why rebuilds were refused
+  ProximityRefinementReport proximity_refinement;
   SliverRemovalReport sliver_removal;
   // Intersection repair (spec, second paper) on the wrap when anything still intersected.
   size_t repair_runs = 0;

@@ -1,0 +1,244 @@
+#include "post/proximity_refinement.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+
+#include <tbb/parallel_for.h>
+
+#include "common/vec.h"
+#include "post/local_edits.h"
+
+namespace vdbwrap::post {
+namespace {
+
+constexpr double kDeg = M_PI / 180.0;
+
+LocalEditBounds edit_bounds(const ProximityRefinementParams& p) {
+  LocalEditBounds b;
+  b.offset = p.offset, b.feature_tolerance = p.feature_tolerance, b.float_coordinates = p.float_coordinates;
+  return b;
+}
+
+// The distance to the input, or an upper bound of it: a point within a fiftieth of `far` (most
+// of the wrap lies on the input) gets that, from a query bounded by so small a radius,
+// which is cheap; a point within `far` its distance; the others the full query. The index
+// itself, not the memo: these points are asked once per round, and inserts cost more than
+// they save.
+double distance_within(const QualityReference& ref, const Vec3& q, double far) {
+  const Vec3 local = q - ref.origin;
+  if (ref.input->within(local, 0.02 * far)) return 0.02 * far;
+  mesh::SurfaceIndex::Hit hit;
+  if (ref.input->closest_within(local, far, hit)) return std::sqrt(hit.squared_distance);
+  return std::sqrt(ref.input->closest(local).squared_distance);
+}
+
+// The farthest a point of the triangle can be from its nearest corner: the circumradius of
+// an acute triangle, half the longest edge of any other.
+double reach_from_corners(const Vec3& a, const Vec3& b, const Vec3& c) {
+  std::array<double, 3> e = {norm2(b - c), norm2(c - a), norm2(a - b)};
+  std::sort(e.begin(), e.end());
+  if (e[2] >= e[0] + e[1]) return 0.5 * std::sqrt(e[2]);
+  const double area2 = norm(area_vector(a, b, c));  // twice the area
+  return area2 > 0 ? std::sqrt(e[0] * e[1] * e[2]) / (2 * area2) : 0.5 * std::sqrt(e[2]);
+}
+
+// Triangles (those alive, when `alive` is not empty) with a corner, an edge midpoint or the
+// centroid farther than `far` from the input, the farthest first; `dist`: each point's
+// distance (or a bound, see distance_within). A triangle whose farthest corner plus its reach
+// from the corners is within `far` cannot have such a point, and is not sampled.
+std::vector<uint32_t> far_triangles(const PostSurface& s, const std::vector<uint8_t>& alive,
+                                    const QualityReference& ref, double far, std::vector<double>& dist) {
+  dist.assign(s.points.size(), 0);
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, s.points.size(), 512), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t v = r.begin(); v != r.end(); ++v) dist[v] = distance_within(ref, s.points[v], far);
+  });
+  const size_t nt = s.triangles.size();
+  std::vector<double> worst(nt, 0);
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, nt, 512), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t f = r.begin(); f != r.end(); ++f) {
+      if (!alive.empty() && !alive[f]) continue;
+      const Tri& t = s.triangles[f];
+      const Vec3 &a = s.points[t[0]], &b = s.points[t[1]], &c = s.points[t[2]];
+      double w = std::max({dist[t[0]], dist[t[1]], dist[t[2]]});
+      if (w <= far && w + reach_from_corners(a, b, c) > far)
+        for (const Vec3& q : {(a + b + c) * (1.0 / 3.0), (a + b) * 0.5, (b + c) * 0.5, (c + a) * 0.5})
+          w = std::max(w, distance_within(ref, q, far));
+      worst[f] = w;
+    }
+  });
+  std::vector<std::pair<double, uint32_t>> order;
+  for (uint32_t f = 0; f < nt; ++f)
+    if (worst[f] > far) order.push_back({-worst[f], f});
+  std::sort(order.begin(), order.end());
+  std::vector<uint32_t> out;
+  for (const auto& o : order) out.push_back(o.second);
+  return out;
+}
+
+class ProximityRefiner : LocalEdits {
+ public:
+  ProximityRefiner(PostSurface& s, const QualityReference& ref, const ProximityRefinementParams& prm)
+      : LocalEdits(s, ref, edit_bounds(prm)), prm_(prm), cos_turn_(std::cos(prm.max_normal_turn_deg * kDeg)) {}
+
+  // `far`, `dist`: the far triangles and the points' distances, found before the engine was built.
+  ProximityRefinementStats run(std::vector<uint32_t> far, std::vector<double> dist) {
+    dist_ = std::move(dist);
+    // Attempts are bounded too: where much of the wrap is far (a wrap around both sides of a
+    // soup, bridges over openings), most are refused, each after distance queries.
+    const size_t budget = std::max<size_t>(1000, size_t(prm_.budget * double(s_.triangles.size())));
+    bool last_round_changed = false;
+    stats_.far_before = far.size();
+    for (round_ = 0; round_ <= prm_.rounds; ++round_) {
+      if (round_ > 0 && !last_round_changed) break;  // the far triangles are those of the round before
+      if (round_ > 0) far = far_triangles(s_, alive_, ref_, prm_.far_distance, dist_);
+      stats_.far_after = far.size();
+      if (round_ == prm_.rounds || far.empty()) break;
+      const size_t edits = stats_.pulls + stats_.splits;
+      for (uint32_t f : far) {
+        if (stats_.pulls + stats_.splits >= budget || attempts_ >= budget) break;
+        if (alive_[f]) ++attempts_, bring_nearer(f);
+      }
+      last_round_changed = stats_.pulls + stats_.splits > edits;
+    }
+    stats_.refusals = refusals();
+    return stats_;
+  }
+
+ private:
+  // The triangle's farthest corner goes onto the input when it is far; else (or when that is
+  // refused) its far edges are split, the farthest midpoint first.
+  void bring_nearer(uint32_t f) {
+    const Tri t = s_.triangles[f];
+    uint32_t corner = kNone;
+    for (uint32_t v : t)
+      if (v < dist_.size() && dist_[v] > prm_.far_distance && !fixed(v) && (corner == kNone || dist_[v] > dist_[corner]))
+        corner = v;
+    if (corner != kNone && pull(corner)) return;
+    std::array<std::pair<double, int>, 3> edges;
+    for (int i = 0; i < 3; ++i) edges[i] = {-distance_to_input((s_.points[t[i]] + s_.points[t[(i + 1) % 3]]) * 0.5), i};
+    std::sort(edges.begin(), edges.end());
+    for (const auto& [d, i] : edges)
+      if (-d > prm_.far_distance && split(t[i], t[(i + 1) % 3])) return;
+  }
+
+  // Node v onto the input, or as far toward it as the checks allow.
+  bool pull(uint32_t v) {
+    const Vec3 p = s_.points[v], target = onto_input_anywhere(p);
+    for (double t : {1.0, 0.75, 0.5, 0.25}) {
+      change_.clear();
+      change_.moved = v;
+      change_.to = stored(lerp(p, target, t));
+      for (uint32_t g : vt_[v]) change_.add(g, s_.triangles[g]);
+      if (!nearer(change_)) continue;
+      apply(change_);
+      ++stats_.pulls;
+      return true;
+    }
+    return false;
+  }
+
+  // Edge (a, b) split at its midpoint, the new node placed on the input.
+  bool split(uint32_t a, uint32_t b) {
+    if (feature_edge(a, b)) return false;  // a traced feature edge stays one edge
+    uint32_t f1, f2;
+    if (!edge_triangles(a, b, f1, f2)) return false;
+    const uint32_t c = third(s_.triangles[f1], a, b), d = third(s_.triangles[f2], a, b);
+    if (c == d) return false;
+    const Vec3 mid = (s_.points[a] + s_.points[b]) * 0.5, target = onto_input_anywhere(mid);
+    if (norm(target - mid) > prm_.max_reach) return refuse("split: out of reach");
+    const uint32_t m = uint32_t(s_.points.size());
+    change_.clear();
+    change_.added = m;
+    change_.added_at = target;
+    change_.added_cell = std::min(s_.cell_size[a], s_.cell_size[b]);
+    change_.add(f1, Tri{a, m, c});
+    change_.add(f2, Tri{b, m, d});
+    change_.add(Change::kNoSlot, Tri{m, b, c});
+    change_.add(Change::kNoSlot, Tri{m, a, d});
+    if (!nearer(change_)) return false;
+    apply(change_);
+    ++stats_.splits;
+    return true;
+  }
+
+  // Ten points of the triangle, corners included (a held-back node is the farthest point of
+  // its fan): the barycentric grid of step 1/3. Centroid and midpoints alone missed the far
+  // parts of the long triangles a split makes along a concave crease.
+  void sample_with_corners(const Vec3& a, const Vec3& b, const Vec3& c, Spread& s) const {
+    const double tenth = 0.05 * norm(area_vector(a, b, c));
+    for (int i = 0; i <= 3; ++i)
+      for (int j = 0; i + j <= 3; ++j) {
+        const double d = distance_to_input((a * double(i) + b * double(j) + c * double(3 - i - j)) * (1.0 / 3.0));
+        s.worst = std::max(s.worst, d), s.sum += tenth * d, s.area += tenth, s.plain_sum += d, ++s.n;
+      }
+  }
+
+  // Does the change bring the patch nearer the input and keep the surface valid, its
+  // triangles no worse shaped and the input's sharp edges as near?
+  bool nearer(const Change& c) {
+    const char* kind = c.added != kNone ? "split: " : "pull: ";
+    auto no = [&](const char* why) { return refuse(std::string(kind) + why); };
+    double old_min = 180, new_min = 180;
+    Spread old_d, new_d;
+    std::vector<Tri> made;
+    std::vector<check::Corners> made_at;
+    for (size_t i = 0; i < c.slots.size(); ++i) {
+      const Tri& t = c.tris[i];
+      const check::Corners at = {this->at(t[0], c), this->at(t[1], c), this->at(t[2], c)};
+      if (check::triangle_is_degenerate(at, t)) return no("degenerate");
+      if (c.slots[i] != Change::kNoSlot) {
+        const Tri& o = s_.triangles[c.slots[i]];
+        const Vec3 &oa = s_.points[o[0]], &ob = s_.points[o[1]], &oc = s_.points[o[2]];
+        old_min = std::min(old_min, min_angle_deg(oa, ob, oc));
+        if (dot(normalized(area_vector(oa, ob, oc)), normalized(area_vector(at[0], at[1], at[2]))) < cos_turn_)
+          return no("turns");
+      }
+      new_min = std::min(new_min, min_angle_deg(at[0], at[1], at[2]));
+      made.push_back(t), made_at.push_back(at);
+    }
+    if (new_min < std::min(old_min, prm_.min_angle_deg)) return no("sliver");
+    for (uint32_t f : c.slots)
+      if (f != Change::kNoSlot) {
+        const Tri& o = s_.triangles[f];
+        sample_with_corners(s_.points[o[0]], s_.points[o[1]], s_.points[o[2]], old_d);
+      }
+    for (const check::Corners& at : made_at) sample_with_corners(at[0], at[1], at[2], new_d);
+    // The integral of the distance over the patch, not its mean, must drop: a split that dips
+    // into a concave crease adds area, and area still off the input raises the wrap's mean.
+    if (new_d.worst > old_d.worst || !(new_d.sum < old_d.sum)) return no("no nearer");
+    if (!keeps_sharp_edges(c, made_at)) return no("sharp edge farther");
+    if (const char* why = breaks_surface(c, made, made_at)) return no(why);
+    return true;
+  }
+
+  ProximityRefinementParams prm_;
+  double cos_turn_;
+  size_t attempts_ = 0;        // triangles worked on
+  std::vector<double> dist_;  // per node: its distance to the input at the start of the round
+  ProximityRefinementStats stats_;
+};
+
+}  // namespace
+
+ProximityRefinementParams proximity_refinement_params(double base, double offset, double feature_tolerance,
+                                                      bool float_coordinates) {
+  ProximityRefinementParams p;
+  p.far_distance = 0.75 * base, p.max_reach = 1.5 * base;
+  p.offset = offset, p.feature_tolerance = feature_tolerance, p.float_coordinates = float_coordinates;
+  return p;
+}
+
+ProximityRefinementStats refine_proximity(PostSurface& surface, const QualityReference& ref,
+                                          const ProximityRefinementParams& params) {
+  if (surface.triangles.empty() || !ref.input || !(params.far_distance > 0)) return {};
+  // Most wraps have no far triangle: then the engine (adjacency, buckets, sharp-edge samples) is
+  // not built at all.
+  std::vector<double> dist;
+  std::vector<uint32_t> far = far_triangles(surface, {}, ref, params.far_distance, dist);
+  if (far.empty()) return {};
+  ProximityRefiner r(surface, ref, params);
+  return r.run(std::move(far), std::move(dist));
+}
+
+}  // namespace vdbwrap::post
