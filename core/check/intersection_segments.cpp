@@ -4,10 +4,12 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <cmath>
 #include <mutex>
 
 #include "check/exact_kernel.h"
 #include "check/intersections.h"
+#include "common/vec.h"
 
 namespace vdbwrap::check {
 
@@ -23,7 +25,10 @@ using pair_search::to_point;
 // pair with itself), and a coplanar pair (duplicates, overlaps: they meet in an area or along
 // their own edges), has no intersection line; both are settled by exact predicates first.
 std::vector<Segment> intersection_segments(const std::vector<Vec3>& points, const std::vector<Tri>& triangles,
-                                           const std::vector<TrianglePair>& pairs) {
+                                           const std::vector<TrianglePair>& pairs, double min_angle_deg) {
+  // Planes at min_angle_deg or less: |cos| of the normals' angle at least this (0: none).
+  const double shallow_cos = min_angle_deg > 0 ? std::cos(min_angle_deg * M_PI / 180.0) : 2.0;
+  auto unit_normal = [&](const Tri& t) { return normalized(area_vector(points[t[0]], points[t[1]], points[t[2]])); };
   using EK = CGAL::Exact_predicates_exact_constructions_kernel;
   auto exact = [&](uint32_t v) { return EK::Point_3(points[v][0], points[v][1], points[v][2]); };
   std::vector<Segment> out;
@@ -40,6 +45,8 @@ std::vector<Segment> intersection_segments(const std::vector<Vec3>& points, cons
       if (CGAL::coplanar(px[0], px[1], px[2], py[0]) && CGAL::coplanar(px[0], px[1], px[2], py[1]) &&
           CGAL::coplanar(px[0], px[1], px[2], py[2]))
         continue;
+      // Not collinear, so both normals are defined (doubles: only a near tie can go either way).
+      if (shallow_cos <= 1.0 && std::abs(dot(unit_normal(x), unit_normal(y))) >= shallow_cos) continue;
       const EK::Triangle_3 tx(exact(x[0]), exact(x[1]), exact(x[2]));
       const EK::Triangle_3 ty(exact(y[0]), exact(y[1]), exact(y[2]));
       const auto result = CGAL::intersection(tx, ty);

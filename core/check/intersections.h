@@ -74,9 +74,12 @@ struct Segment {
 };
 
 // The segments along which the given pairs cross (pairs that meet in a point or overlap
-// in a plane give no segment).
+// in a plane give no segment). Pairs whose planes meet at `min_angle_deg` or less give none
+// either: their surfaces cross without a sharp edge (the feature angle's sense), and nearly
+// coplanar overlaps, whose lines are rounding noise, give nothing to construct (the exact
+// kernel's slowest case).
 std::vector<Segment> intersection_segments(const std::vector<Vec3>& points, const std::vector<Tri>& triangles,
-                                           const std::vector<TrianglePair>& pairs);
+                                           const std::vector<TrianglePair>& pairs, double min_angle_deg = 0);
 
 // Faces of a closed 2-manifold triangle mesh that intersect another face or are
 // degenerate, by CGAL::Polygon_mesh_processing::self_intersections (parallel).

@@ -157,7 +157,8 @@ PreparedInput prepare(const Mesh& input, const PrepareParams& params, ProgressSi
 
   if (progress) progress->progress("prepare", 0.7, "finding self-intersection lines");
   out.intersecting_pairs = check::find_intersecting_pairs(m.points, m.triangles, check::SoupKind::kInput, &edges);
-  for (const auto& seg : check::intersection_segments(m.points, m.triangles, out.intersecting_pairs))
+  for (const auto& seg :
+       check::intersection_segments(m.points, m.triangles, out.intersecting_pairs, params.feature_angle_deg))
     out.intersections.push_back({seg.a, seg.b, seg.tri_a, seg.tri_b});
   if (progress) progress->progress("prepare", 1.0, "done");
   return out;
