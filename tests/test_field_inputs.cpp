@@ -17,6 +17,7 @@
 #include "check/intersections.h"
 #include "common/vec.h"
 #include "grid/adaptive_grid.h"
+#include "hostile_meshes.h"
 #include "vdbwrap/io.h"
 #include "test_meshes.h"
 #include "vdbwrap/errors.h"
@@ -403,6 +404,29 @@ TEST_F(FieldInputs, NearlyCoplanarOverlappingTrianglesWrapInTime) {
   const Mesh wrapped = io::read_mesh(out);
   const auto verdict = check::cgal_verdict(wrapped.points, wrapped.triangles);
   EXPECT_TRUE(verdict.valid_polygon_mesh && verdict.closed && !verdict.self_intersects && verdict.outward);
+}
+
+// `vdbwrap repair` on inputs whose intersecting regions hold triangles with a repeated corner:
+// make_hostile's degenerate solid (seed 2), and its small dirty solid 1e7 from the origin in
+// binary STL, where float32 collapses corners together. The repair aborted with heap
+// corruption or a segmentation fault when its refinement split an edge of such a triangle
+// (found by the 2026-11-26 sweep). It ends with exit 0 or 4 (intersections left) and a
+// readable output.
+TEST_F(FieldInputs, RepairOfTrianglesWithRepeatedCornersEndsCleanly) {
+  const std::vector<std::pair<std::string, std::pair<int, uint32_t>>> inputs = {
+      {"degenerate", {1, 2}}, {"far_offset_float", {1, 1}}, {"far_offset_float", {3, 1}}};
+  for (const auto& [kind, scale_seed] : inputs) {
+    const vdbwrap::stress::HostileMesh h = vdbwrap::stress::make_hostile(kind, scale_seed.first, scale_seed.second);
+    SCOPED_TRACE(h.file_name);
+    const std::string in = (dir_ / h.file_name).string(), out = (dir_ / "repaired.obj").string();
+    std::ofstream(in, std::ios::binary) << h.bytes;
+    const int status =
+        std::system((std::string(VDBWRAP_CLI) + " repair " + in + " -o " + out + " -q > /dev/null 2>&1").c_str());
+    ASSERT_TRUE(WIFEXITED(status)) << "ended by a signal";
+    const int code = WEXITSTATUS(status);
+    EXPECT_TRUE(code == 0 || code == 4) << "exit " << code;
+    EXPECT_GT(io::read_mesh(out).triangles.size(), 0u);
+  }
 }
 
 }  // namespace

@@ -13,6 +13,7 @@
 #include "repair/refill.h"
 #include "repair/regions.h"
 #include "repair/stitch.h"
+#include "repair/work.h"
 #include "test_meshes.h"
 #include "vdbwrap/repair.h"
 
@@ -153,6 +154,43 @@ void print(const RepairReport& r, const std::string& name) {
 }  // namespace
 
 // ---- building blocks ------------------------------------------------------------------
+
+// A degenerate triangle with a repeated corner (0 1 0) is listed twice at vertex 0. Splitting
+// edge 0-1 cut it twice: the second time it had no edge 0-1 left, the search for it read past
+// the triangle's corners and an entry missing from the vertex lists was erased (heap
+// corruption: `vdbwrap repair` aborted with "double free or corruption" on make_hostile's
+// far_offset_float, found by the 2026-11-26 sweep). Now it is cut once and the per-corner
+// lists stay those of the triangles.
+TEST(RepairWork, SplittingAnEdgeOfATriangleWithARepeatedCornerKeepsTheVertexLists) {
+  Work w;
+  w.points = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {1, 1, 0}};
+  w.origin = w.points;
+  w.tris = {{0, 1, 0}, {1, 0, 2}, {0, 1, 3}, {1, 1, 2}};
+  w.part.assign(w.tris.size(), 0);
+  w.region_of.assign(w.tris.size(), 0);
+  w.touched.assign(w.tris.size(), 0);
+  std::vector<std::vector<uint32_t>> vf(w.points.size());
+  for (uint32_t t = 0; t < w.tris.size(); ++t)
+    for (uint32_t v : w.tris[t]) vf[v].push_back(t);
+  const uint32_t m = uint32_t(w.points.size());
+  w.points.push_back({0.5, 0, 0});
+  w.origin.push_back(w.points.back());
+  std::vector<uint32_t> changed;
+  split_edge(w, vf, 0, 1, m, changed);
+  // Each of the three triangles on edge 0-1 cut once: three halves appended.
+  EXPECT_EQ(w.tris.size(), 7u);
+  EXPECT_EQ(changed.size(), 6u);
+  EXPECT_EQ(w.part.size(), w.tris.size());
+  // The lists are the triangles' corners, with their multiplicity.
+  std::vector<std::vector<uint32_t>> expected(vf.size());
+  for (uint32_t t = 0; t < w.tris.size(); ++t)
+    for (uint32_t v : w.tris[t]) expected[v].push_back(t);
+  for (size_t v = 0; v < vf.size(); ++v) {
+    std::vector<uint32_t> got = vf[v];
+    std::sort(got.begin(), got.end());
+    EXPECT_EQ(got, expected[v]) << "vertex " << v;
+  }
+}
 
 TEST(RepairRegions, PairsAndSharedVerticesMakeRegions) {
   Mesh m;

@@ -117,16 +117,21 @@ std::vector<uint8_t> clean_regions(const Work& w, size_t regions_found) {
 
 void split_edge(Work& w, std::vector<std::vector<uint32_t>>& vf, uint32_t u, uint32_t v, uint32_t m,
                 std::vector<uint32_t>& changed) {
+  // vf lists a triangle once per corner: one with a repeated corner (a degenerate triangle,
+  // u v u) is listed twice at u, and is cut once. (Cut twice, its second pass looked for the
+  // edge u v it no longer had, past the triangle's three corners, and erased a missing entry
+  // of vf: heap corruption, found by the 2026-11-26 sweep on a float STL far from the origin.)
   std::vector<uint32_t> on;
   for (uint32_t f : vf[u]) {
     const Tri& t = w.tris[f];
-    if (t[0] == v || t[1] == v || t[2] == v) on.push_back(f);
+    if ((t[0] == v || t[1] == v || t[2] == v) && std::find(on.begin(), on.end(), f) == on.end()) on.push_back(f);
   }
   vf.resize(std::max<size_t>(vf.size(), m + 1));
   for (uint32_t f : on) {
     Tri t = w.tris[f];
     int k = 0;
-    while (!((t[k] == u && t[(k + 1) % 3] == v) || (t[k] == v && t[(k + 1) % 3] == u))) ++k;
+    while (k < 3 && !((t[k] == u && t[(k + 1) % 3] == v) || (t[k] == v && t[(k + 1) % 3] == u))) ++k;
+    if (k == 3) continue;  // not for u != v; never read past the three corners
     const uint32_t a = t[k], b = t[(k + 1) % 3], c = t[(k + 2) % 3];
     const uint32_t keep_end = a == u ? b : a;  // the corner (u or v) that leaves slot f
     w.tris[f] = a == u ? Tri{a, m, c} : Tri{m, b, c};
@@ -138,7 +143,8 @@ void split_edge(Work& w, std::vector<std::vector<uint32_t>>& vf, uint32_t u, uin
     w.touched.push_back(1);
     w.touched[f] = 1;
     auto& row = vf[keep_end];
-    row.erase(std::find(row.begin(), row.end(), f));
+    const auto at = std::find(row.begin(), row.end(), f);
+    if (at != row.end()) row.erase(at);
     vf[m].push_back(f);
     for (uint32_t x : other) vf[x].push_back(id);
     changed.push_back(f);
