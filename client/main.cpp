@@ -372,16 +372,21 @@ int main(int argc, char** argv) {
         if (!quiet) std::fprintf(stderr, "wrote %s\n", page.c_str());
       }
       const auto& r = result.report;
+      // Without samples (--no-distances) there is no distance to print: zeros would read as a
+      // perfect fit.
+      char distances[256] = "distances not sampled (--no-distances)";
+      if (r.output_to_input.samples > 0)
+        std::snprintf(distances, sizeof distances,
+                      "distance to input mean %s, p95 %s of the diagonal, max %.6g at (%.6g, %.6g, %.6g)",
+                      percent(r.output_to_input.mean, r.diagonal).c_str(),
+                      percent(r.output_to_input.p95, r.diagonal).c_str(), r.output_to_input.max,
+                      r.output_to_input.max_at[0], r.output_to_input.max_at[1], r.output_to_input.max_at[2]);
       if (!quiet)
-        std::fprintf(
-            stderr,
-            "wrote %s: %zu triangles, closed, manifold, outward, no self-intersections; distance to input mean %s, "
-            "p95 %s of the diagonal, max %.6g at (%.6g, %.6g, %.6g); %.2fs%s%s%s%s\n",
-            output.c_str(), result.surface.triangles.size(), percent(r.output_to_input.mean, r.diagonal).c_str(),
-            percent(r.output_to_input.p95, r.diagonal).c_str(), r.output_to_input.max, r.output_to_input.max_at[0],
-            r.output_to_input.max_at[1], r.output_to_input.max_at[2], r.total_seconds,
-            report_path.empty() ? "" : "; report ", report_path.c_str(),
-            deviation_path.empty() ? "" : "; deviation field ", deviation_path.c_str());
+        std::fprintf(stderr,
+                     "wrote %s: %zu triangles, closed, manifold, outward, no self-intersections; %s; %.2fs%s%s%s%s\n",
+                     output.c_str(), result.surface.triangles.size(), distances, r.total_seconds,
+                     report_path.empty() ? "" : "; report ", report_path.c_str(),
+                     deviation_path.empty() ? "" : "; deviation field ", deviation_path.c_str());
       return 0;
     }
     if (*repair_cmd) {

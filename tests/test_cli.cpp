@@ -124,6 +124,20 @@ TEST_F(Cli, WrapsAFileAndWritesAReport) {
   EXPECT_NE(json.find("peak_memory_mb"), std::string::npos);
 }
 
+// The last line of a wrap run with --no-distances printed "distance to input mean 0.0000%, p95
+// 0.0000% of the diagonal, max 0 at (0, 0, 0)", as if the fit were perfect (found by the
+// 2026-11-26 sweep). It says the distances were not sampled; with samples it gives them.
+TEST_F(Cli, WrapWithoutDistancesSaysSoInsteadOfPrintingZeros) {
+  const std::string in = vdbwrap::testing::data_path("fuze.obj"), out = (dir / "out.ply").string();
+  CliRun none = run("wrap " + in + " -o " + out + " --base-size 4% --no-distances");
+  ASSERT_EQ(none.code, 0) << none.err;
+  EXPECT_NE(none.err.find("distances not sampled (--no-distances)"), std::string::npos) << none.err;
+  EXPECT_EQ(none.err.find("distance to input mean"), std::string::npos) << none.err;
+  CliRun sampled = run("wrap " + in + " -o " + out + " --base-size 4%");
+  ASSERT_EQ(sampled.code, 0) << sampled.err;
+  EXPECT_NE(sampled.err.find("distance to input mean"), std::string::npos) << sampled.err;
+}
+
 TEST_F(Cli, CheckReportsWatertightnessAndDistance) {
   CliRun ok = run("check " + vdbwrap::testing::data_path("unit_sphere.STL") + " --against " +
                   vdbwrap::testing::data_path("unit_sphere.STL"));
