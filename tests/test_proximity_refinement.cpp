@@ -27,10 +27,11 @@ TEST_P(ProximityRefinementWrap, FarthestPointWithinABaseCell) {
   const WrapResult a = wrap(input, off), b = wrap(input, on);
   const double base = 0.01 * a.report.diagonal;
   const ProximityRefinementReport& r = b.report.quality.proximity_refinement;
-  std::printf("[%s 1%%] max %.3f -> %.3f base cells; mean %.3g -> %.3g; far triangles %zu -> %zu; %zu pulls, %zu splits\n",
-              GetParam(), a.report.output_to_input.max / base, b.report.output_to_input.max / base,
-              a.report.output_to_input.mean, b.report.output_to_input.mean, r.far_triangles_before,
-              r.far_triangles_after, r.pulls, r.splits);
+  std::printf(
+      "[%s 1%%] max %.3f -> %.3f base cells; mean %.3g -> %.3g; far triangles %zu -> %zu; %zu pulls, %zu splits\n",
+      GetParam(), a.report.output_to_input.max / base, b.report.output_to_input.max / base,
+      a.report.output_to_input.mean, b.report.output_to_input.mean, r.far_triangles_before, r.far_triangles_after,
+      r.pulls, r.splits);
   auto v = valid_closed_surface(b.surface);
   EXPECT_TRUE(v.ok) << v.why;
   EXPECT_EQ(b.report.output.intersecting_triangles, 0u);

@@ -137,7 +137,8 @@ bool LocalEdits::keeps_sharp_edges(const Change& c, const std::vector<check::Cor
           }
           before = std::sqrt(before);
           if (before > reach) continue;  // held by other triangles, or out of reach
-          for (const auto& at : made_at) after = std::min(after, norm2(q - closest_on_triangle(q, at[0], at[1], at[2])));
+          for (const auto& at : made_at)
+            after = std::min(after, norm2(q - closest_on_triangle(q, at[0], at[1], at[2])));
           if (std::sqrt(after) > std::max(before, bounds_.feature_tolerance)) return true;
         }
         return false;

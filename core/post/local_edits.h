@@ -64,9 +64,7 @@ class LocalEdits {
   static uint32_t third(const Tri& t, uint32_t a, uint32_t b);
 
   // Where point v is once change c is made.
-  Vec3 at(uint32_t v, const Change& c) const {
-    return v == c.moved ? c.to : v == c.added ? c.added_at : s_.points[v];
-  }
+  Vec3 at(uint32_t v, const Change& c) const { return v == c.moved ? c.to : v == c.added ? c.added_at : s_.points[v]; }
   double min_angle(uint32_t f) const;
   Vec3 stored(const Vec3& x) const;  // as the output will hold it
 
@@ -93,8 +91,7 @@ class LocalEdits {
   bool keeps_sharp_edges(const Change& c, const std::vector<check::Corners>& made_at) const;
   // Why the made triangles would break the surface: "folds" (they meet each other),
   // "intersects" (they meet a triangle the change keeps), or null.
-  const char* breaks_surface(const Change& c, const std::vector<Tri>& made,
-                             const std::vector<check::Corners>& made_at);
+  const char* breaks_surface(const Change& c, const std::vector<Tri>& made, const std::vector<check::Corners>& made_at);
 
   void apply(const Change& c);
   // Did node v or a neighbour change in this round or the one before?

@@ -84,7 +84,7 @@ class ProximityRefiner : LocalEdits {
   // `far`, `dist`: the far triangles and the points' distances, found before the engine was built.
   ProximityRefinementStats run(std::vector<uint32_t> far, std::vector<double> dist) {
     dist_ = std::move(dist);
-    // Attempts are bounded too: where much of the wrap is far (a wrap around both sides of a
+    // The attempts are bounded: where much of the wrap is far (a wrap around both sides of a
     // soup, bridges over openings), most are refused, each after distance queries.
     const size_t budget = std::max<size_t>(1000, size_t(prm_.budget * double(s_.triangles.size())));
     bool last_round_changed = false;
@@ -93,10 +93,10 @@ class ProximityRefiner : LocalEdits {
       if (round_ > 0 && !last_round_changed) break;  // the far triangles are those of the round before
       if (round_ > 0) far = far_triangles(s_, alive_, ref_, prm_.far_distance, dist_);
       stats_.far_after = far.size();
-      if (round_ == prm_.rounds || far.empty()) break;
+      if (round_ == prm_.rounds || far.empty() || attempts_ >= budget) break;
       const size_t edits = stats_.pulls + stats_.splits;
       for (uint32_t f : far) {
-        if (stats_.pulls + stats_.splits >= budget || attempts_ >= budget) break;
+        if (attempts_ >= budget) break;
         if (alive_[f]) ++attempts_, bring_nearer(f);
       }
       last_round_changed = stats_.pulls + stats_.splits > edits;
@@ -112,7 +112,8 @@ class ProximityRefiner : LocalEdits {
     const Tri t = s_.triangles[f];
     uint32_t corner = kNone;
     for (uint32_t v : t)
-      if (v < dist_.size() && dist_[v] > prm_.far_distance && !fixed(v) && (corner == kNone || dist_[v] > dist_[corner]))
+      if (v < dist_.size() && dist_[v] > prm_.far_distance && !fixed(v) &&
+          (corner == kNone || dist_[v] > dist_[corner]))
         corner = v;
     if (corner != kNone && pull(corner)) return;
     std::array<std::pair<double, int>, 3> edges;
@@ -214,7 +215,7 @@ class ProximityRefiner : LocalEdits {
 
   ProximityRefinementParams prm_;
   double cos_turn_;
-  size_t attempts_ = 0;        // triangles worked on
+  size_t attempts_ = 0;       // triangles worked on
   std::vector<double> dist_;  // per node: its distance to the input at the start of the round
   ProximityRefinementStats stats_;
 };

@@ -25,7 +25,7 @@ struct ProximityRefinementParams {
   double min_angle_deg = 10;        // no new triangle under this angle, unless one as bad was there
   double max_normal_turn_deg = 80;  // no triangle turns more than this in one edit
   int rounds = 6;                   // passes over the far triangles left
-  double budget = 0.02;             // at most this many attempts per triangle of the wrap (a bound on the time)
+  double budget = 0.005;            // at most this many attempts per triangle of the wrap (a bound on the time)
   bool float_coordinates = false;   // placed nodes rounded to float (binary STL output)
 };
 
