@@ -41,6 +41,14 @@ struct LocalEditBounds {
   bool float_coordinates = false;  // placed nodes rounded to float (binary STL output)
 };
 
+// The bounds from a pass's parameters, which name them alike.
+template <typename Params>
+LocalEditBounds edit_bounds(const Params& p) {
+  LocalEditBounds b;
+  b.offset = p.offset, b.feature_tolerance = p.feature_tolerance, b.float_coordinates = p.float_coordinates;
+  return b;
+}
+
 class LocalEdits {
  public:
   LocalEdits(PostSurface& s, const QualityReference& ref, const LocalEditBounds& bounds);

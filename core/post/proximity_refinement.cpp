@@ -14,12 +14,6 @@ namespace {
 
 constexpr double kDeg = M_PI / 180.0;
 
-LocalEditBounds edit_bounds(const ProximityRefinementParams& p) {
-  LocalEditBounds b;
-  b.offset = p.offset, b.feature_tolerance = p.feature_tolerance, b.float_coordinates = p.float_coordinates;
-  return b;
-}
-
 // The distance to the input, or an upper bound of it: a point within a fiftieth of `far` (most
 // of the wrap lies on the input) gets that, from a query bounded by so small a radius,
 // which is cheap; a point within `far` its distance; the others the full query. The index

@@ -13,12 +13,6 @@ namespace {
 
 constexpr double kDeg = M_PI / 180.0;
 
-LocalEditBounds edit_bounds(const SliverRemovalParams& p) {
-  LocalEditBounds b;
-  b.offset = p.offset, b.feature_tolerance = p.feature_tolerance, b.float_coordinates = p.float_coordinates;
-  return b;
-}
-
 class SliverRemover : LocalEdits {
  public:
   SliverRemover(PostSurface& s, const QualityReference& ref, const SliverRemovalParams& prm)
