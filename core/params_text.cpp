@@ -108,8 +108,11 @@ std::string ControlVolume::to_string() const {
 
 PartSize PartSize::parse(const std::string& text) {
   size_t eq = text.rfind('=');
-  if (eq == std::string::npos || eq == 0) bad("part size '" + text + "': expected NAME=SIZE");
-  return PartSize{trim(text.substr(0, eq)), Length::parse(text.substr(eq + 1))};
+  if (eq == std::string::npos) bad("part size '" + text + "': expected NAME=SIZE");
+  std::string name = trim(text.substr(0, eq));
+  // A blank name (" =1") would match no part, as the API's empty one does: refused alike.
+  if (name.empty()) bad("part size '" + text + "': the part name is empty (expected NAME=SIZE)");
+  return PartSize{std::move(name), Length::parse(text.substr(eq + 1))};
 }
 
 ContactRule ContactRule::parse(const std::string& text) {

@@ -244,6 +244,8 @@ TEST(ControlVolumes, ShapeDistancesAndParsing) {
   EXPECT_THROW(ContactRule::parse("a:b:c"), Error);
   EXPECT_EQ(ContactRule::parse("a, b : c").groups.size(), 2u);
   EXPECT_EQ(PartSize::parse("wing=0.5%").part, "wing");
+  // A blank name is refused as the API's empty one is (found by fuzz_params_text: " =1").
+  for (const char* bad : {"=1", " =1", "\t =0.5%", "wing"}) EXPECT_THROW(PartSize::parse(bad), Error) << bad;
   VolumeChoice choice;
   std::vector<Vec3> seeds;
   parse_volume_choice("1,2,3;4,5,6", choice, seeds);
