@@ -44,6 +44,19 @@ class FieldInputs : public ::testing::Test {
     std::ofstream(p, std::ios::binary).write(bytes.data(), std::streamsize(bytes.size()));
     return p;
   }
+  // `vdbwrap wrap IN -o OUT -q`, killed after `timeout_s` seconds when given; the output must
+  // come back with exit 0, closed, outward and free of self-intersections (CGAL's verdict).
+  void expect_cli_wraps_valid(const std::string& in, const std::string& out, int timeout_s = 0) const {
+    const std::string limit = timeout_s > 0 ? "timeout -s KILL " + std::to_string(timeout_s) + " " : "";
+    const int status =
+        std::system((limit + std::string(VDBWRAP_CLI) + " wrap " + in + " -o " + out + " -q > /dev/null 2>&1").c_str());
+    ASSERT_TRUE(WIFEXITED(status)) << "ended by a signal"
+                                   << (timeout_s > 0 ? " (killed on the time limit: a hang)" : "");
+    ASSERT_EQ(WEXITSTATUS(status), 0);
+    const Mesh w = io::read_mesh(out);
+    const auto verdict = check::cgal_verdict(w.points, w.triangles);
+    EXPECT_TRUE(verdict.valid_polygon_mesh && verdict.closed && !verdict.self_intersects && verdict.outward);
+  }
   fs::path dir_;
 };
 
@@ -238,13 +251,7 @@ TEST_F(FieldInputs, CsgExportWithDegenerateTrianglesWraps) {
   }
   const std::string in = (dir_ / "csg.obj").string(), out = (dir_ / "csg_wrap.ply").string();
   io::write_mesh(m, in);
-  const int status =
-      std::system((std::string(VDBWRAP_CLI) + " wrap " + in + " -o " + out + " -q > /dev/null 2>&1").c_str());
-  ASSERT_TRUE(WIFEXITED(status)) << "ended by a signal";
-  ASSERT_EQ(WEXITSTATUS(status), 0);
-  const Mesh w = io::read_mesh(out);
-  const auto verdict = check::cgal_verdict(w.points, w.triangles);
-  EXPECT_TRUE(verdict.valid_polygon_mesh && verdict.closed && !verdict.self_intersects && verdict.outward);
+  expect_cli_wraps_valid(in, out);
 }
 
 // The same kind of input at the ends of the supported range: CGAL's constructions in doubles
@@ -396,14 +403,7 @@ TEST_F(FieldInputs, NearlyCoplanarOverlappingTrianglesWrapInTime) {
   }
   const std::string in = (dir_ / "overlaps.obj").string(), out = (dir_ / "overlaps_wrap.ply").string();
   io::write_mesh(m, in);
-  const int status = std::system(
-      ("timeout -s KILL 120 " + std::string(VDBWRAP_CLI) + " wrap " + in + " -o " + out + " -q > /dev/null 2>&1")
-          .c_str());
-  ASSERT_TRUE(WIFEXITED(status)) << "ended by a signal (killed after 120 s: a hang)";
-  ASSERT_EQ(WEXITSTATUS(status), 0);
-  const Mesh wrapped = io::read_mesh(out);
-  const auto verdict = check::cgal_verdict(wrapped.points, wrapped.triangles);
-  EXPECT_TRUE(verdict.valid_polygon_mesh && verdict.closed && !verdict.self_intersects && verdict.outward);
+  expect_cli_wraps_valid(in, out, 120);
 }
 
 // `vdbwrap repair` on inputs whose intersecting regions hold triangles with a repeated corner:

@@ -101,6 +101,13 @@ class LocalEdits {
   // "intersects" (they meet a triangle the change keeps), or null.
   const char* breaks_surface(const Change& c, const std::vector<Tri>& made, const std::vector<check::Corners>& made_at);
 
+  // change_ made the move of node v to x (its triangles keep their corners).
+  void propose_move(uint32_t v, const Vec3& x) {
+    change_.clear();
+    change_.moved = v;
+    change_.to = x;
+    for (uint32_t g : vt_[v]) change_.add(g, s_.triangles[g]);
+  }
   void apply(const Change& c);
   // Did node v or a neighbour change in this round or the one before?
   bool changed_near(uint32_t v) const;

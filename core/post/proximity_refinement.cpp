@@ -121,10 +121,7 @@ class ProximityRefiner : LocalEdits {
   bool pull(uint32_t v) {
     const Vec3 p = s_.points[v], target = onto_input_anywhere(p);
     for (double t : {1.0, 0.75, 0.5, 0.25}) {
-      change_.clear();
-      change_.moved = v;
-      change_.to = stored(lerp(p, target, t));
-      for (uint32_t g : vt_[v]) change_.add(g, s_.triangles[g]);
+      propose_move(v, stored(lerp(p, target, t)));
       if (!nearer(change_)) continue;
       apply(change_);
       ++stats_.pulls;

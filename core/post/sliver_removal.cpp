@@ -274,10 +274,7 @@ class SliverRemover : LocalEdits {
   // Node v moved to the first of `targets` the checks accept, if any.
   bool move_to_first_acceptable(uint32_t v, std::initializer_list<Vec3> targets) {
     for (const Vec3& x : targets) {
-      change_.clear();
-      change_.moved = v;
-      change_.to = x;
-      for (uint32_t g : vt_[v]) change_.add(g, s_.triangles[g]);
+      propose_move(v, x);
       if (!acceptable(change_)) continue;
       apply(change_);
       ++stats_.moves;
