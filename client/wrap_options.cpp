@@ -138,7 +138,7 @@ void WrapOptions::add_to(CLI::App* cmd, const std::string& threads_help) {
   CLI::Option* sr =
       cmd->add_flag("--sliver-removal,!--no-sliver-removal", sliver_removal_,
                     "Remove the triangles with an angle under 10 degrees left after the rebuilds (edge flips, "
-                    "collapses and tangential moves, held near the input)")
+                    "collapses, tangential moves and splits of strips' rails, held near the input)")
           ->group("Surface fit");
   bindings_.push_back({sr, [this](WrapParams& p) { p.remove_slivers = sliver_removal_; }});
   CLI::Option* pr =

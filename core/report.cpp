@@ -149,6 +149,7 @@ json quality_json(const QualityReport& q, const WrapParams& p) {
                 {"flips", q.sliver_removal.flips},
                 {"collapses", q.sliver_removal.collapses},
                 {"moves", q.sliver_removal.moves},
+                {"splits", q.sliver_removal.splits},
                 {"refusals", q.sliver_removal.refusals}}},
               {"intersection_repair",
                {{"runs", q.repair_runs},

@@ -84,7 +84,7 @@ void post_process(WrapRun& run) {
     SliverRemovalReport& out = run.report.quality.sliver_removal;
     out.ran = true, out.target_angle_deg = sp.target_angle_deg;
     out.slivers_before = st.slivers_before, out.slivers_after = st.slivers_after;
-    out.flips = st.flips, out.collapses = st.collapses, out.moves = st.moves;
+    out.flips = st.flips, out.collapses = st.collapses, out.moves = st.moves, out.splits = st.splits;
     out.refusals = st.refusals;
   }
 

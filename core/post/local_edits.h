@@ -90,9 +90,16 @@ class LocalEdits {
     double worst = 0, sum = 0, area = 0, plain_sum = 0;
     size_t n = 0;
     double mean() const { return area > 0 ? sum / area : n ? plain_sum / double(n) : 0.0; }
+    void add(const Spread& o) {
+      worst = std::max(worst, o.worst), sum += o.sum, area += o.area, plain_sum += o.plain_sum, n += o.n;
+    }
   };
   // Distances to the input of a triangle's centroid and edge midpoints.
   void sample(const Vec3& a, const Vec3& b, const Vec3& c, Spread& s) const;
+  // Distances to the input of ten points of a triangle, corners included: the barycentric grid
+  // of step 1/3. A moved node can be its triangles' farthest point, and the centroid and edge
+  // midpoints alone miss the far parts of long triangles (as along a concave crease).
+  void sample_grid(const Vec3& a, const Vec3& b, const Vec3& c, Spread& s) const;
 
   // The input's sharp edges near the change stay as near the surface as they were (or within
   // the feature tolerance).

@@ -154,18 +154,6 @@ class ProximityRefiner : LocalEdits {
     return true;
   }
 
-  // Ten points of the triangle, corners included (a held-back node is the farthest point of
-  // its fan): the barycentric grid of step 1/3. Centroid and midpoints alone missed the far
-  // parts of the long triangles a split makes along a concave crease.
-  void sample_with_corners(const Vec3& a, const Vec3& b, const Vec3& c, Spread& s) const {
-    const double tenth = 0.05 * norm(area_vector(a, b, c));
-    for (int i = 0; i <= 3; ++i)
-      for (int j = 0; i + j <= 3; ++j) {
-        const double d = distance_to_input((a * double(i) + b * double(j) + c * double(3 - i - j)) * (1.0 / 3.0));
-        s.worst = std::max(s.worst, d), s.sum += tenth * d, s.area += tenth, s.plain_sum += d, ++s.n;
-      }
-  }
-
   // Does the change bring the patch nearer the input and keep the surface valid, its
   // triangles no worse shaped and the input's sharp edges as near?
   bool nearer(const Change& c) {
@@ -193,9 +181,9 @@ class ProximityRefiner : LocalEdits {
     for (uint32_t f : c.slots)
       if (f != Change::kNoSlot) {
         const Tri& o = s_.triangles[f];
-        sample_with_corners(s_.points[o[0]], s_.points[o[1]], s_.points[o[2]], old_d);
+        sample_grid(s_.points[o[0]], s_.points[o[1]], s_.points[o[2]], old_d);
       }
-    for (const check::Corners& at : made_at) sample_with_corners(at[0], at[1], at[2], new_d);
+    for (const check::Corners& at : made_at) sample_grid(at[0], at[1], at[2], new_d);
     // The integral of the distance over the patch, not its mean, must drop: a split that dips
     // into a concave crease adds area, and area still off the input raises the wrap's mean.
     if (new_d.worst > old_d.worst || !(new_d.sum < old_d.sum)) return no("no nearer");

@@ -23,8 +23,27 @@ class SliverRemover : LocalEdits {
 
   SliverRemovalStats run() {
     stats_.slivers_before = slivers().size();
-    for (round_ = 0; round_ < prm_.rounds; ++round_) {
-      const size_t changes = stats_.flips + stats_.collapses + stats_.moves;
+    round_ = 0;
+    improve(0);
+    // Slivers left in strips: more nodes along the rails, then the same operations near them.
+    for (int pass = 0; pass < prm_.rail_passes; ++pass) {
+      ++round_;
+      if (split_rails() == 0) break;
+      improve(round_ + 1);
+    }
+    stats_.slivers_after = slivers().size();
+    if (changes() > 0) compact();
+    stats_.refusals = refusals();
+    return stats_;
+  }
+
+  size_t changes() const { return stats_.flips + stats_.collapses + stats_.moves + stats_.splits; }
+
+  // Rounds of fixes and moves from round `first`: in the first of all every sliver is tried,
+  // later only those near a change.
+  void improve(int first) {
+    for (round_ = first; round_ < first + prm_.rounds; ++round_) {
+      const size_t before = changes();
       for (uint32_t f : slivers()) {
         if (!alive_[f] || min_angle(f) >= prm_.target_angle_deg) continue;  // changed by an earlier fix
         // A later round retries a sliver only where the surface near it changed since the
@@ -41,23 +60,95 @@ class SliverRemover : LocalEdits {
       nodes.erase(std::unique(nodes.begin(), nodes.end()), nodes.end());
       for (uint32_t v : nodes)
         if (round_ == 0 || changed_near(v)) try_move(v);
-      if (stats_.flips + stats_.collapses + stats_.moves == changes) break;
+      if (changes() == before) break;
     }
-    stats_.slivers_after = slivers().size();
-    if (stats_.flips + stats_.collapses + stats_.moves > 0) compact();
-    stats_.refusals = refusals();
-    return stats_;
+  }
+
+  // Twice the area of f over edge (a, b)'s length: f's height over that edge.
+  double height_over(uint32_t f, uint32_t a, uint32_t b) const {
+    const Tri& t = s_.triangles[f];
+    const double len = norm(s_.points[b] - s_.points[a]);
+    return len > 0 ? norm(area_vector(s_.points[t[0]], s_.points[t[1]], s_.points[t[2]])) / len : 0.0;
+  }
+
+  // A strip of slivers between two rows of nodes (two close feature curves, the faces of a
+  // rod thinner than the cells) cannot be triangulated well with the nodes it has: its
+  // triangles are as long as the nodes are apart along the rows, and only as high as the rows
+  // are apart. Each sliver's rails (its long edges along a row: a traced feature edge, or one
+  // with a well-shaped triangle across it) are split at their middle, on the edge, so the
+  // surface does not move; the flips after it then make triangles half as long. Rails too long
+  // for their height to become good in two halvings are left (a step far finer than the cells).
+  size_t split_rails() {
+    const double t = std::tan(prm_.target_angle_deg * kDeg);
+    const double reach = double(1 << std::min(prm_.rail_passes, 8));  // how much too long a rail may be
+    std::vector<std::pair<uint32_t, uint32_t>> rails;
+    for (uint32_t f : slivers()) {
+      const Tri tri = s_.triangles[f];
+      for (int i = 0; i < 3; ++i) {
+        const uint32_t a = tri[i], b = tri[(i + 1) % 3];
+        const double len = norm(s_.points[b] - s_.points[a]), h = height_over(f, a, b);
+        if (!(h < len * t) || h * reach < len * t) continue;  // not long for its height, or hopeless
+        uint32_t ab, ba;
+        if (!edge_triangles(a, b, ab, ba)) continue;
+        const uint32_t other = ab == f ? ba : ab;
+        if (!feature_edge(a, b) && height_over(other, a, b) < len * t) continue;  // a diagonal
+        rails.push_back({std::min(a, b), std::max(a, b)});
+      }
+    }
+    std::sort(rails.begin(), rails.end());
+    rails.erase(std::unique(rails.begin(), rails.end()), rails.end());
+    size_t made = 0;
+    for (const auto& [a, b] : rails) made += split_on_edge(a, b);
+    return made;
+  }
+
+  // The traced chain's edge (a, b) now runs a - m - b; m stays on it (locked, as a and b are).
+  void run_chain_through(uint32_t a, uint32_t b, uint32_t m) {
+    std::replace(feature_[a].begin(), feature_[a].end(), b, m);
+    std::replace(feature_[b].begin(), feature_[b].end(), a, m);
+    feature_[m] = {a, b};
+    s_.locked[m] = 1;
+  }
+
+  // Edge (a, b) split at its middle, the new node on the edge: the surface stays where it is
+  // (up to the float rounding of the output, which the intersection check covers).
+  bool split_on_edge(uint32_t a, uint32_t b) {
+    uint32_t ab, ba;
+    if (!edge_triangles(a, b, ab, ba)) return false;
+    const uint32_t c = third(s_.triangles[ab], a, b), d = third(s_.triangles[ba], a, b);
+    if (c == d) return false;
+    const uint32_t m = uint32_t(s_.points.size());
+    change_.clear();
+    change_.added = m;
+    change_.added_at = stored((s_.points[a] + s_.points[b]) * 0.5);
+    change_.added_cell = std::min(s_.cell_size[a], s_.cell_size[b]);
+    change_.add(ab, Tri{a, m, c});
+    change_.add(ba, Tri{b, m, d});
+    change_.add(Change::kNoSlot, Tri{m, b, c});
+    change_.add(Change::kNoSlot, Tri{m, a, d});
+    std::vector<Tri> made;
+    std::vector<check::Corners> made_at;
+    for (const Tri& t : change_.tris) {
+      made.push_back(t), made_at.push_back({at(t[0], change_), at(t[1], change_), at(t[2], change_)});
+      if (check::triangle_is_degenerate(made_at.back(), t)) return refuse("split: degenerate");
+    }
+    if (const char* why = breaks_surface(change_, made, made_at)) return refuse(std::string("split: ") + why);
+    const bool traced = feature_edge(a, b);
+    commit(change_);
+    if (traced) run_chain_through(a, b, m);
+    ++stats_.splits;
+    return true;
   }
 
  private:
   // Live triangles under the target angle, the worst first.
-  std::vector<uint32_t> slivers() const {
+  // (Each triangle's smallest angle is kept current: the rounds ask for the slivers twice, and
+  // the triangles they would measure are a few hundred times as many as the slivers.)
+  std::vector<uint32_t> slivers() {
     std::vector<std::pair<double, uint32_t>> bad;
-    for (uint32_t f = 0; f < s_.triangles.size(); ++f) {
-      if (!alive_[f]) continue;
-      const double a = min_angle(f);
-      if (a < prm_.target_angle_deg) bad.push_back({a, f});
-    }
+    for (uint32_t f = uint32_t(angle_.size()); f < s_.triangles.size(); ++f) angle_.push_back(min_angle(f));
+    for (uint32_t f = 0; f < s_.triangles.size(); ++f)
+      if (alive_[f] && angle_[f] < prm_.target_angle_deg) bad.push_back({angle_[f], f});
     std::sort(bad.begin(), bad.end());
     std::vector<uint32_t> out;
     for (const auto& b : bad) out.push_back(b.second);
@@ -72,35 +163,51 @@ class SliverRemover : LocalEdits {
     std::vector<Tri> made;
     std::vector<check::Corners> made_at;
     // The patch's normal (area-weighted: slivers hardly count), and how far its well-shaped
-    // triangles are from it. A sliver's own normal says little: a new triangle in its slot is
-    // held to the patch's.
+    // triangles are from it. A new triangle in a well-shaped triangle's slot turns little from
+    // it. One in a sliver's slot, or an appended one, turns little from the patch or from a
+    // triangle it replaces: the patch's normal alone says little where the patch spans a sharp
+    // edge (a fan of slivers on a face beside a wall: its normal is half the wall's).
     Vec3 patch{0, 0, 0};
     for (uint32_t f : c.slots) {
+      if (f == Change::kNoSlot) continue;
       const Tri& o = s_.triangles[f];
       patch = patch + area_vector(s_.points[o[0]], s_.points[o[1]], s_.points[o[2]]);
     }
     patch = normalized(patch);
     double patch_cos = cos_turn_;
     for (uint32_t f : c.slots)
-      if (min_angle(f) >= prm_.target_angle_deg) {
+      if (f != Change::kNoSlot && min_angle(f) >= prm_.target_angle_deg) {
         const Tri& o = s_.triangles[f];
         patch_cos =
             std::min(patch_cos, dot(patch, normalized(area_vector(s_.points[o[0]], s_.points[o[1]], s_.points[o[2]]))));
       }
     for (size_t i = 0; i < c.slots.size(); ++i) {
-      const Tri& o = s_.triangles[c.slots[i]];
-      const Vec3 &oa = s_.points[o[0]], &ob = s_.points[o[1]], &oc = s_.points[o[2]];
-      const double old_angle = min_angle_deg(oa, ob, oc);
-      old_min = std::min(old_min, old_angle);
-      old_bad += old_angle < prm_.target_angle_deg;
+      const bool appended = c.slots[i] == Change::kNoSlot;
+      Vec3 old_normal{0, 0, 0};
+      double old_angle = 0;
+      if (!appended) {
+        const Tri& o = s_.triangles[c.slots[i]];
+        const Vec3 &oa = s_.points[o[0]], &ob = s_.points[o[1]], &oc = s_.points[o[2]];
+        old_angle = min_angle_deg(oa, ob, oc);
+        old_normal = normalized(area_vector(oa, ob, oc));
+        old_min = std::min(old_min, old_angle);
+        old_bad += old_angle < prm_.target_angle_deg;
+      }
       if (c.dies[i]) continue;
       const Tri& t = c.tris[i];
       const check::Corners at = {this->at(t[0], c), this->at(t[1], c), this->at(t[2], c)};
       if (check::triangle_is_degenerate(at, t)) return refuse("degenerate");
       const Vec3 n_new = normalized(area_vector(at[0], at[1], at[2]));
-      if (old_angle >= prm_.target_angle_deg ? dot(normalized(area_vector(oa, ob, oc)), n_new) < cos_turn_
-                                             : dot(patch, n_new) < std::min(cos_turn_, patch_cos))
-        return refuse("turns");
+      bool own = !appended && dot(old_normal, n_new) >= cos_turn_;
+      if (appended)
+        for (uint32_t g : c.slots)
+          if (g != Change::kNoSlot) {
+            const Tri& o = s_.triangles[g];
+            const Vec3 n = normalized(area_vector(s_.points[o[0]], s_.points[o[1]], s_.points[o[2]]));
+            own = own || dot(n, n_new) >= cos_turn_;
+          }
+      const bool well_shaped = !appended && old_angle >= prm_.target_angle_deg;
+      if (well_shaped ? !own : !own && dot(patch, n_new) < std::min(cos_turn_, patch_cos)) return refuse("turns");
       const double new_angle = min_angle_deg(at[0], at[1], at[2]);
       new_min = std::min(new_min, new_angle);
       new_bad += new_angle < prm_.target_angle_deg;
@@ -110,10 +217,8 @@ class SliverRemover : LocalEdits {
     // shrink and fewer triangles are left under the target.
     if (new_min < old_min + prm_.min_gain_deg && !(new_min >= old_min && new_bad < old_bad)) return refuse("no gain");
     // Distances last of the local checks: they ask the input's index, the rest reads the wrap.
-    for (uint32_t f : c.slots) {
-      const Tri& o = s_.triangles[f];
-      sample(s_.points[o[0]], s_.points[o[1]], s_.points[o[2]], old_d);
-    }
+    for (uint32_t f : c.slots)
+      if (f != Change::kNoSlot) old_d.add(spread_of(f));
     for (size_t i = 0; i < made.size(); ++i) sample(made_at[i][0], made_at[i][1], made_at[i][2], new_d);
     if (new_d.worst > std::max(prm_.max_deviation, old_d.worst)) return refuse("far");
     // On average no farther from the input than before (a tenth of the bound for rounding).
@@ -138,8 +243,68 @@ class SliverRemover : LocalEdits {
     if (cap) {
       if (flip_at(2) || collapse_at(0) || collapse_at(1)) return;
     } else {
-      if (collapse_at(0) || flip_at(2) || flip_at(1) || collapse_at(1)) return;
+      if (collapse_at(0) || flip_at(2) || flip_at(1) || collapse_at(1) || split_rail_and_flip(f)) return;
     }
+  }
+
+  // A needle in a strip of them: two rows of nodes (a thin tube, or two close feature curves)
+  // with edges along them much longer than the rows are apart. No flip or collapse helps
+  // there; the rows need more nodes. One of the needle's long edges (the rail, along a row) is
+  // split at its middle, and its other long edge (the diagonal across the strip) flipped onto
+  // the new node: both needles on the diagonal become triangles twice as wide for their length.
+  // The shorter long edge is tried as the rail first (the diagonal is the longer).
+  bool split_rail_and_flip(uint32_t f) {
+    const Tri t = s_.triangles[f];
+    int apex = 0;  // the corner with the smallest angle: the one across the shortest edge
+    double shortest = INFINITY;
+    for (int i = 0; i < 3; ++i) {
+      const double e = norm2(s_.points[t[(i + 2) % 3]] - s_.points[t[(i + 1) % 3]]);
+      if (e < shortest) shortest = e, apex = i;
+    }
+    const uint32_t a = t[apex], b = t[(apex + 1) % 3], c = t[(apex + 2) % 3];  // f runs a -> b -> c
+    const bool ab_first = norm2(s_.points[b] - s_.points[a]) <= norm2(s_.points[c] - s_.points[a]);
+    // The rail a -> b (apex at its start) or c -> a (apex at its end), the third corner after it.
+    return ab_first ? split_rail_flip(f, a, b, c, true) || split_rail_flip(f, c, a, b, false)
+                    : split_rail_flip(f, c, a, b, false) || split_rail_flip(f, a, b, c, true);
+  }
+
+  // f = (u, v, w): rail u -> v split at a new node m, and the diagonal from the apex (u when
+  // apex_first, else v) to w flipped onto m.
+  bool split_rail_flip(uint32_t f, uint32_t u, uint32_t v, uint32_t w, bool apex_first) {
+    uint32_t uv, vu;
+    if (!edge_triangles(u, v, uv, vu) || uv != f) return false;
+    const uint32_t d = third(s_.triangles[vu], u, v);  // across the rail
+    const uint32_t apex = apex_first ? u : v;
+    if (feature_edge(apex, w)) return false;  // the rail is the other long edge
+    uint32_t across, back;                    // the triangle across the diagonal holds apex -> w when apex_first
+    if (!(apex_first ? edge_triangles(u, w, across, back) : edge_triangles(w, v, across, back))) return false;
+    const uint32_t x = third(s_.triangles[across], apex, w);
+    if (x == d || d == w || across == vu || back != f) return false;
+    const bool traced = feature_edge(u, v);
+    const Vec3 mid = (s_.points[u] + s_.points[v]) * 0.5;
+    const double cell = std::min(s_.cell_size[u], s_.cell_size[v]);
+    const uint32_t m = uint32_t(s_.points.size());
+    change_.clear();
+    change_.added = m;
+    // A traced rail keeps its line: the new node stays on it (it is locked as the rail's ends).
+    change_.added_at = traced ? stored(mid) : onto_input(mid, cell > 0 ? cell : norm(s_.points[u] - s_.points[v]));
+    change_.added_cell = cell;
+    if (apex_first) {
+      change_.add(f, Tri{m, w, x});
+      change_.add(across, Tri{x, u, m});
+      change_.add(Change::kNoSlot, Tri{m, v, w});
+    } else {
+      change_.add(f, Tri{u, m, w});
+      change_.add(across, Tri{x, w, m});
+      change_.add(Change::kNoSlot, Tri{m, v, x});
+    }
+    change_.add(vu, Tri{v, m, d});
+    change_.add(Change::kNoSlot, Tri{m, u, d});
+    if (!acceptable(change_)) return false;
+    commit(change_);
+    if (traced) run_chain_through(u, v, m);
+    ++stats_.splits;
+    return true;
   }
 
   // Distance from p to the segment ab.
@@ -174,7 +339,7 @@ class SliverRemover : LocalEdits {
     change_.add(f1, Tri{c, a, d});
     change_.add(f2, Tri{d, b, c});
     if (!acceptable(change_)) return false;
-    apply(change_);
+    commit(change_);
     if (traced) {  // the chain a b now runs a - apex - b
       const uint32_t apex = c_on ? c : d;
       auto unlink = [&](uint32_t x, uint32_t y) {
@@ -235,7 +400,7 @@ class SliverRemover : LocalEdits {
         change_.add(g, t);
       }
       if (!acceptable(change_)) continue;
-      apply(change_);
+      commit(change_);
       vt_[v].clear();
       // v's traced edges go to u.
       for (uint32_t w : feature_[v]) {
@@ -276,7 +441,7 @@ class SliverRemover : LocalEdits {
     for (const Vec3& x : targets) {
       propose_move(v, x);
       if (!acceptable(change_)) continue;
-      apply(change_);
+      commit(change_);
       ++stats_.moves;
       return true;
     }
@@ -294,7 +459,37 @@ class SliverRemover : LocalEdits {
     return move_to_first_acceptable(v, {stored(middle), stored((p + middle) * 0.5)});
   }
 
+  // Triangle f's distance samples, measured once while it stays as it is (each sliver is
+  // weighed for several operations, over the same old triangles).
+  const Spread& spread_of(uint32_t f) {
+    if (spread_.size() < s_.triangles.size())
+      spread_.resize(s_.triangles.size()), spread_known_.resize(s_.triangles.size(), 0);
+    if (!spread_known_[f]) {
+      const Tri& o = s_.triangles[f];
+      spread_[f] = Spread{};
+      sample(s_.points[o[0]], s_.points[o[1]], s_.points[o[2]], spread_[f]);
+      spread_known_[f] = 1;
+    }
+    return spread_[f];
+  }
+
+  // The change made, and the smallest angles of the triangles it rewrote or appended.
+  void commit(const Change& c) {
+    const size_t had = s_.triangles.size();
+    apply(c);
+    for (uint32_t f : c.slots)
+      if (f != Change::kNoSlot) {
+        if (f < angle_.size()) angle_[f] = min_angle(f);
+        if (f < spread_known_.size()) spread_known_[f] = 0;
+      }
+    if (angle_.size() == had)
+      for (uint32_t f = uint32_t(had); f < s_.triangles.size(); ++f) angle_.push_back(min_angle(f));
+  }
+
   SliverRemovalParams prm_;
+  std::vector<double> angle_;   // per triangle: its smallest angle (degrees)
+  std::vector<Spread> spread_;  // per triangle: its distance samples, where known
+  std::vector<uint8_t> spread_known_;
   double cos_flat_ = 1, cos_turn_ = 1;
   SliverRemovalStats stats_;
 };

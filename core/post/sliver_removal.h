@@ -3,11 +3,13 @@
 // lattice's nodes were projected close together. Local operations remove them, in the manner
 // of isotropic remeshing (Botsch and Kobbelt): edge flips where the surface is nearly flat,
 // collapses of short edges (the kept node placed on the input), and tangential moves of the
-// nodes left around slivers (re-projected onto the input). Every operation is checked before
-// it is applied: the smallest angle around it grows, no triangle folds or turns far, the
-// surface stays within the deviation bound of the input (or no farther than before), the link
-// condition holds, snapped feature nodes stay where they are, and no new triangle meets
-// another (exact predicates). The surface stays closed, manifold and oriented.
+// nodes left around slivers (re-projected onto the input). Strips between two close rows of
+// nodes (close feature curves, thin walls' tops) get more nodes: their rails are split.
+// Every operation is checked before it is applied: the smallest angle around it grows, no
+// triangle folds or turns far, the surface stays within the deviation bound of the input (or
+// no farther than before), the link condition holds, snapped feature nodes stay where they
+// are, and no new triangle meets another (exact predicates). The surface stays closed,
+// manifold and oriented.
 #pragma once
 #include <cstddef>
 #include <map>
@@ -26,6 +28,7 @@ struct SliverRemovalParams {
   double max_normal_turn_deg = 60;  // no well-shaped triangle turns more than this in one operation
   double min_gain_deg = 0.5;        // an operation must raise the smallest angle around it by this much
   int rounds = 6;                   // passes over the slivers left
+  int rail_passes = 2;              // the slivers' rails split at their middle, then rounds again
   bool float_coordinates = false;   // moved nodes rounded to float (binary STL output)
 };
 
@@ -40,6 +43,7 @@ inline SliverRemovalParams sliver_removal_params(double max_deviation, double of
 struct SliverRemovalStats {
   size_t slivers_before = 0, slivers_after = 0;  // triangles under the target angle
   size_t flips = 0, collapses = 0, moves = 0;
+  size_t splits = 0;                       // rails split in strips of needles
   std::map<std::string, size_t> refusals;  // operations refused, by the first check they failed
 };
 

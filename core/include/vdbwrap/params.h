@@ -131,7 +131,7 @@ struct WrapParams {
   // from the input (constrained Delaunay on nearly flat patches) or by ear clipping.
   bool remesh = true;
   // Stage 4: triangles with an angle under 10 degrees left after the rebuilds are removed by edge
-  // flips, collapses and tangential moves checked against the input.
+  // flips, collapses, tangential moves and rail splits checked against the input.
   bool remove_slivers = true;
   // Stage 4, before the sliver removal: where the wrap is still over 3/4 of a base cell from the
   // input (nodes held back at coarse cells, faces bridging concave corners), nodes are moved onto

@@ -102,6 +102,7 @@ struct SliverRemovalReport {
   double target_angle_deg = 0;
   size_t slivers_before = 0, slivers_after = 0;  // triangles
   size_t flips = 0, collapses = 0, moves = 0;
+  size_t splits = 0;  // rails split in strips of needles
   std::map<std::string, size_t> refusals;
 };
 
