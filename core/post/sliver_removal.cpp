@@ -279,7 +279,7 @@ class SliverRemover : LocalEdits {
     uint32_t across, back;                    // the triangle across the diagonal holds apex -> w when apex_first
     if (!(apex_first ? edge_triangles(u, w, across, back) : edge_triangles(w, v, across, back))) return false;
     const uint32_t x = third(s_.triangles[across], apex, w);
-    if (x == d || d == w || across == vu || back != f) return false;
+    if (x == d || x == u || x == v || d == w || across == vu || back != f) return false;
     const bool traced = feature_edge(u, v);
     const Vec3 mid = (s_.points[u] + s_.points[v]) * 0.5;
     const double cell = std::min(s_.cell_size[u], s_.cell_size[v]);
