@@ -80,7 +80,12 @@ for name in "${FUZZERS[@]}"; do
   extra=()
   # The pipeline's caches (TBB, OpenVDB) make libFuzzer re-run most inputs to look for leaks,
   # halving the pipeline's speed; leaks still show when each worker exits.
-  [ "$name" = fuzz_wrap ] && extra=(-detect_leaks=0)
+  # Its inputs need up to 7 + 48 x 10 bytes (48 triangles, fuzz_wrap.cpp); without -max_len and
+  # -len_control=0 every -fork job starts from its seeds' largest size and lengthens inputs only
+  # after some hundreds of runs without new coverage, which a job of fuzz_wrap (a few runs a
+  # second) hardly ever sees: a 60-minute run made no input over 28 bytes
+  # (bench/results/2026-11-26-fuzz-wrap-long.md).
+  [ "$name" = fuzz_wrap ] && extra=(-detect_leaks=0 -max_len=512 -len_control=0)
   # -fork=1 with -ignore_crashes: one worker; a crash is saved and the run goes on to find more.
   "$bin" "${extra[@]}" -fork=1 -ignore_crashes=1 -ignore_timeouts=1 -ignore_ooms=1 \
     -max_total_time="$SECONDS_EACH" -timeout="$TIMEOUT" -rss_limit_mb="$RSS_MB" \
