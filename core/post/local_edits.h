@@ -4,6 +4,7 @@
 // applies or refuses; sliver removal and proximity refinement decide what to try.
 // The surface stays closed, manifold and oriented: every change replaces a closed fan.
 #pragma once
+#include <algorithm>
 #include <cstdint>
 #include <map>
 #include <string>

@@ -37,6 +37,7 @@ class SliverRemover : LocalEdits {
     return stats_;
   }
 
+ private:
   size_t changes() const { return stats_.flips + stats_.collapses + stats_.moves + stats_.splits; }
 
   // Rounds of fixes and moves from round `first`: in the first of all every sliver is tried,
@@ -140,7 +141,6 @@ class SliverRemover : LocalEdits {
     return true;
   }
 
- private:
   // Live triangles under the target angle, the worst first.
   // (Each triangle's smallest angle is kept current: the rounds ask for the slivers twice, and
   // the triangles they would measure are a few hundred times as many as the slivers.)
