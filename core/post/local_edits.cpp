@@ -178,6 +178,23 @@ const char* LocalEdits::breaks_surface(const Change& c, const std::vector<Tri>& 
   return nullptr;
 }
 
+bool LocalEdits::propose_split(uint32_t a, uint32_t b, const Vec3& x) {
+  uint32_t ab, ba;
+  if (!edge_triangles(a, b, ab, ba)) return false;
+  const uint32_t c = third(s_.triangles[ab], a, b), d = third(s_.triangles[ba], a, b);
+  if (c == d) return false;
+  const uint32_t m = uint32_t(s_.points.size());
+  change_.clear();
+  change_.added = m;
+  change_.added_at = x;
+  change_.added_cell = std::min(s_.cell_size[a], s_.cell_size[b]);
+  change_.add(ab, Tri{a, m, c});
+  change_.add(ba, Tri{b, m, d});
+  change_.add(Change::kNoSlot, Tri{m, b, c});
+  change_.add(Change::kNoSlot, Tri{m, a, d});
+  return true;
+}
+
 void LocalEdits::apply(const Change& c) {
   if (c.moved != kNone) s_.points[c.moved] = c.to;
   if (c.added != kNone) {

@@ -116,6 +116,9 @@ class LocalEdits {
     change_.to = x;
     for (uint32_t g : vt_[v]) change_.add(g, s_.triangles[g]);
   }
+  // change_ made the split of edge (a, b) at a new node x: its two triangles become four.
+  // False where the edge does not have two triangles with different third corners.
+  bool propose_split(uint32_t a, uint32_t b, const Vec3& x);
   void apply(const Change& c);
   // Did node v or a neighbour change in this round or the one before?
   bool changed_near(uint32_t v) const;

@@ -133,21 +133,11 @@ class ProximityRefiner : LocalEdits {
   // Edge (a, b) split at its midpoint, the new node placed on the input.
   bool split(uint32_t a, uint32_t b) {
     if (feature_edge(a, b)) return false;  // a traced feature edge stays one edge
-    uint32_t f1, f2;
-    if (!edge_triangles(a, b, f1, f2)) return false;
-    const uint32_t c = third(s_.triangles[f1], a, b), d = third(s_.triangles[f2], a, b);
-    if (c == d) return false;
-    const Vec3 mid = (s_.points[a] + s_.points[b]) * 0.5, target = onto_input_anywhere(mid);
+    const Vec3 mid = (s_.points[a] + s_.points[b]) * 0.5;
+    if (!propose_split(a, b, mid)) return false;
+    const Vec3 target = onto_input_anywhere(mid);
     if (norm(target - mid) > prm_.max_reach) return refuse("split: out of reach");
-    const uint32_t m = uint32_t(s_.points.size());
-    change_.clear();
-    change_.added = m;
     change_.added_at = target;
-    change_.added_cell = std::min(s_.cell_size[a], s_.cell_size[b]);
-    change_.add(f1, Tri{a, m, c});
-    change_.add(f2, Tri{b, m, d});
-    change_.add(Change::kNoSlot, Tri{m, b, c});
-    change_.add(Change::kNoSlot, Tri{m, a, d});
     if (!nearer(change_)) return false;
     apply(change_);
     ++stats_.splits;

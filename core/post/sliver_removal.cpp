@@ -114,19 +114,8 @@ class SliverRemover : LocalEdits {
   // Edge (a, b) split at its middle, the new node on the edge: the surface stays where it is
   // (up to the float rounding of the output, which the intersection check covers).
   bool split_on_edge(uint32_t a, uint32_t b) {
-    uint32_t ab, ba;
-    if (!edge_triangles(a, b, ab, ba)) return false;
-    const uint32_t c = third(s_.triangles[ab], a, b), d = third(s_.triangles[ba], a, b);
-    if (c == d) return false;
     const uint32_t m = uint32_t(s_.points.size());
-    change_.clear();
-    change_.added = m;
-    change_.added_at = stored((s_.points[a] + s_.points[b]) * 0.5);
-    change_.added_cell = std::min(s_.cell_size[a], s_.cell_size[b]);
-    change_.add(ab, Tri{a, m, c});
-    change_.add(ba, Tri{b, m, d});
-    change_.add(Change::kNoSlot, Tri{m, b, c});
-    change_.add(Change::kNoSlot, Tri{m, a, d});
+    if (!propose_split(a, b, stored((s_.points[a] + s_.points[b]) * 0.5))) return false;
     std::vector<Tri> made;
     std::vector<check::Corners> made_at;
     for (const Tri& t : change_.tris) {
