@@ -44,11 +44,13 @@ void WrapOptions::add_to(CLI::App* cmd, const std::string& threads_help) {
           ->group("Size");
   bindings_.push_back({fc, [this](WrapParams& p) { p.refine_far_cells = refine_far_cells_; }});
   CLI::Option* hb =
-      cmd->add_flag("--refine-held-back,!--no-refine-held-back", refine_held_back_,
-                    "Where the projection held nodes back more than a base cell from the input, refine the cells "
-                    "around them to the finest level and fit again (the outside volume)")
+      cmd->add_flag("--refine-where-far,--refine-held-back,!--no-refine-where-far,!--no-refine-held-back",
+                    refine_where_far_,
+                    "Where the projection left the wrap over a base cell from the input (held-back nodes, faces "
+                    "bridging a concave crease), refine the cells around the far parts to the finest level and fit "
+                    "again (the outside volume; on by default)")
           ->group("Size");
-  bindings_.push_back({hb, [this](WrapParams& p) { p.refine_held_back = refine_held_back_; }});
+  bindings_.push_back({hb, [this](WrapParams& p) { p.refine_where_far = refine_where_far_; }});
   bind(cmd, "--volume", volume_,
        "Volume to wrap: outside (around the input), inside (the largest volume it encloses), or the volume(s) "
        "holding seed points X,Y,Z (several separated by ';'); a seed point's volume reaching the outside is a leak",

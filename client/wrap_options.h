@@ -41,7 +41,7 @@ class WrapOptions {
   bool proximity_refinement_ = false;
   bool two_sided_sheets_ = false;
   bool refine_far_cells_ = false;
-  bool refine_held_back_ = false;
+  bool refine_where_far_ = true;
 };
 
 }  // namespace vdbwrap::cli

@@ -16,7 +16,7 @@ WrapResult run_pipeline(const Mesh& input, const WrapParams& params, ProgressSin
   pipeline::prepare_input(run);
   pipeline::build_volume(run);
   pipeline::project_lattice(run);
-  pipeline::refine_where_held_back(run);
+  pipeline::refine_where_far(run);
   pipeline::fit_surface(run);
   pipeline::post_process(run);
   pipeline::validate_surface(run);

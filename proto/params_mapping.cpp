@@ -136,7 +136,7 @@ WrapParams to_wrap_params(const pb::WrapParameters& in) {
   if (in.has_proximity_refinement()) p.proximity_refinement = in.proximity_refinement();
   if (in.has_two_sided_sheets()) p.two_sided_sheets = in.two_sided_sheets();
   if (in.has_refine_far_cells()) p.refine_far_cells = in.refine_far_cells();
-  if (in.has_refine_held_back()) p.refine_held_back = in.refine_held_back();
+  if (in.has_refine_held_back()) p.refine_where_far = in.refine_held_back();
   if (in.has_corner_angle_deg()) p.corner_angle_deg = in.corner_angle_deg();
   if (in.has_refine_at_features()) p.refine_at_features = in.refine_at_features();
   if (in.has_weld_tolerance()) p.weld_tolerance = in.weld_tolerance();
@@ -212,7 +212,7 @@ pb::WrapParameters to_proto(const WrapParams& in) {
   out.set_proximity_refinement(in.proximity_refinement);
   out.set_two_sided_sheets(in.two_sided_sheets);
   out.set_refine_far_cells(in.refine_far_cells);
-  out.set_refine_held_back(in.refine_held_back);
+  out.set_refine_held_back(in.refine_where_far);
   return out;
 }
 

@@ -279,12 +279,12 @@ RefineResult build_refined_grid(const prep::PreparedInput& in, const RefineCrite
     return false;
   };
 
-  CellLists<> near_points(std::max(params.near_reach, base));
+  CellLists<> near_points(std::max({params.near_reach, params.far_point_reach, base}));
   for (uint32_t i = 0; i < params.refine_near.size(); ++i) near_points.add(params.refine_near[i], i);
-  auto near_a_point = [&](const Vec3& lo, double h) {
+  auto near_a_point = [&](const Vec3& lo, double h, double reach) {
     Box3 cell;
     cell.add(lo), cell.add(lo + Vec3{h, h, h});
-    const double r2 = params.near_reach * params.near_reach;
+    const double r2 = reach * reach;
     return near_points.for_lists(
         cell,
         [&](const std::vector<uint32_t>& list) {
@@ -358,8 +358,10 @@ RefineResult build_refined_grid(const prep::PreparedInput& in, const RefineCrite
             if (split) break;
           }
         }
-        if (!split && criteria && far2 > 0) split = has_far_point(ct.tris, lo, h);
-        if (!split && criteria && !near_points.empty()) split = near_a_point(lo, h);
+        if (!split && criteria && far2 > 0 &&
+            (params.far_point_reach <= 0 || near_a_point(lo, h, params.far_point_reach)))
+          split = has_far_point(ct.tris, lo, h);
+        if (!split && criteria && !near_points.empty()) split = near_a_point(lo, h, params.near_reach);
         if (!split && contact && in_contact()) {
           if (level < sc.contact_level)
             split = true;

@@ -33,6 +33,7 @@ struct RefineCriteria {
   // there start near the input.
   std::vector<Vec3> refine_near;
   double near_reach = 0;
+  double far_point_reach = 0;  // model units: far_point_cells only this near a refine_near point (0: everywhere)
 };
 
 // base_size in model units. The grid pads the input's bounding box by `padding` level-0

@@ -1,8 +1,10 @@
 // Stage 3: the lattice surface projected onto the input with its feature curves, nodes
-// inserted where the traced chains missed a curve, and flat parts coarsened.
+// inserted where the traced chains missed a curve, and flat parts coarsened; where the first fit
+// stays far from the input, the grid refined there and the lattice fitted again.
 #include "common/stage_timer.h"
 #include "fit/feature_insert.h"
 #include "fit/two_sided_report.h"
+#include "mesh/far_from_input.h"
 #include "pipeline/stage_params.h"
 #include "pipeline/stages.h"
 #include "post/coarsen.h"
@@ -53,6 +55,28 @@ void coarsen(WrapRun& run) {
   fitted.feature_edges.swap(edges);
 }
 
+// The first fit's parts far from the input, into run.refine_near and the report. True when a
+// point is nearly a base cell off or more: where the first fit is nearer everywhere, proximity
+// refinement's local edits are enough, at a fraction of a refit's cost.
+bool find_far_parts(WrapRun& run) {
+  StageTimer timer("far check", run.report.stages);
+  const mesh::SurfaceIndex& index = run.index();
+  std::vector<Vec3> near;
+  for (const Vec3& p : run.fitted.held_back_points) {
+    const Vec3 local = p - run.prepared.origin;
+    if (index.squared_distance(local) > run.base * run.base) near.push_back(local);
+  }
+  run.report.nodes_held_back_far_first_fit = near.size();
+  std::vector<double> node_distance;
+  const std::vector<mesh::FarTriangle> far = mesh::far_triangles(
+      run.fitted.points, run.fitted.triangles, {}, index, run.prepared.origin, kRefitFar * run.base, node_distance);
+  run.report.triangles_far_first_fit = far.size();
+  if (near.empty() && (far.empty() || far.front().distance <= kRefitTrigger * run.base)) return false;
+  for (const mesh::FarTriangle& f : far) near.push_back(f.at - run.prepared.origin);
+  run.refine_near = std::move(near);
+  return true;
+}
+
 }  // namespace
 
 void project_lattice(WrapRun& run) {
@@ -72,24 +96,18 @@ void project_lattice(WrapRun& run) {
   if (run.progress && !two_sided.empty()) run.progress->progress("project", 1.0, two_sided);
 }
 
-void refine_where_held_back(WrapRun& run) {
+void refine_where_far(WrapRun& run) {
   // Only around the outside: a finer grid can open a passage, and for a seed point or the
   // inside volume that would turn a result into a leak.
-  if (!run.params.refine_held_back || run.params.volume != VolumeChoice::Outside) return;
-  const mesh::SurfaceIndex& index = run.index();
-  const double far2 = run.base * run.base;
-  for (const Vec3& p : run.fitted.held_back_points) {
-    const Vec3 local = p - run.prepared.origin;
-    if (index.squared_distance(local) > far2) run.refine_near.push_back(local);
-  }
-  run.report.nodes_held_back_far_first_fit = run.refine_near.size();
-  if (run.refine_near.empty()) return;
+  if (!run.params.refine_where_far || run.params.volume != VolumeChoice::Outside) return;
+  if (!find_far_parts(run)) return;
   if (run.progress)
     run.progress->progress("project", 1.0,
-                           std::to_string(run.refine_near.size()) +
-                               " nodes held back over a base cell from the input: refining around them, fitting again");
-  // Once: a second refit, around the nodes the first held back, gained a few hundredths of a
-  // cell for the same cost again.
+                           std::to_string(run.report.triangles_far_first_fit) + " triangles and " +
+                               std::to_string(run.report.nodes_held_back_far_first_fit) +
+                               " held-back nodes far from the input: refining around them, fitting again");
+  run.fitted = {};  // not needed any more: the refit's peak memory is the first fit's
+  // Once: a second refit gained a few hundredths of a cell for the same cost again.
   build_volume(run);
   project_lattice(run);
 }

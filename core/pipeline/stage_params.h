@@ -19,9 +19,17 @@ namespace vdbwrap::pipeline {
 inline constexpr double kMostCellsAcross = 20000;
 // Unresolved contacts listed in the report, one per base cell.
 inline constexpr size_t kMostContactLocations = 100;
-// Cells within this many base cells of a node held back over a base cell are refined
-// (refine_held_back).
-inline constexpr double kHeldBackRefineReach = 2;
+// The refit where the first fit is far from the input (refine_where_far): it looks at triangles
+// with a point over kRefitFar base cells off, and runs when one is over kRefitTrigger (the
+// stages after it can move the farthest point out by a little: the target is a base cell), or
+// a node is held back over a base cell off. Then the cells within kRefitNearReach base cells of
+// them are refined to the finest level, and those within kRefitFarCellsReach with a boundary
+// point over a base cell from their triangles (a concave crease's cells, whose corners
+// project far apart).
+inline constexpr double kRefitFar = 0.75;
+inline constexpr double kRefitTrigger = 0.9;
+inline constexpr double kRefitNearReach = 2;
+inline constexpr double kRefitFarCellsReach = 6;
 // Stage 4 samples the input's sharp edges every this fraction of the diagonal.
 inline constexpr double kFeatureSampleSpacing = 1e-3;
 

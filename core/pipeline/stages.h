@@ -15,10 +15,11 @@ void prepare_input(WrapRun& run);
 void build_volume(WrapRun& run);
 // Stage 3: the lattice surface projected onto the input, with feature snapping.
 void project_lattice(WrapRun& run);
-// Where that held nodes back more than a base cell from the input (at corners of coarse
-// cells), stage 2 again with the cells around them refined to the finest level, and the
-// projection again (refine_held_back; the outside volume only).
-void refine_where_held_back(WrapRun& run);
+// Where that left the wrap over a base cell from the input (nodes held back at corners of
+// coarse cells, faces bridging a concave crease), stage 2 again with the cells around the far
+// parts refined to the finest level, and the projection again (refine_where_far; the outside
+// volume only).
+void refine_where_far(WrapRun& run);
 // Stage 3, end: nodes inserted on missed feature curves, coarsening of flat parts.
 void fit_surface(WrapRun& run);
 // Stage 4: quality analysis, remeshing of bad regions, intersection repair where anything

@@ -20,7 +20,7 @@ void report_contacts(WrapRun& run) {
   contact.rules = run.params.contact_prevention.size();
   contact.floor = run.controls.contact_floor;
   contact.unresolved_cells = run.refined.unresolved_contacts.size();
-  contact.unresolved_locations.clear();  // a second build (refine_held_back) lists them anew
+  contact.unresolved_locations.clear();  // a second build (refine_where_far) lists them anew
   // One location per base cell is plenty to find them.
   std::set<std::array<long, 3>> seen;
   for (const Vec3& c : run.refined.unresolved_contacts) {
@@ -79,7 +79,7 @@ void build_volume(WrapRun& run) {
 
   // The nearest-point index: for the clearance of gap closure and leaks, then projection. Its
   // build is serial in part (CGAL's tree): it overlaps the refinement and the flood fill.
-  // (A second build, around held-back nodes, keeps the index and the curves of the first.)
+  // (A second build, the refit where the first fit is far, keeps the index and the curves of the first.)
   if (!run.index_builder)
     run.index_builder = std::make_unique<InBackground<std::unique_ptr<mesh::SurfaceIndex>>>(
         [&prepared] { return std::make_unique<mesh::SurfaceIndex>(prepared.mesh.points, prepared.mesh.triangles); });
@@ -87,7 +87,9 @@ void build_volume(WrapRun& run) {
     StageTimer timer("refine", report.stages);
     grid::RefineCriteria criteria = refine_criteria(run.params);
     criteria.refine_near = run.refine_near;
-    criteria.near_reach = kHeldBackRefineReach * run.base;
+    criteria.near_reach = kRefitNearReach * run.base;
+    if (!run.refine_near.empty() && !(criteria.far_point_cells > 0))  // the refit: cells with far points, near them
+      criteria.far_point_cells = 1, criteria.far_point_reach = kRefitFarCellsReach * run.base;
     run.refined = grid::build_refined_grid(prepared, criteria, run.base, run.controls, run.progress);
   }
   report.cells_per_level = run.refined.touched_per_level;

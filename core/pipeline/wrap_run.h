@@ -47,7 +47,7 @@ struct WrapRun {
   std::vector<grid::Coord> anchors;
   extract::LatticeSurface lattice;
   // Points (local frame) around which the grid is refined to the finest level: where a first
-  // fit held nodes back far from the input (see refine_where_held_back).
+  // fit was far from the input (see refine_where_far).
   std::vector<Vec3> refine_near;
   // Started in the background when their inputs exist, waited for when first needed.
   std::unique_ptr<InBackground<std::unique_ptr<mesh::SurfaceIndex>>> index_builder;

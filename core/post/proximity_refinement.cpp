@@ -4,9 +4,8 @@
 #include <array>
 #include <cmath>
 
-#include <tbb/parallel_for.h>
-
 #include "common/vec.h"
+#include "mesh/far_from_input.h"
 #include "post/local_edits.h"
 
 namespace vdbwrap::post {
@@ -14,59 +13,14 @@ namespace {
 
 constexpr double kDeg = M_PI / 180.0;
 
-// The distance to the input, or an upper bound of it: a point within a fiftieth of `far` (most
-// of the wrap lies on the input) gets that, from a query bounded by so small a radius,
-// which is cheap; a point within `far` its distance; the others the full query. The index
-// itself, not the memo: these points are asked once per round, and inserts cost more than
-// they save.
-double distance_within(const QualityReference& ref, const Vec3& q, double far) {
-  const Vec3 local = q - ref.origin;
-  if (ref.input->within(local, 0.02 * far)) return 0.02 * far;
-  mesh::SurfaceIndex::Hit hit;
-  if (ref.input->closest_within(local, far, hit)) return std::sqrt(hit.squared_distance);
-  return std::sqrt(ref.input->closest(local).squared_distance);
-}
-
-// The farthest a point of the triangle can be from its nearest corner: the circumradius of
-// an acute triangle, half the longest edge of any other.
-double reach_from_corners(const Vec3& a, const Vec3& b, const Vec3& c) {
-  std::array<double, 3> e = {norm2(b - c), norm2(c - a), norm2(a - b)};
-  std::sort(e.begin(), e.end());
-  if (e[2] >= e[0] + e[1]) return 0.5 * std::sqrt(e[2]);
-  const double area2 = norm(area_vector(a, b, c));  // twice the area
-  return area2 > 0 ? std::sqrt(e[0] * e[1] * e[2]) / (2 * area2) : 0.5 * std::sqrt(e[2]);
-}
-
-// Triangles (those alive, when `alive` is not empty) with a corner, an edge midpoint or the
-// centroid farther than `far` from the input, the farthest first; `dist`: each point's
-// distance (or a bound, see distance_within). A triangle whose farthest corner plus its reach
-// from the corners is within `far` cannot have such a point, and is not sampled.
+// The far triangles' indices, the farthest first; `dist`: each node's distance to the input
+// (or a bound of it).
 std::vector<uint32_t> far_triangles(const PostSurface& s, const std::vector<uint8_t>& alive,
                                     const QualityReference& ref, double far, std::vector<double>& dist) {
-  dist.assign(s.points.size(), 0);
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, s.points.size(), 512), [&](const tbb::blocked_range<size_t>& r) {
-    for (size_t v = r.begin(); v != r.end(); ++v) dist[v] = distance_within(ref, s.points[v], far);
-  });
-  const size_t nt = s.triangles.size();
-  std::vector<double> worst(nt, 0);
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, nt, 512), [&](const tbb::blocked_range<size_t>& r) {
-    for (size_t f = r.begin(); f != r.end(); ++f) {
-      if (!alive.empty() && !alive[f]) continue;
-      const Tri& t = s.triangles[f];
-      const Vec3 &a = s.points[t[0]], &b = s.points[t[1]], &c = s.points[t[2]];
-      double w = std::max({dist[t[0]], dist[t[1]], dist[t[2]]});
-      if (w <= far && w + reach_from_corners(a, b, c) > far)
-        for (const Vec3& q : {(a + b + c) * (1.0 / 3.0), (a + b) * 0.5, (b + c) * 0.5, (c + a) * 0.5})
-          w = std::max(w, distance_within(ref, q, far));
-      worst[f] = w;
-    }
-  });
-  std::vector<std::pair<double, uint32_t>> order;
-  for (uint32_t f = 0; f < nt; ++f)
-    if (worst[f] > far) order.push_back({-worst[f], f});
-  std::sort(order.begin(), order.end());
   std::vector<uint32_t> out;
-  for (const auto& o : order) out.push_back(o.second);
+  for (const mesh::FarTriangle& f :
+       mesh::far_triangles(s.points, s.triangles, alive, *ref.input, ref.origin, far, dist))
+    out.push_back(f.triangle);
   return out;
 }
 

@@ -41,7 +41,7 @@ TEST(ParamsMapping, RoundTripsEveryFieldAndRefusesOutOfRange) {
   p.proximity_refinement = !vdbwrap::WrapParams().proximity_refinement;
   p.two_sided_sheets = !vdbwrap::WrapParams().two_sided_sheets;
   p.refine_far_cells = !vdbwrap::WrapParams().refine_far_cells;
-  p.refine_held_back = !vdbwrap::WrapParams().refine_held_back;
+  p.refine_where_far = !vdbwrap::WrapParams().refine_where_far;
   p.corner_angle_deg = 55;
   p.compute_distances = false;
   vdbwrap::WrapParams q = vdbwrap::api::to_wrap_params(vdbwrap::api::to_proto(p));
@@ -64,7 +64,7 @@ TEST(ParamsMapping, RoundTripsEveryFieldAndRefusesOutOfRange) {
   EXPECT_EQ(q.proximity_refinement, p.proximity_refinement);
   EXPECT_EQ(q.two_sided_sheets, p.two_sided_sheets);
   EXPECT_EQ(q.refine_far_cells, p.refine_far_cells);
-  EXPECT_EQ(q.refine_held_back, p.refine_held_back);
+  EXPECT_EQ(q.refine_where_far, p.refine_where_far);
   EXPECT_EQ(q.corner_angle_deg, 55);
   EXPECT_FALSE(q.compute_distances);
   // The voxel-stage controls (issue 5), through the API and back.

@@ -101,10 +101,11 @@ struct WrapParams {
   // Refine a cell the input passes through when a point of its boundary lies more than a base
   // cell from its triangles: held-back nodes then stay within a base cell of the input.
   bool refine_far_cells = false;
-  // Where the projection held wrap nodes back more than a base cell from the input (at corners
-  // of coarse cells), refine the cells around them to the finest level and fit again. Off by
-  // default: the refit costs stage 2 and the projection again (see docs/cli.md).
-  bool refine_held_back = false;
+  // Where the projection left the wrap more than a base cell from the input (nodes held back at
+  // corners of coarse cells, faces bridging a concave crease), refine the cells around the far
+  // parts to the finest level and fit again. It costs stage 2 and the projection again, on the
+  // models where it applies (see docs/cli.md).
+  bool refine_where_far = true;
 
   // Projection (spec stage 3).
   double weld_tolerance = 1e-7;   // fraction of the diagonal under which vertices merge

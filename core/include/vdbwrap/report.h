@@ -157,9 +157,11 @@ struct WrapReport {
   ContactReport contact;
   size_t manifold_fixes = 0;   // cells taken out of the volume to keep it manifold
   size_t nodes_held_back = 0;  // nodes kept off the input to stay valid
-  // Nodes a first fit held back more than a base cell from the input; when any, the grid was
-  // refined around them and the lattice fitted again (refine_held_back).
+  // The first fit's nodes held back more than a base cell from the input, and its triangles with
+  // a point over 3/4 of a base cell off; where any point was over a base cell off, the grid was
+  // refined around them and the lattice fitted again (refine_where_far).
   size_t nodes_held_back_far_first_fit = 0;
+  size_t triangles_far_first_fit = 0;
   size_t nodes_projected = 0;  // nodes of the lattice surface (with polygon centres)
   TwoSidedReport two_sided;
   size_t triangles_before_coarsening = 0;
