@@ -2,6 +2,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cstdint>
 #include <cmath>
 #include <map>
 #include <memory>
@@ -593,7 +594,7 @@ TEST(Extract, CutOffPocketsAreFoundNearTheCellsTakenOut) {
     auto g = volume_grid();
     take_out(*g, shell);
     size_t dropped = 99;
-    ASSERT_TRUE(extract::drop_cut_off_pockets(*g, label, shell, 0.25, dropped));
+    ASSERT_TRUE(extract::drop_cut_off_pockets(*g, label, shell, 0.25, SIZE_MAX, dropped));
     EXPECT_EQ(dropped, 1u);
     EXPECT_EQ(g->get(0, Coord(5, 5, 5)), grid::kExcluded);
     EXPECT_EQ(g->get(0, Coord(6, 6, 6)), grid::kExcluded);
@@ -605,7 +606,7 @@ TEST(Extract, CutOffPocketsAreFoundNearTheCellsTakenOut) {
     auto g = volume_grid();
     take_out(*g, open);
     size_t dropped = 99;
-    ASSERT_TRUE(extract::drop_cut_off_pockets(*g, label, open, 0.25, dropped));
+    ASSERT_TRUE(extract::drop_cut_off_pockets(*g, label, open, 0.25, SIZE_MAX, dropped));
     EXPECT_EQ(dropped, 0u);
     EXPECT_EQ(g->get(0, Coord(5, 5, 5)), label);
     EXPECT_EQ(count(*g, label), 1728u - 55u);
@@ -617,7 +618,16 @@ TEST(Extract, CutOffPocketsAreFoundNearTheCellsTakenOut) {
     auto g = volume_grid();
     take_out(*g, wall);
     size_t dropped = 99;
-    EXPECT_FALSE(extract::drop_cut_off_pockets(*g, label, wall, 0.25, dropped));
+    EXPECT_FALSE(extract::drop_cut_off_pockets(*g, label, wall, 0.25, SIZE_MAX, dropped));
     EXPECT_EQ(count(*g, label), 1728u - 144u) << "nothing may change when the searches cannot tell";
+  }
+  {
+    // The shell again, with room for fewer cells than the searches need: a labelling decides.
+    auto g = volume_grid();
+    take_out(*g, shell);
+    size_t dropped = 99;
+    EXPECT_FALSE(extract::drop_cut_off_pockets(*g, label, shell, 0.25, 8, dropped));
+    EXPECT_EQ(g->get(0, Coord(5, 5, 5)), label) << "nothing may change past the total budget";
+    EXPECT_EQ(count(*g, label), 1728u - 56u);
   }
 }

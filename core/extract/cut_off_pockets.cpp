@@ -16,7 +16,8 @@ namespace vdbwrap::extract {
 using grid::AdaptiveGrid;
 
 bool drop_cut_off_pockets(AdaptiveGrid& g, int32_t label, const std::vector<std::pair<int, Coord>>& taken_out,
-                          double pocket_share, size_t& dropped, std::vector<std::pair<int, Coord>>* dropped_cells) {
+                          double pocket_share, size_t total_budget, size_t& dropped,
+                          std::vector<std::pair<int, Coord>>* dropped_cells) {
   // Why looking near the taken-out cells is enough: the volume was one piece before. A path
   // through it that crossed taken-out cells entered and left a cluster of them through
   // volume cells next to it; when those are joined without the taken-out cells, the path
@@ -72,6 +73,7 @@ bool drop_cut_off_pockets(AdaptiveGrid& g, int32_t label, const std::vector<std:
     }
     return pocket_limit;
   };
+  size_t queued = 0;  // by all clusters' searches
   for (const auto& [root, members] : clusters) {
     // One search per volume cell next to the cluster, run together (breadth first); searches
     // that meet are joined. pending[g]: cells queued and not yet expanded by joined search g.
@@ -93,7 +95,7 @@ bool drop_cut_off_pockets(AdaptiveGrid& g, int32_t label, const std::vector<std:
     size_t open = queue.size();  // searches not yet joined to another nor finished
     std::vector<uint32_t> finished;
     for (size_t q = 0; q < queue.size() && open > 1; ++q) {
-      if (queue.size() > budget) return false;
+      if (queue.size() > budget || queued + queue.size() > total_budget) return false;
       const auto [level, c] = queue[q];
       const uint32_t mine = find(up, from[q]);
       for (int axis = 0; axis < 3; ++axis)
@@ -113,6 +115,7 @@ bool drop_cut_off_pockets(AdaptiveGrid& g, int32_t label, const std::vector<std:
       const uint32_t me = find(up, mine);
       if (--pending[me] == 0) finished.push_back(me), --open;  // all of a cut-off piece
     }
+    queued += queue.size();
     // Undecided within the budget, or every search ended (no piece reached beyond: a tiny
     // volume): a full labelling decides.
     if (open != 1) return false;

@@ -27,9 +27,10 @@ LatticeSurface extract_faces(const grid::AdaptiveGrid& grid, int32_t label, Volu
 // the rest, found by searches from the volume cells next to the taken-out ones, are taken
 // out too (`dropped`: how many). Returns false, changing nothing, when the searches cannot
 // tell within their budget, or a piece is not below `pocket_share` of the volume left: a
-// full labelling must decide.
+// full labelling must decide. `total_budget`: the cells all searches together may queue (past
+// it a labelling of the whole volume is the cheaper way).
 bool drop_cut_off_pockets(grid::AdaptiveGrid& grid, int32_t label, const std::vector<std::pair<int, Coord>>& taken_out,
-                          double pocket_share, size_t& dropped,
+                          double pocket_share, size_t total_budget, size_t& dropped,
                           std::vector<std::pair<int, Coord>>* dropped_cells = nullptr);
 
 struct ExtractStats {

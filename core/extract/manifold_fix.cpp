@@ -25,6 +25,12 @@ namespace {
 using grid::AdaptiveGrid;
 using grid::LeafRef;
 
+// The searches for cut-off pockets may queue this many cells per face of the surface, all
+// clusters together; past that one labelling of the volume and a whole round cost less. (Around
+// a thin shell wrapped from both sides the searches from each cluster go far before they meet:
+// teapot.stl queued 20 cells per face, an assembly of overlapping solids 0.2.)
+constexpr size_t kPocketSearchPerFace = 2;
+
 // Face-connected groups among the 8 octants around a node that share a membership
 // (octants one bit apart share a face). Returns the number of groups on each side.
 void octant_groups(const bool in[8], int group[8], int& groups_in, int& groups_out) {
@@ -344,6 +350,7 @@ LatticeSurface extract_manifold_surface(AdaptiveGrid& g, int32_t& label, VolumeC
   // changed (extracting the whole surface's cell faces each round would cost most of the
   // stage), until a full labelling changes cells anywhere.
   bool whole = true;
+  size_t surface_faces = 0;          // of the last whole round
   std::vector<uint64_t> candidates;  // for a round near the changes: lattice points to look at
   for (int round = 0; round < max_rounds; ++round) {
     if (progress) {
@@ -357,6 +364,7 @@ LatticeSurface extract_manifold_surface(AdaptiveGrid& g, int32_t& label, VolumeC
     RoundRepairs rep;
     if (whole || whole_rounds) {
       faces = faces_and_nodes(g, label, choice);
+      surface_faces = faces->quads.size();
       if (faces->quads.empty())
         throw Error(ErrorKind::WrapFailed, "the chosen volume has no boundary: nothing to wrap");
       rep = repair_surface(g, label, choice, faces->surf, min_exclude_level, !whole);
@@ -382,7 +390,8 @@ LatticeSurface extract_manifold_surface(AdaptiveGrid& g, int32_t& label, VolumeC
     if (choice != VolumeChoice::SeedPoints) {
       size_t pockets = 0;
       std::vector<std::pair<int, Coord>> dropped;
-      if (drop_cut_off_pockets(g, label, rep.taken_out, 0.25, pockets, &dropped)) {
+      if (drop_cut_off_pockets(g, label, rep.taken_out, 0.25, kPocketSearchPerFace * surface_faces, pockets,
+                               &dropped)) {
         stats.dropped_pieces += pockets;
         const DenseNumbers lattice = lattice_numbers(g);
         candidates = std::move(rep.visited);

@@ -32,8 +32,8 @@ double reach_from_corners(const Vec3& a, const Vec3& b, const Vec3& c) {
 }  // namespace
 
 std::vector<FarTriangle> far_triangles(const std::vector<Vec3>& points, const std::vector<Tri>& triangles,
-                                       const std::vector<uint8_t>& alive, const SurfaceIndex& input,
-                                       const Vec3& origin, double far, std::vector<double>& node_distance) {
+                                       const std::vector<uint8_t>& alive, const SurfaceIndex& input, const Vec3& origin,
+                                       double far, std::vector<double>& node_distance) {
   node_distance.assign(points.size(), 0);
   tbb::parallel_for(tbb::blocked_range<size_t>(0, points.size(), 512), [&](const tbb::blocked_range<size_t>& r) {
     for (size_t v = r.begin(); v != r.end(); ++v) node_distance[v] = distance_within(input, points[v] - origin, far);

@@ -24,7 +24,7 @@ struct FarTriangle {
 // A triangle whose farthest corner plus its reach from the corners is within `far` cannot have
 // such a point, and is not sampled.
 std::vector<FarTriangle> far_triangles(const std::vector<Vec3>& points, const std::vector<Tri>& triangles,
-                                       const std::vector<uint8_t>& alive, const SurfaceIndex& input,
-                                       const Vec3& origin, double far, std::vector<double>& node_distance);
+                                       const std::vector<uint8_t>& alive, const SurfaceIndex& input, const Vec3& origin,
+                                       double far, std::vector<double>& node_distance);
 
 }  // namespace vdbwrap::mesh
