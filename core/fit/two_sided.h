@@ -10,6 +10,8 @@
 #include <unordered_map>
 #include <vector>
 
+#include <tbb/parallel_for.h>
+
 #include "common/grid_key.h"
 #include "common/vec.h"
 #include "vdbwrap/mesh.h"
@@ -121,20 +123,29 @@ class TwoSidedSheets {
 // project to, or whose centroid has feet of both sides within a cell.
 inline double two_sided_area_fraction(const TwoSidedStats& s, const std::vector<Vec3>& points,
                                       const std::vector<Tri>& triangles) {
+  // The lookups in parallel (seconds on millions of triangles), the sums in order: the same
+  // figure on any number of threads.
+  std::vector<uint8_t> both_sides(triangles.size());
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, triangles.size(), 4096), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t t = r.begin(); t != r.end(); ++t) {
+      const Vec3 &a = points[triangles[t][0]], &b = points[triangles[t][1]], &c = points[triangles[t][2]];
+      uint8_t bits = t < s.triangle_sides.size() ? s.triangle_sides[t] : 0;
+      const GridKey k = grid_key((a + b + c) * (1.0 / 3.0), s.inv_cell);
+      for (int dx = -1; dx <= 1 && bits != 3; ++dx)
+        for (int dy = -1; dy <= 1 && bits != 3; ++dy)
+          for (int dz = -1; dz <= 1 && bits != 3; ++dz) {
+            auto it = s.cell_sides.find({k.x + dx, k.y + dy, k.z + dz});
+            if (it != s.cell_sides.end()) bits |= it->second;
+          }
+      both_sides[t] = bits == 3;
+    }
+  });
   double both = 0, all = 0;
   for (size_t t = 0; t < triangles.size(); ++t) {
     const Vec3 &a = points[triangles[t][0]], &b = points[triangles[t][1]], &c = points[triangles[t][2]];
     const double area = 0.5 * norm(cross(b - a, c - a));
     all += area;
-    uint8_t bits = t < s.triangle_sides.size() ? s.triangle_sides[t] : 0;
-    const GridKey k = grid_key((a + b + c) * (1.0 / 3.0), s.inv_cell);
-    for (int dx = -1; dx <= 1 && bits != 3; ++dx)
-      for (int dy = -1; dy <= 1 && bits != 3; ++dy)
-        for (int dz = -1; dz <= 1 && bits != 3; ++dz) {
-          auto it = s.cell_sides.find({k.x + dx, k.y + dy, k.z + dz});
-          if (it != s.cell_sides.end()) bits |= it->second;
-        }
-    if (bits == 3) both += area;
+    if (both_sides[t]) both += area;
   }
   return all > 0 ? both / all : 0.0;
 }

@@ -55,6 +55,15 @@ void coarsen(WrapRun& run) {
   fitted.feature_edges.swap(edges);
 }
 
+// How much of the input the fit wraps from both sides, the input's openings, and the gap closure
+// that would keep the volume out: for the report and the progress log. Of the fit that stays
+// only (not of a first fit the refit replaces: on a large input it costs seconds).
+void report_two_sided(WrapRun& run) {
+  StageTimer timer("two-sided report", run.report.stages);
+  const std::string text = fit::describe_two_sided(run.fitted.two_sided, run.prepared, run.report.two_sided);
+  if (run.progress && !text.empty()) run.progress->progress("project", 1.0, text);
+}
+
 // The first fit's parts far from the input, into run.refine_near and the report. True when a
 // point is nearly a base cell off or more: where the first fit is nearer everywhere, proximity
 // refinement's local edits are enough, at a fraction of a refit's cost.
@@ -92,8 +101,6 @@ void project_lattice(WrapRun& run) {
   run.fitted = fit::fit_to_input(run.lattice, *run.refined.grid, index, curves, run.prepared.origin,
                                  fit_params(run.params), run.progress);
   report_snapping(report, run.fitted);
-  const std::string two_sided = fit::describe_two_sided(run.fitted.two_sided, run.prepared, report.two_sided);
-  if (run.progress && !two_sided.empty()) run.progress->progress("project", 1.0, two_sided);
 }
 
 void refine_where_far(WrapRun& run) {
@@ -113,6 +120,7 @@ void refine_where_far(WrapRun& run) {
 }
 
 void fit_surface(WrapRun& run) {
+  report_two_sided(run);
   const std::vector<fit::FeatureCurve>& curves = run.curves_builder->get();
   if (!curves.empty() && run.fitted.valid) insert_feature_nodes(run, curves);
   run.report.triangles_before_coarsening = run.fitted.triangles.size();
