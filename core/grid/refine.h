@@ -28,9 +28,9 @@ struct RefineCriteria {
   // base cells from the cell's own triangles: refine (0: off). The wrap's held-back nodes sit on
   // such points, up to a cell diagonal off the input.
   double far_point_cells = 0;
-  // Points (local frame) where a first fit held wrap nodes back far from the input: a touched
-  // cell within `near_reach` of one is refined to the criteria's depth, so the lattice nodes
-  // there start near the input.
+  // Points (local frame) where a first fit was far from the input (held-back nodes, faces
+  // bridging a concave crease): a touched cell within `near_reach` of one is refined to the
+  // criteria's depth, so the lattice nodes there start near the input.
   std::vector<Vec3> refine_near;
   double near_reach = 0;
   double far_point_reach = 0;  // model units: far_point_cells only this near a refine_near point (0: everywhere)
