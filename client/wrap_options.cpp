@@ -27,6 +27,13 @@ void WrapOptions::add_to(CLI::App* cmd, const std::string& threads_help) {
       ->capture_default_str()
       ->check(CLI::Range(0, 6))
       ->group("Size");
+  bind(cmd, "--thin-part-levels", cli_.thin_part_levels,
+       "Refine parts of the input thinner than half a cell across (rods, narrow bars) up to this many levels "
+       "below --levels, so their wrap is not made of slivers (0-3; 0: off; closed pieces only)",
+       [this](WrapParams& p) { p.thin_part_levels = cli_.thin_part_levels; })
+      ->capture_default_str()
+      ->check(CLI::Range(0, 3))
+      ->group("Size");
   bind(cmd, "--refine-triangles", cli_.refine_max_triangles, "Refine a cell holding more input triangles than this",
        [this](WrapParams& p) { p.refine_max_triangles = cli_.refine_max_triangles; })
       ->capture_default_str()

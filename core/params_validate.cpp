@@ -23,6 +23,7 @@ void positive(const Length& l, const std::string& field) {
 void validate(const WrapParams& p) {
   positive(p.base_size, "base_size");
   if (p.levels < 0 || p.levels > 6) bad("levels", "must be between 0 and 6");
+  if (p.thin_part_levels < 0 || p.thin_part_levels > 3) bad("thin_part_levels", "must be between 0 and 3");
   if (!(p.feature_angle_deg > 0 && p.feature_angle_deg < 180))
     bad("feature_angle_deg", "must be strictly between 0 and 180 degrees");
   if (p.volume == VolumeChoice::SeedPoints && p.seed_points.empty())

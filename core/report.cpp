@@ -69,6 +69,7 @@ json contact_json(const WrapParams& p) {
 json params_json(const WrapParams& p) {
   return json{{"base_size", p.base_size.to_string()},
               {"levels", p.levels},
+              {"thin_part_levels", p.thin_part_levels},
               {"feature_angle_deg", p.feature_angle_deg},
               {"volume", volume_choice_to_string(p.volume, p.seed_points)},
               {"gap_closure", p.gap_closure ? json(p.gap_closure->to_string()) : json(nullptr)},
@@ -262,6 +263,7 @@ std::string to_json(const WrapReport& r, int indent) {
            {"finest_size", r.finest_size},
            {"diagonal", r.diagonal},
            {"cells_on_input_per_level", r.cells_per_level},
+           {"thin_part_cells", r.thin_part_cells},
            {"cells_excluded_for_manifoldness", r.manifold_fixes}}},
          {"volumes",
           {{"free_volumes", r.volumes.free_volumes},

@@ -59,6 +59,7 @@ WrapParams to_wrap_params(const pb::WrapParameters& in) {
       break;
   }
   if (in.has_levels()) p.levels = in.levels();
+  if (in.has_thin_part_levels()) p.thin_part_levels = in.thin_part_levels();
   if (in.has_feature_angle_deg()) p.feature_angle_deg = in.feature_angle_deg();
   switch (in.volume()) {
     case pb::VOLUME_UNSPECIFIED:
@@ -154,6 +155,7 @@ pb::WrapParameters to_proto(const WrapParams& in) {
   else
     out.set_base_size_model_units(in.base_size.value);
   out.set_levels(in.levels);
+  out.set_thin_part_levels(in.thin_part_levels);
   out.set_feature_angle_deg(in.feature_angle_deg);
   out.set_volume(in.volume == VolumeChoice::Inside       ? pb::VOLUME_INSIDE
                  : in.volume == VolumeChoice::SeedPoints ? pb::VOLUME_SEED_POINTS

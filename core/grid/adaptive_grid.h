@@ -40,6 +40,11 @@ class AdaptiveGrid {
   AdaptiveGrid(const Vec3& origin, double base_size, int levels, const Coord& dims0);
 
   int max_level() const { return levels_; }
+  // Drops the levels below `levels` (they must hold no cell).
+  void trim_levels(int levels) {
+    levels_ = std::min(levels_, levels);
+    grids_.resize(size_t(levels_) + 1);
+  }
   double base_size() const { return base_size_; }
   double cell_size(int level) const { return base_size_ / double(1 << level); }
   double fine_size() const { return cell_size(levels_); }

@@ -15,6 +15,7 @@
 #include "common/grid_key.h"
 #include "common/radix_sort.h"
 #include "common/vec.h"
+#include "grid/thin_parts.h"
 #include "vdbwrap/errors.h"
 
 namespace vdbwrap::grid {
@@ -226,6 +227,31 @@ std::vector<CellTris> level0_cells(const prep::PreparedInput& in, const Vec3& or
   return level_cells;
 }
 
+// near_thin[i] = 1 where cell i, or one of its 26 neighbours, holds a part thinner than `thin`.
+void mark_near_thin(const prep::PreparedInput& in, const std::vector<CellTris>& cells, const Vec3& origin, double h,
+                    double thin, std::vector<uint8_t>& near_thin) {
+  std::vector<uint8_t> holds(cells.size(), 0);
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, cells.size(), 64), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t i = r.begin(); i != r.end(); ++i) {
+      const Coord& c = cells[i].c;
+      const Vec3 centre{origin[0] + (c.x() + 0.5) * h, origin[1] + (c.y() + 0.5) * h, origin[2] + (c.z() + 0.5) * h};
+      holds[i] = thinnest_part(in, cells[i].tris, centre, thin) < thin;
+    }
+  });
+  std::unordered_map<GridKey, uint32_t, GridKeyHash> at;
+  for (size_t i = 0; i < cells.size(); ++i)
+    if (holds[i]) at.emplace(GridKey{cells[i].c.x(), cells[i].c.y(), cells[i].c.z()}, uint32_t(i));
+  if (at.empty()) return;
+  for (size_t i = 0; i < cells.size(); ++i) {
+    near_thin[i] = holds[i];
+    const Coord& c = cells[i].c;
+    for (int dx = -1; dx <= 1 && !near_thin[i]; ++dx)
+      for (int dy = -1; dy <= 1 && !near_thin[i]; ++dy)
+        for (int dz = -1; dz <= 1 && !near_thin[i]; ++dz)
+          near_thin[i] = at.count(GridKey{c.x() + dx, c.y() + dy, c.z() + dz}) > 0;
+  }
+}
+
 RefineResult build_refined_grid(const prep::PreparedInput& in, const RefineCriteria& params, double base,
                                 const SizeControls& sc, ProgressSink* progress, int padding) {
   const auto& pts = in.mesh.points;
@@ -233,7 +259,9 @@ RefineResult build_refined_grid(const prep::PreparedInput& in, const RefineCrite
   Box3 box;
   for (const Tri& t : tris)  // the surface's extent: stray points no triangle uses do not count
     for (uint32_t v : t) box.add(pts[v]);
-  const int levels = sc.max_level;
+  // Thin parts may ask for levels below everything else; the grid keeps only those used.
+  const int thin_from = sc.criteria_levels, thin_to = sc.criteria_levels + std::max(params.thin_levels, 0);
+  const int levels = std::max(sc.max_level, thin_to);
   Vec3 origin = box.lo - Vec3{padding * base, padding * base, padding * base};
   Coord dims0;
   for (int k = 0; k < 3; ++k) {
@@ -295,6 +323,7 @@ RefineResult build_refined_grid(const prep::PreparedInput& in, const RefineCrite
         1);
   };
 
+  int deepest = 0;
   for (int level = 0; level <= levels; ++level) {
     if (progress) {
       if (progress->cancelled()) throw Error(ErrorKind::Cancelled, "cancelled");
@@ -306,13 +335,22 @@ RefineResult build_refined_grid(const prep::PreparedInput& in, const RefineCrite
     const double h = g.cell_size(level);
     // Decide refinement per cell, in parallel; a refined cell's children are tested against
     // the parent's triangles only.
-    std::vector<uint8_t> refine(level_cells.size(), 0), unresolved(level_cells.size(), 0);
+    std::vector<uint8_t> refine(level_cells.size(), 0), unresolved(level_cells.size(), 0),
+        thin_split(level_cells.size(), 0);
     // The children's triangles are needed when they may be split in turn or checked for
     // contacts; else only which children the input meets, and a child is settled by its first
     // triangle (split cells can hold tens of millions of triangles in all: listing them for
     // each child is costly).
-    const bool child_lists = level + 1 < levels || contact;
-    std::vector<std::array<std::vector<uint32_t>, 8>> children(level < levels && child_lists ? level_cells.size() : 0);
+    const bool child_lists = level + 1 < sc.max_level || contact;
+    // Cells at or past the criteria's depth may be split for a thin part; below it, their
+    // children too, and those need their triangles listed.
+    const bool thin_here = level >= thin_from - 1 && level < thin_to;
+    // Thin parts: the cells holding one and their neighbours, so that no cell the part merely
+    // grazes stays coarse beside them (the wrap would go around it, far from the part).
+    std::vector<uint8_t> near_thin(thin_here ? level_cells.size() : 0, 0);
+    if (thin_here) mark_near_thin(in, level_cells, origin, h, params.thin_fraction * h, near_thin);
+    std::vector<std::array<std::vector<uint32_t>, 8>> children(
+        level < levels && (child_lists || thin_here) ? level_cells.size() : 0);
     std::vector<uint8_t> children_met(level < levels ? level_cells.size() : 0, 0);
     tbb::parallel_for(tbb::blocked_range<size_t>(0, level_cells.size(), 64), [&](const tbb::blocked_range<size_t>& r) {
       for (size_t i = r.begin(); i != r.end(); ++i) {
@@ -362,6 +400,11 @@ RefineResult build_refined_grid(const prep::PreparedInput& in, const RefineCrite
             (params.far_point_reach <= 0 || near_a_point(lo, h, params.far_point_reach)))
           split = has_far_point(ct.tris, lo, h);
         if (!split && criteria && !near_points.empty()) split = near_a_point(lo, h, params.near_reach);
+        bool lists = child_lists;
+        if (thin_here && near_thin[i]) {
+          if (!split && level >= thin_from) split = true, thin_split[i] = 1;
+          lists = lists || level + 1 < thin_to;
+        }
         if (!split && contact && in_contact()) {
           if (level < sc.contact_level)
             split = true;
@@ -375,9 +418,9 @@ RefineResult build_refined_grid(const prep::PreparedInput& in, const RefineCrite
         uint8_t met = 0;
         for (uint32_t t : ct.tris) {
           const uint8_t in = octants_overlapped(pts[tris[t][0]], pts[tris[t][1]], pts[tris[t][2]], centre, 0.5 * hc,
-                                                hc * (0.5 + margin_fraction), child_lists ? 0xff : uint8_t(~met));
+                                                hc * (0.5 + margin_fraction), lists ? 0xff : uint8_t(~met));
           met |= in;
-          if (child_lists) {
+          if (lists) {
             for (int k = 0; k < 8; ++k)
               if (in & (1 << k)) children[i][k].push_back(t);
           } else if (met == 0xff) {
@@ -399,13 +442,14 @@ RefineResult build_refined_grid(const prep::PreparedInput& in, const RefineCrite
         continue;
       }
       ++refined;
+      result.thin_cells += thin_split[i];
       g.set(level, c, kRefined);
       for (int k = 0; k < 8; ++k) {
         Coord child(2 * c.x() + (k & 1), 2 * c.y() + ((k >> 1) & 1), 2 * c.z() + ((k >> 2) & 1));
         if (!(children_met[i] & (1 << k))) {
           g.set(level + 1, child, kFree);
         } else {
-          next.push_back({child, child_lists ? std::move(children[i][k]) : std::vector<uint32_t>()});
+          next.push_back({child, children.empty() ? std::vector<uint32_t>() : std::move(children[i][k])});
         }
       }
     }
@@ -413,7 +457,9 @@ RefineResult build_refined_grid(const prep::PreparedInput& in, const RefineCrite
     std::sort(next.begin(), next.end(), [](const CellTris& u, const CellTris& v) { return u.c < v.c; });
     level_cells = std::move(next);
     if (level_cells.empty()) break;
+    deepest = level + 1;
   }
+  g.trim_levels(std::max(sc.max_level, deepest));
   if (progress) progress->progress("refine", 1.0, "done");
   return result;
 }

@@ -13,6 +13,7 @@ namespace vdbwrap::grid {
 
 struct RefineResult {
   std::unique_ptr<AdaptiveGrid> grid;
+  size_t thin_cells = 0;  // cells refined for a part thinner than they are
   std::vector<size_t> touched_per_level;
   std::vector<size_t> refined_per_level;
   // Contact prevention: cells at the floor level still holding parts that must stay apart.
@@ -34,6 +35,10 @@ struct RefineCriteria {
   std::vector<Vec3> refine_near;
   double near_reach = 0;
   double far_point_reach = 0;  // model units: far_point_cells only this near a refine_near point (0: everywhere)
+  // Parts of the input thinner than `thin_fraction` of the cell (grid/thin_parts.h): refined
+  // up to `thin_levels` below the criteria's depth (0: off).
+  int thin_levels = 2;
+  double thin_fraction = 0.5;
 };
 
 // base_size in model units. The grid pads the input's bounding box by `padding` level-0

@@ -9,7 +9,8 @@
 
 namespace vdbwrap::mesh {
 
-size_t orient_pieces(const std::vector<Vec3>& points, std::vector<Tri>& triangles, const EdgeTriangles* edges) {
+size_t orient_pieces(const std::vector<Vec3>& points, std::vector<Tri>& triangles, const EdgeTriangles* edges,
+                     std::vector<uint8_t>* closed) {
   // Triangles meeting at an edge used by exactly two of them must traverse it in opposite
   // directions; a breadth-first walk flips neighbours that disagree.
   EdgeTriangles made;
@@ -63,6 +64,14 @@ size_t orient_pieces(const std::vector<Vec3>& points, std::vector<Tri>& triangle
     Tri cur = triangles[t];
     if (flip[t]) std::swap(cur[1], cur[2]);
     volume[piece[t]] += dot(points[cur[0]], cross(points[cur[1]], points[cur[2]]));
+  }
+  if (closed) {
+    std::vector<uint8_t> open(pieces, 0);
+    for (uint32_t t = 0; t < triangles.size(); ++t)
+      for (int e = 0; e < 3; ++e)
+        if (across[3 * t + e] == none) open[piece[t]] = 1;
+    closed->resize(triangles.size());
+    for (uint32_t t = 0; t < triangles.size(); ++t) (*closed)[t] = !open[piece[t]];
   }
   size_t flipped = 0;
   for (uint32_t t = 0; t < triangles.size(); ++t) {

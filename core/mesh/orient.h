@@ -1,6 +1,7 @@
 // Consistent, outward orientation of each connected piece of a triangle mesh.
 #pragma once
 #include <cstddef>
+#include <cstdint>
 #include <vector>
 
 #include "common/edge_triangles.h"
@@ -11,7 +12,10 @@ namespace vdbwrap::mesh {
 // Makes the orientation consistent across every manifold edge of each connected piece and
 // turns closed-looking pieces outward (positive signed volume). Returns triangles flipped.
 // `edges`: the triangles' edges when known (flipping triangles changes none of them).
-size_t orient_pieces(const std::vector<Vec3>& points, std::vector<Tri>& triangles,
-                     const EdgeTriangles* edges = nullptr);
+// `closed`, when given: 1 per triangle whose piece is closed (every side shared with one other
+// triangle of it), so that its normal points out of the material; 0 on open pieces and soups,
+// whose outward side is a guess.
+size_t orient_pieces(const std::vector<Vec3>& points, std::vector<Tri>& triangles, const EdgeTriangles* edges = nullptr,
+                     std::vector<uint8_t>* closed = nullptr);
 
 }  // namespace vdbwrap::mesh

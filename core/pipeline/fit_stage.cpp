@@ -26,7 +26,7 @@ void report_snapping(WrapReport& report, const fit::FittedSurface& fitted) {
 void insert_feature_nodes(WrapRun& run, const std::vector<fit::FeatureCurve>& curves) {
   StageTimer timer("insert feature nodes", run.report.stages);
   if (run.progress) run.progress->progress("project", 0.97, "inserting nodes where the wrap misses a feature curve");
-  const fit::FeatureInsertParams fp = feature_insert_params(run.params, run.base, run.refined.grid->fine_size());
+  const fit::FeatureInsertParams fp = feature_insert_params(run.params, run.base, run.report.finest_size);
   const auto fs = fit::insert_feature_nodes(run.fitted, curves, run.index(), run.prepared.origin, fp);
   FeatureStats& features = run.report.features;
   features.points_missed = fs.samples_missed;
@@ -39,7 +39,7 @@ void insert_feature_nodes(WrapRun& run, const std::vector<fit::FeatureCurve>& cu
 void coarsen(WrapRun& run) {
   StageTimer timer("coarsen", run.report.stages);
   fit::FittedSurface& fitted = run.fitted;
-  const post::CoarsenParams cp = coarsen_params(run.params, run.base, run.refined.grid->fine_size());
+  const post::CoarsenParams cp = coarsen_params(run.params, run.base, run.report.finest_size);
   const post::CoarsenStats cs = post::coarsen(fitted.points, fitted.triangles, fitted.snapped, run.index(),
                                               run.prepared.origin, cp, run.progress);
   // The per-point data follow their points (snapped nodes are never merged away).

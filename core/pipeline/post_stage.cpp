@@ -34,7 +34,7 @@ void remesh(WrapRun& run) {
   report.quality.before = post::analyse_quality(surface.points, surface.triangles, surface.cell_size, run.quality_ref,
                                                 &flags, nullptr, &run.deviation_memo);
   if (run.params.remesh) {
-    const post::RemeshParams rp = remesh_params(run.params, run.base, run.refined.grid->fine_size());
+    const post::RemeshParams rp = remesh_params(run.params, run.base, run.report.finest_size);
     const post::RemeshStats st =
         post::remesh_bad_regions(surface, flags, run.quality_ref, run.prepared, rp, run.progress);
     report.quality.regions = st.regions;
@@ -51,7 +51,7 @@ void remesh(WrapRun& run) {
 // sliver removal, which then works on the triangles the splits made).
 void refine_proximity(WrapRun& run) {
   StageTimer timer("proximity", run.report.stages);
-  const post::RemeshParams rp = remesh_params(run.params, run.base, run.refined.grid->fine_size());
+  const post::RemeshParams rp = remesh_params(run.params, run.base, run.report.finest_size);
   const post::ProximityRefinementParams pp =
       post::proximity_refinement_params(run.base, rp.offset, 0.5 * rp.max_deviation, rp.float_coordinates);
   if (run.progress)
@@ -78,7 +78,7 @@ void post_process(WrapRun& run) {
   run.check_cancel();
   if (run.params.remove_slivers) {  // flips, collapses and tangential moves, held to the rebuilds' tolerance
     StageTimer timer("slivers", run.report.stages);
-    const post::RemeshParams rp = remesh_params(run.params, run.base, run.refined.grid->fine_size());
+    const post::RemeshParams rp = remesh_params(run.params, run.base, run.report.finest_size);
     const post::SliverRemovalParams sp = post::sliver_removal_params(rp.max_deviation, rp.offset, rp.float_coordinates);
     const post::SliverRemovalStats st = post::remove_slivers(run.surface, run.quality_ref, sp);
     SliverRemovalReport& out = run.report.quality.sliver_removal;

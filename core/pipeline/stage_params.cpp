@@ -11,8 +11,10 @@ grid::SizeRequests size_requests(const WrapParams& params) {
 }
 
 grid::RefineCriteria refine_criteria(const WrapParams& params) {
-  return {params.refine_max_triangles, params.refine_normal_spread_deg, params.refine_at_features,
-          params.refine_far_cells ? 1.0 : 0.0};
+  grid::RefineCriteria c{params.refine_max_triangles, params.refine_normal_spread_deg, params.refine_at_features,
+                         params.refine_far_cells ? 1.0 : 0.0};
+  c.thin_levels = params.thin_part_levels;
+  return c;
 }
 
 fit::FitParams fit_params(const WrapParams& params) {

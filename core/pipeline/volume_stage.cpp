@@ -93,6 +93,7 @@ void build_volume(WrapRun& run) {
     run.refined = grid::build_refined_grid(prepared, criteria, run.base, run.controls, run.progress);
   }
   report.cells_per_level = run.refined.touched_per_level;
+  report.thin_part_cells = run.refined.thin_cells;
   if (run.controls.contact()) report_contacts(run);
   run.check_cancel();
 

@@ -143,7 +143,7 @@ PreparedInput prepare(const Mesh& input, const PrepareParams& params, ProgressSi
   if (progress) progress->progress("prepare", 0.3, "orienting connected pieces");
   // One edge listing for orienting and for the feature edges: flips change no triangle's edges.
   const EdgeTriangles edges = edge_triangles(m.triangles);
-  out.flipped_triangles = mesh::orient_pieces(m.points, m.triangles, &edges);
+  out.flipped_triangles = mesh::orient_pieces(m.points, m.triangles, &edges, &out.closed_piece);
 
   out.normals.resize(m.triangles.size());
   tbb::parallel_for(tbb::blocked_range<size_t>(0, m.triangles.size(), 4096), [&](const tbb::blocked_range<size_t>& r) {

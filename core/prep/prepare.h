@@ -30,6 +30,9 @@ struct PreparedInput {
   Vec3 origin{0, 0, 0};  // world = local + origin
   double diagonal = 0;
   std::vector<Vec3> normals;  // unit normal per triangle
+  // 1 per triangle whose piece is closed, so that its normal points out of the material (the
+  // thin-part refinement reads which side is solid); empty when unknown.
+  std::vector<uint8_t> closed_piece;
   std::vector<FeatureEdge> feature_edges;
   std::vector<IntersectionSegment> intersections;
   // Pairs of mesh triangles that intersect, sorted: the pipeline's only search for them. The

@@ -43,6 +43,7 @@ TEST(ParamsMapping, RoundTripsEveryFieldAndRefusesOutOfRange) {
   p.refine_far_cells = !vdbwrap::WrapParams().refine_far_cells;
   p.refine_where_far = !vdbwrap::WrapParams().refine_where_far;
   p.corner_angle_deg = 55;
+  p.thin_part_levels = 3;
   p.compute_distances = false;
   vdbwrap::WrapParams q = vdbwrap::api::to_wrap_params(vdbwrap::api::to_proto(p));
   EXPECT_EQ(q.base_size.value, 0.25);
@@ -66,6 +67,7 @@ TEST(ParamsMapping, RoundTripsEveryFieldAndRefusesOutOfRange) {
   EXPECT_EQ(q.refine_far_cells, p.refine_far_cells);
   EXPECT_EQ(q.refine_where_far, p.refine_where_far);
   EXPECT_EQ(q.corner_angle_deg, 55);
+  EXPECT_EQ(q.thin_part_levels, 3);
   EXPECT_FALSE(q.compute_distances);
   // The voxel-stage controls (issue 5), through the API and back.
   vdbwrap::WrapParams c;

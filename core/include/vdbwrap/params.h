@@ -98,6 +98,11 @@ struct WrapParams {
   int refine_max_triangles = 64;         // more triangles than this in a cell: refine
   double refine_normal_spread_deg = 20;  // normals spread more than this: refine
   bool refine_at_features = true;        // sharp, boundary or intersection edges: refine
+  // Parts of the input thinner than half a cell across two directions (rods, narrow bars, small
+  // closed pieces) are refined up to this many levels below `levels`, so the wrap has nodes enough
+  // across them: on a rod a tenth of a cell thick, a cell-sized lattice leaves only slivers.
+  // 0 turns it off. Closed pieces only (which side is solid is known there).
+  int thin_part_levels = 2;
   // Refine a cell the input passes through when a point of its boundary lies more than a base
   // cell from its triangles: held-back nodes then stay within a base cell of the input.
   bool refine_far_cells = false;

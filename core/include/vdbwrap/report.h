@@ -156,6 +156,7 @@ struct WrapReport {
   LeakReport leak;
   ContactReport contact;
   size_t manifold_fixes = 0;   // cells taken out of the volume to keep it manifold
+  size_t thin_part_cells = 0;  // cells refined below --levels for a part thinner than half of them
   size_t nodes_held_back = 0;  // nodes kept off the input to stay valid
   // The first fit's nodes held back more than a base cell from the input, and its triangles with
   // a point over 3/4 of a base cell off; where any point was over a base cell off, the grid was

@@ -1,0 +1,64 @@
+#include "grid/thin_parts.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace vdbwrap::grid {
+
+double thinnest_part(const prep::PreparedInput& in, const std::vector<uint32_t>& cell_tris, const Vec3& centre,
+                     double within) {
+  if (in.closed_piece.size() != in.mesh.triangles.size() || cell_tris.size() < 4) return within;
+  constexpr double kOpposite = -0.8;  // cos 143 degrees: a wedge's faces are not a part's two sides
+  constexpr double kTurned = 0.7071;  // cos 45 degrees
+  constexpr size_t kMostPairs = 64;   // the thinnest pairs weighed against each other
+  // Coplanar faces of two closed pieces that touch (an assembly's shared face) are no part.
+  const double least = 1e-3 * within;
+  struct Face {
+    double offset;  // the plane's distance from the centre along the normal
+    uint32_t t;
+  };
+  struct Pair {
+    double thickness;
+    Vec3 normal;
+  };
+  std::vector<Face> front, back;
+  std::vector<Pair> pairs;
+  for (int axis = 0; axis < 3; ++axis) {
+    front.clear(), back.clear();
+    for (uint32_t t : cell_tris) {
+      if (!in.closed_piece[t]) continue;
+      const Vec3& n = in.normals[t];
+      const Face f{dot(n, in.mesh.points[in.mesh.triangles[t][0]] - centre), t};
+      if (n[axis] > 0.5) front.push_back(f);
+      if (n[axis] < -0.5) back.push_back(f);
+    }
+    if (front.empty() || back.empty()) continue;
+    std::sort(back.begin(), back.end(), [](const Face& a, const Face& b) { return a.offset < b.offset; });
+    for (const Face& f : front) {
+      // Faces pointing away from each other with solid between: the offsets add up to the
+      // thickness (facing each other, across a gap, they add up to minus the gap). The
+      // thinnest such pair for this face.
+      auto it = std::lower_bound(back.begin(), back.end(), least - f.offset,
+                                 [](const Face& a, double v) { return a.offset < v; });
+      for (; it != back.end() && f.offset + it->offset < within; ++it)
+        if (dot(in.normals[f.t], in.normals[it->t]) <= kOpposite) {
+          pairs.push_back({f.offset + it->offset, in.normals[f.t]});
+          break;
+        }
+    }
+  }
+  // Thin across two directions at least 45 degrees apart: a rod, not a wall (whose rim, where a
+  // wall is wrapped in a strip of needles, the sliver removal's rail splits mend at less cost).
+  std::sort(pairs.begin(), pairs.end(), [](const Pair& a, const Pair& b) { return a.thickness < b.thickness; });
+  if (pairs.size() > kMostPairs) pairs.resize(kMostPairs);
+  double best = within;
+  for (size_t i = 0; i < pairs.size() && pairs[i].thickness < best; ++i)
+    for (size_t j = 0; j < i; ++j)
+      if (std::abs(dot(pairs[i].normal, pairs[j].normal)) < kTurned) {
+        best = pairs[i].thickness;  // the thicker of the two (pairs are sorted)
+        break;
+      }
+  return best;
+}
+
+}  // namespace vdbwrap::grid
