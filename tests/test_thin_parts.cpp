@@ -48,8 +48,7 @@ grid::RefineResult refine(const Mesh& m, double base, int levels, int thin_level
   params.levels = levels;
   params.thin_part_levels = thin_levels;
   const prep::PreparedInput in = prep::prepare(m, pipeline::prepare_params(params), nullptr);
-  auto controls =
-      grid::make_size_controls(pipeline::size_requests(params), in.mesh, in.origin, in.diagonal, base);
+  auto controls = grid::make_size_controls(pipeline::size_requests(params), in.mesh, in.origin, in.diagonal, base);
   return grid::build_refined_grid(in, pipeline::refine_criteria(params), base, controls, nullptr);
 }
 
