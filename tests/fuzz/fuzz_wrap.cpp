@@ -6,7 +6,7 @@
 //   0  flags: bits 0-1 volume (outside, inside, seed points, outside), 2 gap closure,
 //      3 contact prevention, 4 group against group (three parts), 5 no feature snapping, 6 no remeshing, 7 far from
 //      origin
-//   1  levels (b % 3)            2  base size, % of the diagonal (finest cell >= 1.5 %)
+//   1  levels (b % 3), thin-part levels (2 - b / 3 % 3)    2  base size, % of the diagonal (finest cell >= 1.5 %)
 //   3  scale 10^(b % 19 - 9)     4  gap closure 0.5..20 %     5  translation 10^(b % 8) x scale
 //   6  seed count (1 + b % 2), then 3 bytes per seed point
 //   then operations, one byte each plus their operands, until the bytes or 48 triangles run out:
@@ -193,7 +193,9 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   const uint8_t flags = in.next();
   WrapParams params;
   params.threads = 1;  // one core per fuzzer; results do not depend on it
-  params.levels = in.next() % 3;
+  const uint8_t depth = in.next();
+  params.levels = depth % 3;
+  params.thin_part_levels = 2 - depth / 3 % 3;  // the default first (the seeds' bytes are small)
   // Small grids keep one run well under a second: finest cell at least 1.5 % of the diagonal.
   const double min_base = 1.5 * double(1 << params.levels);
   params.base_size = Length{std::max(min_base, 3.0 + double(in.next() % 23)), true};
@@ -245,9 +247,10 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   // VDBWRAP_FUZZ_VERBOSE=1: what an input does (for triage), on stderr.
   static const bool verbose = std::getenv("VDBWRAP_FUZZ_VERBOSE") != nullptr;
   if (verbose)
-    std::fprintf(stderr, "fuzz_wrap: %zu triangles, %zu points, %zu parts, base %g%%, levels %d, volume %d, gap %s\n",
+    std::fprintf(stderr,
+                 "fuzz_wrap: %zu triangles, %zu points, %zu parts, base %g%%, levels %d+%d, volume %d, gap %s\n",
                  mesh.triangles.size(), mesh.points.size(), mesh.part_names.size(), params.base_size.value,
-                 params.levels, int(params.volume),
+                 params.levels, params.thin_part_levels, int(params.volume),
                  params.gap_closure ? params.gap_closure->to_string().c_str() : "off");
   WrapResult result;
   try {
