@@ -129,6 +129,12 @@ TEST(ThinParts, RefinementGoesBelowTheLevelsAroundARodOnly) {
   const grid::RefineResult off = refine(rod, 10, 1, 0);
   EXPECT_EQ(off.grid->max_level(), 1);
   EXPECT_EQ(off.thin_cells, 0u);
+  // Around the outside only: for the inside or a seed point's volume, finer cells beside a
+  // part could open a passage (a leak where there was none).
+  WrapParams inside;
+  inside.volume = VolumeChoice::Inside;
+  EXPECT_EQ(pipeline::refine_criteria(inside).thin_levels, 0);
+  EXPECT_EQ(pipeline::refine_criteria(WrapParams{}).thin_levels, 2);
   // A block of the same extent has no thin part: the grid keeps --levels' depth, as without.
   const grid::RefineResult block = refine(box_mesh({-20, -20, -50}, {20, 20, 50}), 10, 1, 2);
   EXPECT_EQ(block.grid->max_level(), 1);

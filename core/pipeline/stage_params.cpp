@@ -13,7 +13,9 @@ grid::SizeRequests size_requests(const WrapParams& params) {
 grid::RefineCriteria refine_criteria(const WrapParams& params) {
   grid::RefineCriteria c{params.refine_max_triangles, params.refine_normal_spread_deg, params.refine_at_features,
                          params.refine_far_cells ? 1.0 : 0.0};
-  c.thin_levels = params.thin_part_levels;
+  // Around the outside only, as the refit: finer cells beside a part can open a passage, and
+  // for a seed point or the inside volume that would turn a result into a leak.
+  c.thin_levels = params.volume == VolumeChoice::Outside ? params.thin_part_levels : 0;
   return c;
 }
 

@@ -101,7 +101,8 @@ struct WrapParams {
   // Parts of the input thinner than half a cell across two directions (rods, narrow bars, small
   // closed pieces) are refined up to this many levels below `levels`, so the wrap has nodes enough
   // across them: on a rod a tenth of a cell thick, a cell-sized lattice leaves only slivers.
-  // 0 turns it off. Closed pieces only (which side is solid is known there).
+  // 0 turns it off. Closed pieces only (which side is solid is known there); the outside
+  // volume only (a finer grid could open a passage into the inside or a seed point's volume).
   int thin_part_levels = 2;
   // Refine a cell the input passes through when a point of its boundary lies more than a base
   // cell from its triangles: held-back nodes then stay within a base cell of the input.
