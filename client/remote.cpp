@@ -21,6 +21,7 @@
 #include <mutex>
 #include <random>
 #include <sstream>
+#include <memory>
 #include <thread>
 
 #include <nlohmann/json.hpp>
@@ -274,6 +275,33 @@ void write_file(const std::string& path, const std::string& bytes) {
   if (std::rename(tmp.c_str(), path.c_str()) != 0) throw Error(ErrorKind::OutputFailed, path + ": cannot write");
 }
 
+// A call retried while the server is unreachable, for up to --retry seconds. wait_for_ready
+// covers a server not up yet; a call in flight when the server goes down (a crash, a restart)
+// fails at once with UNAVAILABLE, and is made again. `ctx` is the last attempt's context (its
+// trailing metadata give the exit code). The calls retried must be safe to repeat. A bounded
+// call has a deadline (30 s at most); a download is not bounded (a large result takes longer).
+template <typename Call>
+grpc::Status call_retrying(const Connection& conn, std::unique_ptr<grpc::ClientContext>& ctx, Call&& call,
+                           bool bounded = true) {
+  const auto give_up =
+      Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(conn.retry_seconds));
+  for (int attempt = 0;; ++attempt) {
+    ctx = std::make_unique<grpc::ClientContext>();
+    conn.prepare(*ctx);
+    // Unbounded, it fails fast while nothing listens (else it would wait for ever), and the
+    // loop tries again.
+    ctx->set_wait_for_ready(bounded);
+    const auto left = std::max<Clock::duration>(std::chrono::seconds(1), give_up - Clock::now());
+    if (bounded)
+      ctx->set_deadline(std::chrono::system_clock::now() +
+                        std::chrono::duration_cast<std::chrono::system_clock::duration>(
+                            std::min<Clock::duration>(left, std::chrono::seconds(30))));
+    grpc::Status st = call(*ctx);
+    if (st.error_code() != grpc::StatusCode::UNAVAILABLE || Clock::now() > give_up) return st;
+    std::this_thread::sleep_for(std::chrono::milliseconds(std::min(2000, 200 * (attempt + 1))));
+  }
+}
+
 // Watches job `id` on `channel` until it ends (reconnecting while the server restarts), then
 // downloads its result into target. Returns the exit code.
 int follow(const Connection& conn, const std::shared_ptr<grpc::Channel>& channel, const std::string& id,
@@ -308,14 +336,14 @@ int follow(const Connection& conn, const std::shared_ptr<grpc::Channel>& channel
   // Final status and report.
   pb::JobStatus status;
   {
-    grpc::ClientContext ctx;
-    conn.prepare(ctx);
+    std::unique_ptr<grpc::ClientContext> ctx;
     pb::JobId req;
     req.set_job_id(id);
-    grpc::Status st = stub->GetStatus(&ctx, req, &status);
+    grpc::Status st =
+        call_retrying(conn, ctx, [&](grpc::ClientContext& c) { return stub->GetStatus(&c, req, &status); });
     if (!st.ok()) {
       display.note(index, "error: job " + id + ": " + describe(st));
-      return exit_code_of(st, ctx);
+      return exit_code_of(st, *ctx);
     }
   }
   if (status.state() != pb::JOB_STATE_SUCCEEDED) {
@@ -335,36 +363,41 @@ int follow(const Connection& conn, const std::shared_ptr<grpc::Channel>& channel
     }
     return exit_code(api::to_error_kind(status.error_kind()));
   }
-  // Download, straight to OUTPUT.tmp; renamed when complete.
+  // Download, straight to OUTPUT.tmp; renamed when complete. Made again from the start while
+  // the server is unreachable (it keeps finished jobs across a restart).
   const std::string tmp = target.output + ".tmp";
   {
-    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-    if (!out) {
-      display.note(index, "error: " + target.output + ": cannot write");
-      return exit_code(ErrorKind::OutputFailed);
-    }
-    grpc::ClientContext ctx;
-    conn.prepare(ctx);
+    std::unique_ptr<grpc::ClientContext> ctx;
+    uint64_t total = 0, got = 0;
+    bool written = true;
     pb::DownloadRequest req;
     req.set_job_id(id);
     req.set_format(format);
-    auto reader = stub->Download(&ctx, req);
-    pb::DownloadChunk chunk;
-    uint64_t total = 0, got = 0;
-    bool first = true;
-    while (reader->Read(&chunk)) {
-      if (first) total = chunk.total_size();
-      first = false;
-      out.write(chunk.data().data(), std::streamsize(chunk.data().size()));
-      got += chunk.data().size();
-    }
-    grpc::Status st = reader->Finish();
-    out.close();
-    if (!st.ok() || got != total || !out) {
+    grpc::Status st = call_retrying(
+        conn, ctx,
+        [&](grpc::ClientContext& c) {
+          std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
+          total = got = 0;
+          auto reader = stub->Download(&c, req);
+          pb::DownloadChunk chunk;
+          bool first = true;
+          while (reader->Read(&chunk)) {
+            if (first) total = chunk.total_size();
+            first = false;
+            out.write(chunk.data().data(), std::streamsize(chunk.data().size()));
+            got += chunk.data().size();
+          }
+          grpc::Status s = reader->Finish();
+          out.close();
+          written = bool(out);
+          return s;
+        },
+        false);
+    if (!st.ok() || got != total || !written) {
       std::remove(tmp.c_str());
       if (!st.ok()) {
         display.note(index, "error: job " + id + ": download failed: " + describe(st));
-        return exit_code_of(st, ctx);
+        return exit_code_of(st, *ctx);
       }
       display.note(index,
                    "error: job " + id + (got != total ? ": download incomplete" : ": cannot write " + target.output));
@@ -804,19 +837,15 @@ int RemoteCommands::Impl::run_wait() {
   std::vector<pb::MeshFormat> formats;
   std::vector<bool> repairs;
   for (const auto& id : ids) {
-    grpc::ClientContext ctx;
-    conn.prepare(ctx);
-    ctx.set_wait_for_ready(true);
-    ctx.set_deadline(std::chrono::system_clock::now() +
-                     std::chrono::duration_cast<std::chrono::system_clock::duration>(
-                         std::chrono::duration<double>(std::max(1.0, conn.retry_seconds))));
+    std::unique_ptr<grpc::ClientContext> ctx;
     pb::JobId req;
     req.set_job_id(id);
     pb::JobStatus status;
-    grpc::Status st = stub->GetStatus(&ctx, req, &status);
+    grpc::Status st =
+        call_retrying(conn, ctx, [&](grpc::ClientContext& c) { return stub->GetStatus(&c, req, &status); });
     if (!st.ok()) {
       std::fprintf(stderr, "vdbwrap: error: job %s: %s\n", id.c_str(), describe(st).c_str());
-      return exit_code_of(st, ctx);
+      return exit_code_of(st, *ctx);
     }
     names.push_back(status.spec().file_name().empty() ? id : status.spec().file_name());
     stems.push_back(stem_of(names.back()));
