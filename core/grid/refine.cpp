@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <unordered_map>
+#include <unordered_set>
 
 #include "common/cell_lists.h"
 #include "common/closest_point.h"
@@ -238,9 +239,9 @@ void mark_near_thin(const prep::PreparedInput& in, const std::vector<CellTris>& 
       holds[i] = thinnest_part(in, cells[i].tris, centre, thin) < thin;
     }
   });
-  std::unordered_map<GridKey, uint32_t, GridKeyHash> at;
+  std::unordered_set<GridKey, GridKeyHash> at;
   for (size_t i = 0; i < cells.size(); ++i)
-    if (holds[i]) at.emplace(GridKey{cells[i].c.x(), cells[i].c.y(), cells[i].c.z()}, uint32_t(i));
+    if (holds[i]) at.insert(GridKey{cells[i].c.x(), cells[i].c.y(), cells[i].c.z()});
   if (at.empty()) return;
   for (size_t i = 0; i < cells.size(); ++i) {
     near_thin[i] = holds[i];
