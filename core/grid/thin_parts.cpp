@@ -7,7 +7,13 @@ namespace vdbwrap::grid {
 
 double thinnest_part(const prep::PreparedInput& in, const std::vector<uint32_t>& cell_tris, const Vec3& centre,
                      double within) {
-  if (in.closed_piece.size() != in.mesh.triangles.size() || cell_tris.size() < 4) return within;
+  if (in.closed_piece.size() != in.mesh.triangles.size()) return within;
+  // A closed piece smaller than the cell all round (a pin, a particle, a scan's stray blob) is
+  // as thin as it is long, whatever its faces: a tetrahedron has no two sides facing away.
+  double best = within;
+  for (uint32_t t : cell_tris)
+    if (in.closed_piece[t] != mesh::kOpenPiece) best = std::min(best, double(in.closed_piece_size[in.closed_piece[t]]));
+  if (cell_tris.size() < 4) return best;
   constexpr double kOpposite = -0.8;  // cos 143 degrees: a wedge's faces are not a part's two sides
   constexpr double kTurned = 0.7071;  // cos 45 degrees
   constexpr size_t kMostPairs = 64;   // the thinnest pairs weighed against each other
@@ -26,7 +32,7 @@ double thinnest_part(const prep::PreparedInput& in, const std::vector<uint32_t>&
   for (int axis = 0; axis < 3; ++axis) {
     front.clear(), back.clear();
     for (uint32_t t : cell_tris) {
-      if (!in.closed_piece[t]) continue;
+      if (in.closed_piece[t] == mesh::kOpenPiece) continue;
       const Vec3& n = in.normals[t];
       const Face f{dot(n, in.mesh.points[in.mesh.triangles[t][0]] - centre), t};
       if (n[axis] > 0.5) front.push_back(f);
@@ -51,7 +57,6 @@ double thinnest_part(const prep::PreparedInput& in, const std::vector<uint32_t>&
   // wall is wrapped in a strip of needles, the sliver removal's rail splits mend at less cost).
   std::sort(pairs.begin(), pairs.end(), [](const Pair& a, const Pair& b) { return a.thickness < b.thickness; });
   if (pairs.size() > kMostPairs) pairs.resize(kMostPairs);
-  double best = within;
   for (size_t i = 0; i < pairs.size() && pairs[i].thickness < best; ++i)
     for (size_t j = 0; j < i; ++j)
       if (std::abs(dot(pairs[i].normal, pairs[j].normal)) < kTurned) {

@@ -16,10 +16,10 @@ namespace vdbwrap::grid {
 // A part's side is two triangles of closed pieces whose normals point away from each other
 // (over 143 degrees apart), with solid between them: the distance between their planes,
 // measured through `centre` (the planes' offsets from it along their own normals). A part is
-// thin across two such sides at least 45 degrees apart, and as thick as the thicker. A plain
-// thin wall is thin across one only: each side of the wrap projects to its own face there,
-// and its rim's strip of needles is mended by the sliver removal at less cost than refining
-// along the wall.
+// thin across two such sides at least 45 degrees apart, and as thick as the thicker; a closed
+// piece is also as thin as its bounding box's longest side. A plain thin wall is thin across
+// one only: each side of the wrap projects to its own face there, and its rim's strip of
+// needles is mended by the sliver removal at less cost than refining along the wall.
 double thinnest_part(const prep::PreparedInput& in, const std::vector<uint32_t>& cell_tris, const Vec3& centre,
                      double within);
 

@@ -10,7 +10,7 @@
 namespace vdbwrap::mesh {
 
 size_t orient_pieces(const std::vector<Vec3>& points, std::vector<Tri>& triangles, const EdgeTriangles* edges,
-                     std::vector<uint8_t>* closed) {
+                     std::vector<uint32_t>* closed) {
   // Triangles meeting at an edge used by exactly two of them must traverse it in opposite
   // directions; a breadth-first walk flips neighbours that disagree.
   EdgeTriangles made;
@@ -70,8 +70,14 @@ size_t orient_pieces(const std::vector<Vec3>& points, std::vector<Tri>& triangle
     for (uint32_t t = 0; t < triangles.size(); ++t)
       for (int e = 0; e < 3; ++e)
         if (across[3 * t + e] == none) open[piece[t]] = 1;
+    // Closed pieces numbered in order of their first triangle.
+    std::vector<uint32_t> number(pieces, kOpenPiece);
+    uint32_t closed_pieces = 0;
     closed->resize(triangles.size());
-    for (uint32_t t = 0; t < triangles.size(); ++t) (*closed)[t] = !open[piece[t]];
+    for (uint32_t t = 0; t < triangles.size(); ++t) {
+      if (!open[piece[t]] && number[piece[t]] == kOpenPiece) number[piece[t]] = closed_pieces++;
+      (*closed)[t] = number[piece[t]];
+    }
   }
   size_t flipped = 0;
   for (uint32_t t = 0; t < triangles.size(); ++t) {

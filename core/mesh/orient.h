@@ -12,10 +12,11 @@ namespace vdbwrap::mesh {
 // Makes the orientation consistent across every manifold edge of each connected piece and
 // turns closed-looking pieces outward (positive signed volume). Returns triangles flipped.
 // `edges`: the triangles' edges when known (flipping triangles changes none of them).
-// `closed`, when given: 1 per triangle whose piece is closed (every side shared with one other
-// triangle of it), so that its normal points out of the material; 0 on open pieces and soups,
-// whose outward side is a guess.
+// `closed`, when given: per triangle, the number of its piece among the closed ones (every side
+// shared with one other triangle of it), whose normals point out of the material; kOpenPiece
+// on open pieces and soups, whose outward side is a guess.
+constexpr uint32_t kOpenPiece = UINT32_MAX;
 size_t orient_pieces(const std::vector<Vec3>& points, std::vector<Tri>& triangles, const EdgeTriangles* edges = nullptr,
-                     std::vector<uint8_t>* closed = nullptr);
+                     std::vector<uint32_t>* closed = nullptr);
 
 }  // namespace vdbwrap::mesh

@@ -42,6 +42,28 @@ InputIntersections input_intersections(const std::vector<check::TrianglePair>& m
   return counts;
 }
 
+namespace {
+
+// The longest side of each closed piece's bounding box.
+std::vector<float> closed_piece_sizes(const Mesh& m, const std::vector<uint32_t>& closed_piece) {
+  std::vector<Vec3> lo, hi;
+  for (uint32_t t = 0; t < m.triangles.size(); ++t) {
+    const uint32_t p = closed_piece[t];
+    if (p == mesh::kOpenPiece) continue;
+    if (p >= lo.size())
+      lo.resize(p + 1, Vec3{HUGE_VAL, HUGE_VAL, HUGE_VAL}), hi.resize(p + 1, Vec3{-HUGE_VAL, -HUGE_VAL, -HUGE_VAL});
+    for (uint32_t v : m.triangles[t])
+      for (int a = 0; a < 3; ++a)
+        lo[p][a] = std::min(lo[p][a], m.points[v][a]), hi[p][a] = std::max(hi[p][a], m.points[v][a]);
+  }
+  std::vector<float> size(lo.size());
+  for (size_t p = 0; p < lo.size(); ++p)
+    size[p] = float(std::max({hi[p][0] - lo[p][0], hi[p][1] - lo[p][1], hi[p][2] - lo[p][2]}));
+  return size;
+}
+
+}  // namespace
+
 PreparedInput prepare(const Mesh& input, const PrepareParams& params, ProgressSink* progress,
                       const ExactWeld* input_weld) {
   PreparedInput out;
@@ -144,6 +166,7 @@ PreparedInput prepare(const Mesh& input, const PrepareParams& params, ProgressSi
   // One edge listing for orienting and for the feature edges: flips change no triangle's edges.
   const EdgeTriangles edges = edge_triangles(m.triangles);
   out.flipped_triangles = mesh::orient_pieces(m.points, m.triangles, &edges, &out.closed_piece);
+  out.closed_piece_size = closed_piece_sizes(m, out.closed_piece);
 
   out.normals.resize(m.triangles.size());
   tbb::parallel_for(tbb::blocked_range<size_t>(0, m.triangles.size(), 4096), [&](const tbb::blocked_range<size_t>& r) {

@@ -9,6 +9,7 @@
 #include "common/edge_triangles.h"
 #include "common/exact_weld.h"
 #include "mesh/feature_edges.h"
+#include "mesh/orient.h"
 #include "vdbwrap/mesh.h"
 #include "vdbwrap/progress.h"
 #include "vdbwrap/report.h"
@@ -30,9 +31,11 @@ struct PreparedInput {
   Vec3 origin{0, 0, 0};  // world = local + origin
   double diagonal = 0;
   std::vector<Vec3> normals;  // unit normal per triangle
-  // 1 per triangle whose piece is closed, so that its normal points out of the material (the
-  // thin-part refinement reads which side is solid); empty when unknown.
-  std::vector<uint8_t> closed_piece;
+  // Per triangle, its closed piece (an index into closed_piece_size), whose normals point out
+  // of the material, or mesh::kOpenPiece; the thin-part refinement reads which side is solid
+  // and which pieces are small. Empty when unknown.
+  std::vector<uint32_t> closed_piece;
+  std::vector<float> closed_piece_size;  // per closed piece, the longest side of its bounding box
   std::vector<FeatureEdge> feature_edges;
   std::vector<IntersectionSegment> intersections;
   // Pairs of mesh triangles that intersect, sorted: the pipeline's only search for them. The
