@@ -115,6 +115,64 @@ TEST(Deviation, ReportCarriesWhereTheMaximumIs) {
   EXPECT_NE(json.find("\"max_at\""), std::string::npos) << json;
 }
 
+// The farthest point of a square from two short segments beside it lies where the two are
+// equally far, on the square's rim: between any samples (a few thousandths apart here). The
+// sampled max finds it to a ten-thousandth of the diagonal (the search climbs from the
+// farthest lattice points), and no more: it is a distance of a point of the square.
+TEST(Deviation, SampledMaxIsFoundBetweenTheSamples) {
+  const Mesh square{{{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}}, {{0, 1, 2}, {0, 2, 3}}};
+  const Vec3 a{-0.01, 0.3, 0}, b{0.93, 0.37, 0.05};
+  Mesh marks;  // two slivers of triangles, each nearly a point
+  for (const Vec3& p : {a, b}) {
+    const uint32_t k = uint32_t(marks.points.size());
+    marks.points.insert(marks.points.end(), {p, p + Vec3{1e-9, 0, 0}, p + Vec3{0, 1e-9, 0}});
+    marks.triangles.push_back({k, k + 1, k + 2});
+  }
+  // Each of the two distances is convex, so the max of the nearer is at a corner or where the
+  // plane between a and b crosses the rim: |p - a|^2 = |p - b|^2 is linear along an edge.
+  double truth = 0;
+  auto nearer = [&](const Vec3& p) { return std::min(norm(p - a), norm(p - b)); };
+  for (int e = 0; e < 4; ++e) {
+    const Vec3 &p = square.points[e], &q = square.points[(e + 1) % 4];
+    truth = std::max(truth, nearer(p));
+    // dot(p + t (q - p), 2 (b - a)) = |b|^2 - |a|^2
+    const double t = (dot(b, b) - dot(a, a) - 2 * dot(p, b - a)) / (2 * dot(q - p, b - a));
+    if (t >= 0 && t <= 1) truth = std::max(truth, nearer(p + (q - p) * t));
+  }
+  const DistanceStats d = sampled_distance(square, marks);
+  EXPECT_NEAR(d.max, truth, 1e-4 * d.diagonal);
+  EXPECT_LE(d.max, truth + 1e-12);
+  EXPECT_NEAR(std::min(norm(d.max_at - a), norm(d.max_at - b)), d.max, 1e-6);
+  EXPECT_NEAR(d.max_at[2], 0.0, 1e-12);
+}
+
+// The mean and p95 weigh the surface by area, not by vertex: a fan of a thousand small
+// triangles at one corner of a plate (on the plate, as far as the rest from the reference)
+// does not move them. A point of the file no triangle uses is no part of the surface.
+TEST(Deviation, SampledMeanWeighsByAreaAndIgnoresStrayPoints) {
+  const Mesh reference{{{-1, -1, -1}, {3, -1, -1}, {3, 3, -1}, {-1, 3, -1}}, {{0, 1, 2}, {0, 2, 3}}};
+  Mesh plate{{{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}}, {{0, 1, 2}, {0, 2, 3}}};
+  const DistanceStats flat = sampled_distance(plate, reference);
+  EXPECT_NEAR(flat.mean, 1.0, 1e-9);
+  // The corner (0, 0) to (0.01, 0.01) cut into a fan of 1000 triangles, lifted 0.5 off the plate.
+  Mesh fanned = plate;
+  const uint32_t centre = uint32_t(fanned.points.size());
+  fanned.points.push_back({0.005, 0.005, 0.5});
+  for (int i = 0; i < 1000; ++i) {
+    const double t0 = 2 * M_PI * i / 1000, t1 = 2 * M_PI * (i + 1) / 1000;
+    const uint32_t k = uint32_t(fanned.points.size());
+    fanned.points.push_back({0.005 + 0.005 * std::cos(t0), 0.005 + 0.005 * std::sin(t0), 0.5});
+    fanned.points.push_back({0.005 + 0.005 * std::cos(t1), 0.005 + 0.005 * std::sin(t1), 0.5});
+    fanned.triangles.push_back({centre, k, k + 1});
+  }
+  fanned.points.push_back({100, 100, 100});  // a stray point
+  const DistanceStats d = sampled_distance(fanned, reference);
+  // The fan's area is a 13 thousandth of the plate's: the mean moves by about that.
+  EXPECT_NEAR(d.mean, 1.0 + 0.5 * M_PI * 0.005 * 0.005, 1e-3);
+  EXPECT_NEAR(d.p95, 1.0, 1e-9);
+  EXPECT_NEAR(d.max, 1.5, 1e-9);
+}
+
 TEST(Deviation, AWrapLiesOutsideAClosedModel) {
   const WrapResult& r = fandisk_wrap();
   const DeviationField field = measure_deviation(r.surface, fandisk());

@@ -8,9 +8,10 @@ namespace vdbwrap {
 // Diagnostics of any mesh, welded exactly (exactly equal coordinates) first.
 MeshDiagnostics diagnose(const Mesh& mesh, bool find_intersections = true);
 
-// Metro-style one-sided distance: samples on `from` spread by area at a spacing of
-// diagonal / samples_per_diagonal (widened so that there are at most about two million),
-// plus every vertex; distances to `to`.
+// Metro-style one-sided distance from `from` to `to`. Mean and p95 over points spread by area
+// at a spacing of diagonal / samples_per_diagonal, held between 20 thousand and a hundred
+// thousand points; the max over those, every vertex of a triangle, and a fine lattice over the
+// triangles of the farthest samples.
 DistanceStats sampled_distance(const Mesh& from, const Mesh& to, double samples_per_diagonal = 1000);
 
 // Distance from points sampled every spacing_fraction x diagonal along the input's sharp
