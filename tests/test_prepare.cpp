@@ -177,6 +177,41 @@ TEST(Prepare, DropsDegenerateAndDuplicateTrianglesAndWeldsCracks) {
   EXPECT_EQ(p.dropped_duplicate, 1u);
 }
 
+// A needle that shares no side with another triangle is a segment, not a surface: the
+// generator's csg_export has one between two solids (collinear points rounded to float), and
+// its wrap, a hair-thin tube with two feature curves on one line, left 1-1.5 % of the
+// triangles under 10 degrees. One inside a surface stays (dropping it opens a crack).
+TEST(Prepare, DropsStrayNeedlesButNotNeedlesInASurface) {
+  Mesh m = box_mesh({0, 0, 0}, {1, 1, 1});
+  add_box(m, {3, 0, 0}, {4, 1, 1});
+  // From a corner of one box to a corner of the other, its middle 3e-6 off the line (half a
+  // millionth of the diagonal; past the weld tolerance, a tenth of a millionth).
+  const uint32_t a = 1, b = 8;  // (1, 0, 0) and (3, 0, 0)
+  ASSERT_EQ(m.points[a], (Vec3{1, 0, 0}));
+  ASSERT_EQ(m.points[b], (Vec3{3, 0, 0}));
+  m.points.push_back({2, 3e-6, 0});
+  m.triangles.push_back({a, uint32_t(m.points.size() - 1), b});
+  // A needle of the same shape at the edge of a fan of three triangles, two of its sides shared.
+  const uint32_t q = uint32_t(m.points.size());
+  m.points.insert(m.points.end(), {{0, 0, 5}, {2, 0, 5}, {2, 3e-6, 5}, {0, 2, 5}});
+  m.triangles.push_back({q, q + 1, q + 2});  // the needle
+  m.triangles.push_back({q, q + 2, q + 3});
+  m.triangles.push_back({q + 1, q + 3, q + 2});
+  m.triangle_part.resize(m.triangles.size(), 0);
+  const auto p = prep::prepare(m, prep::PrepareParams{}, nullptr);
+  EXPECT_EQ(p.dropped_degenerate, 1u);
+  EXPECT_EQ(p.mesh.triangles.size(), 24u + 3u);
+  EXPECT_EQ(p.input_to_mesh[24], UINT32_MAX);  // the stray one
+  EXPECT_NE(p.input_to_mesh[25], UINT32_MAX);  // the one in the fan
+  // A stray sliver a thousandth of the scene high is a surface: kept (the bound is on the
+  // height, a millionth of the diagonal).
+  Mesh wide = box_mesh({0, 0, 0}, {1, 1, 1});
+  wide.points.insert(wide.points.end(), {{2, 0, 0}, {4, 0, 0}, {3, 1e-3, 0}});
+  wide.triangles.push_back({8, 9, 10});
+  wide.triangle_part.resize(wide.triangles.size(), 0);
+  EXPECT_EQ(prep::prepare(wide, prep::PrepareParams{}, nullptr).dropped_degenerate, 0u);
+}
+
 TEST(Prepare, FindsTheJunctionLineOfTwoInterpenetratingBoxes) {
   Mesh m = box_mesh({0, 0, 0}, {2, 2, 2});
   add_box(m, {1, 1, 1}, {3, 3, 3}, 1);

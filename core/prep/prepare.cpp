@@ -62,6 +62,37 @@ std::vector<float> closed_piece_sizes(const Mesh& m, const std::vector<uint32_t>
   return size;
 }
 
+// A triangle thinner than this fraction of the diagonal (its height over its longest side) is a
+// segment, not a surface.
+constexpr double kNeedleHeight = 1e-6;
+
+// Needles that share no side with another triangle are dropped as degenerate: a stray segment
+// (a CAD export's sliver between two parts, collinear points rounded to float) would be
+// wrapped as a hair-thin tube, both its long sides traced as feature curves on one line, and
+// the triangles between the two curves are caps no edit can open (1-1.5 % of the triangles
+// on the generated csg_export). A needle inside a surface stays: dropping it would open a
+// crack there.
+void drop_stray_needles(const std::vector<Tri>& tris, const std::vector<uint8_t>& needle,
+                        std::vector<uint8_t>& degenerate) {
+  std::unordered_map<uint64_t, uint32_t> uses;  // the needles' sides, by how many triangles have them
+  for (size_t t = 0; t < tris.size(); ++t)
+    if (needle[t])
+      for (int k = 0; k < 3; ++k) uses[edge_key(tris[t][k], tris[t][(k + 1) % 3])] = 0;
+  if (uses.empty()) return;
+  for (size_t t = 0; t < tris.size(); ++t)
+    if (!degenerate[t])
+      for (int k = 0; k < 3; ++k) {
+        auto it = uses.find(edge_key(tris[t][k], tris[t][(k + 1) % 3]));
+        if (it != uses.end()) ++it->second;
+      }
+  for (size_t t = 0; t < tris.size(); ++t) {
+    if (!needle[t]) continue;
+    bool alone = true;
+    for (int k = 0; k < 3; ++k) alone = alone && uses[edge_key(tris[t][k], tris[t][(k + 1) % 3])] == 1;
+    if (alone) degenerate[t] = 1;
+  }
+}
+
 }  // namespace
 
 PreparedInput prepare(const Mesh& input, const PrepareParams& params, ProgressSink* progress,
@@ -112,7 +143,8 @@ PreparedInput prepare(const Mesh& input, const PrepareParams& params, ProgressSi
   // was a serial tenth of preparing a million triangles.)
   const size_t n = input.triangles.size();
   std::vector<Tri> welded_tris(n);
-  std::vector<uint8_t> degenerate(n, 0);
+  std::vector<uint8_t> degenerate(n, 0), needle(n, 0);
+  const double needle_height2 = (kNeedleHeight * out.diagonal) * (kNeedleHeight * out.diagonal);
   struct Corners {
     Tri sorted;
     uint32_t t;
@@ -125,13 +157,16 @@ PreparedInput prepare(const Mesh& input, const PrepareParams& params, ProgressSi
       welded_tris[t] = tri;
       const Vec3 &a = m.points[tri[0]], &b = m.points[tri[1]], &c = m.points[tri[2]];
       const double longest2 = std::max({norm2(b - a), norm2(c - b), norm2(a - c)});
-      degenerate[t] = tri[0] == tri[1] || tri[1] == tri[2] || tri[0] == tri[2] ||
-                      norm2(area_vector(a, b, c)) <= 1e-24 * longest2 * longest2;
+      const double twice_area2 = norm2(area_vector(a, b, c));
+      degenerate[t] =
+          tri[0] == tri[1] || tri[1] == tri[2] || tri[0] == tri[2] || twice_area2 <= 1e-24 * longest2 * longest2;
+      needle[t] = !degenerate[t] && twice_area2 <= needle_height2 * longest2;
       Tri sorted = tri;
       std::sort(sorted.begin(), sorted.end());
       corners[t] = {sorted, uint32_t(t)};
     }
   });
+  drop_stray_needles(welded_tris, needle, degenerate);
   tbb::parallel_sort(corners.begin(), corners.end());
   std::vector<uint32_t> copy_of(n, UINT32_MAX);  // the first non-degenerate triangle with the same corners
   for (size_t k = 0; k < n;) {
