@@ -124,13 +124,15 @@ void LocalEdits::sample_grid(const Vec3& a, const Vec3& b, const Vec3& c, Spread
 }
 
 // Each sample within reach of the old triangles is as near the new ones.
-bool LocalEdits::keeps_sharp_edges(const Change& c, const std::vector<check::Corners>& made_at) const {
+bool LocalEdits::keeps_sharp_edges(const Change& c, const std::vector<check::Corners>& made_at,
+                                   double tolerance) const {
   if (samples_.empty()) return true;
+  if (tolerance < 0) tolerance = bounds_.feature_tolerance;
   Box3 box;
   for (uint32_t f : c.slots)
     if (f != Change::kNoSlot)
       for (uint32_t v : s_.triangles[f]) box.add(s_.points[v]);
-  const double reach = 4 * bounds_.feature_tolerance;
+  const double reach = 4 * tolerance;
   const Vec3 r{reach, reach, reach};
   const bool lost = samples_.for_lists(
       samples_.cell_of(box.lo - r), samples_.cell_of(box.hi + r), [&](const std::vector<uint32_t>& list) {
@@ -148,7 +150,7 @@ bool LocalEdits::keeps_sharp_edges(const Change& c, const std::vector<check::Cor
           if (before > reach) continue;  // held by other triangles, or out of reach
           for (const auto& at : made_at)
             after = std::min(after, norm2(q - closest_on_triangle(q, at[0], at[1], at[2])));
-          if (std::sqrt(after) > std::max(before, bounds_.feature_tolerance)) return true;
+          if (std::sqrt(after) > std::max(before, tolerance)) return true;
         }
         return false;
       });

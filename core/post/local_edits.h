@@ -103,8 +103,8 @@ class LocalEdits {
   void sample_grid(const Vec3& a, const Vec3& b, const Vec3& c, Spread& s) const;
 
   // The input's sharp edges near the change stay as near the surface as they were (or within
-  // the feature tolerance).
-  bool keeps_sharp_edges(const Change& c, const std::vector<check::Corners>& made_at) const;
+  // `tolerance`, the bounds' feature tolerance when negative).
+  bool keeps_sharp_edges(const Change& c, const std::vector<check::Corners>& made_at, double tolerance = -1) const;
   // Why the made triangles would break the surface: "folds" (they meet each other),
   // "intersects" (they meet a triangle the change keeps), or null.
   const char* breaks_surface(const Change& c, const std::vector<Tri>& made, const std::vector<check::Corners>& made_at);
