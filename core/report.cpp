@@ -246,6 +246,7 @@ std::string to_json(const WrapReport& r, int indent) {
           {{"sharp_edges", r.features.sharp_edges},
            {"boundary_edges", r.features.boundary_edges},
            {"nonmanifold_edges", r.features.nonmanifold_edges},
+           {"noise_sharp_edges", r.features.noise_sharp_edges},
            {"intersection_segments", r.features.intersection_segments},
            {"curves", r.features.curves},
            {"corners", r.features.corners},

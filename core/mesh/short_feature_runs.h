@@ -1,0 +1,21 @@
+// Sharp edges that are noise, not creases: a scan's rough surface turns every few triangles by
+// more than the feature angle, and its sharp edges form runs a few triangles long in every
+// direction. Runs shorter than the wrap can follow are dropped before the feature curves are
+// built from them.
+#pragma once
+#include <vector>
+
+#include "mesh/feature_edges.h"
+#include "vdbwrap/mesh.h"
+
+namespace vdbwrap::mesh {
+
+// Drops the sharp edges (FeatureKind::Sharp; boundary and non-manifold edges stay) of every run
+// shorter than `shortest`. A run is a path of sharp edges between two corners, or a closed loop
+// of them: a corner is a vertex where other than two sharp edges meet, or where the path turns
+// by more than `corner_angle_deg` (as build_feature_curves ends a curve). `edges` keeps its
+// order. Returns the number of sharp edges dropped.
+size_t drop_short_sharp_runs(const std::vector<Vec3>& points, std::vector<FeatureEdge>& edges, double shortest,
+                             double corner_angle_deg);
+
+}  // namespace vdbwrap::mesh
