@@ -4,9 +4,16 @@
 #include <cmath>
 #include <cstdint>
 
+#include <unordered_map>
+
+#include "common/grid_key.h"
 #include "common/vec.h"
 
 namespace vdbwrap::mesh {
+
+namespace {
+constexpr double kDense = 2;  // cell lengths of short runs per cell over which they are noise
+}  // namespace
 
 size_t drop_short_sharp_runs(const std::vector<Vec3>& points, std::vector<FeatureEdge>& edges, double shortest,
                              double corner_angle_deg) {
@@ -27,34 +34,57 @@ size_t drop_short_sharp_runs(const std::vector<Vec3>& points, std::vector<Featur
     const auto [lo, hi] = around(v);
     return size_t(hi - lo);
   };
-  std::vector<uint8_t> seen(edges.size(), 0), drop(edges.size(), 0);
+  // The runs: each sharp edge's run number, and each run's length.
+  std::vector<uint32_t> run_of(edges.size(), UINT32_MAX);
+  std::vector<double> run_length;
   std::vector<uint32_t> run;
   for (uint32_t first = 0; first < edges.size(); ++first) {
-    if (edges[first].kind != FeatureKind::Sharp || seen[first]) continue;
+    if (edges[first].kind != FeatureKind::Sharp || run_of[first] != UINT32_MAX) continue;
     // Walk both ways from the edge through vertices on exactly two sharp edges.
-    run.assign(1, first);
-    seen[first] = 1;
+    const uint32_t number = uint32_t(run_length.size());
+    run_of[first] = number;
     double length = norm(points[edges[first].b] - points[edges[first].a]);
     for (uint32_t from : {edges[first].a, edges[first].b}) {
       uint32_t v = from, e = first;
       while (degree(v) == 2) {
         const auto [lo, hi] = around(v);
         const uint32_t next = lo->second == e ? (lo + 1)->second : lo->second;
-        if (seen[next]) break;  // a closed loop, walked round
+        if (run_of[next] != UINT32_MAX) break;  // a closed loop, walked round
         // A turn sharper than the corner angle ends the run, as it ends a feature curve.
         const uint32_t back = edges[e].a == v ? edges[e].b : edges[e].a;
         const uint32_t ahead = edges[next].a == v ? edges[next].b : edges[next].a;
         if (dot(normalized(points[back] - points[v]), normalized(points[ahead] - points[v])) > -cos_corner) break;
-        seen[next] = 1;
-        run.push_back(next);
+        run_of[next] = number;
         length += norm(points[edges[next].b] - points[edges[next].a]);
         v = edges[next].a == v ? edges[next].b : edges[next].a;
         e = next;
       }
     }
-    if (length < shortest)
-      for (uint32_t e : run) drop[e] = 1;
+    run_length.push_back(length);
   }
+  // The short runs' length per cell of 2 x `shortest` (the base cell), in cell lengths, from
+  // points every quarter cell along their edges. A rough surface has several per cell; a
+  // small part's ends (a pin, a tooth, a bar's end) are short too, but few, beside long runs.
+  const double inv_cell = 1 / (2 * shortest);
+  std::unordered_map<GridKey, double, GridKeyHash> density;
+  auto short_run = [&](size_t i) { return run_of[i] != UINT32_MAX && run_length[run_of[i]] < shortest; };
+  for (size_t i = 0; i < edges.size(); ++i) {
+    if (!short_run(i)) continue;
+    const Vec3 &p = points[edges[i].a], &q = points[edges[i].b];
+    const double length = norm(q - p);
+    const int steps = std::max(1, int(std::ceil(4 * length * inv_cell)));
+    for (int k = 0; k < steps; ++k)
+      density[grid_key(p + (q - p) * ((k + 0.5) / steps), inv_cell)] += length / steps * inv_cell;
+  }
+  // A short run goes where the cell of its first edge's middle holds more than kDense.
+  std::vector<uint8_t> noise(run_length.size(), 0), decided(run_length.size(), 0);
+  for (size_t i = 0; i < edges.size(); ++i) {
+    if (!short_run(i) || decided[run_of[i]]) continue;
+    decided[run_of[i]] = 1;
+    noise[run_of[i]] = density[grid_key((points[edges[i].a] + points[edges[i].b]) * 0.5, inv_cell)] > kDense;
+  }
+  std::vector<uint8_t> drop(edges.size(), 0);
+  for (size_t i = 0; i < edges.size(); ++i) drop[i] = run_of[i] != UINT32_MAX && noise[run_of[i]];
   size_t dropped = 0, kept = 0;
   for (size_t i = 0; i < edges.size(); ++i) {
     if (drop[i]) {
