@@ -9,6 +9,7 @@
 #include "common/vec.h"
 #include "fit/features.h"
 #include "mesh/short_feature_runs.h"
+#include "pipeline/stage_params.h"
 #include "prep/prepare.h"
 #include "test_meshes.h"
 #include "vdbwrap/check.h"
@@ -87,7 +88,8 @@ TEST(NoiseFeatures, ARoughSphereIsNotTracedAsThousandsOfCreases) {
   const double base = 0.02 * in.diagonal;
   const size_t curves_before = fit::build_feature_curves(in, 30).size();
   const size_t sharp_before = sharp(in.feature_edges);
-  const size_t dropped = mesh::drop_short_sharp_runs(in.mesh.points, in.feature_edges, 0.5 * base, 30);
+  const size_t dropped =
+      mesh::drop_short_sharp_runs(in.mesh.points, in.feature_edges, pipeline::kShortestSharpRun * base, 30);
   const size_t curves_after = fit::build_feature_curves(in, 30).size();
   std::printf("[rough sphere] sharp edges %zu, dropped %zu; curves %zu -> %zu\n", sharp_before, dropped, curves_before,
               curves_after);

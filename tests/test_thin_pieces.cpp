@@ -98,8 +98,8 @@ TEST(ThinPieces, WrapIsValidOneBodyNearTheInputWithItsFeatures) {
   EXPECT_LT(r.report.output_to_input.mean, 0.005 * diag);
   EXPECT_LT(r.report.input_to_output.max, 0.02 * diag);
   // Hundreds of curves (every tooth's tip and root), and the wrap carries nodes on them. (The
-  // teeth's profiles on the caps where two bars nearly meet are runs under half a base cell,
-  // many to a cell: taken as noise, 624 -> 352 curves; the sharp edges lie as near the wrap,
+  // teeth's profiles on the caps where two bars nearly meet are runs under a base cell, many
+  // to a cell: taken as noise, 624 -> 354 curves; the sharp edges lie as near the wrap,
   // 0.049 % of the diagonal on average with them, 0.050 % without.)
   EXPECT_GT(r.report.features.curves, 300u);
   EXPECT_LT(r.report.sharp_edges_to_output.mean, 0.00055 * diag);

@@ -62,7 +62,7 @@ size_t drop_short_sharp_runs(const std::vector<Vec3>& points, std::vector<Featur
     }
     run_length.push_back(length);
   }
-  // The short runs' length per cell of 2 x `shortest` (the base cell), in cell lengths, from
+  // The short runs' length per cell of 2 x `shortest`, in cell lengths, from
   // points every quarter cell along their edges. A rough surface has several per cell; a
   // small part's ends (a pin, a tooth, a bar's end) are short too, but few, beside long runs.
   const double inv_cell = 1 / (2 * shortest);

@@ -17,8 +17,9 @@ namespace vdbwrap::pipeline {
 
 // A base size giving more cells than this across the diagonal is refused (memory and time).
 inline constexpr double kMostCellsAcross = 20000;
-// Runs of sharp edges shorter than this many base cells are dropped as noise (mesh/short_feature_runs.h).
-inline constexpr double kShortestSharpRun = 0.5;
+// Runs of sharp edges shorter than this many base cells, many to a cell, are dropped as noise
+// (mesh/short_feature_runs.h).
+inline constexpr double kShortestSharpRun = 1.0;
 // Unresolved contacts listed in the report, one per base cell.
 inline constexpr size_t kMostContactLocations = 100;
 // The refit where the first fit is far from the input (refine_where_far): it looks at triangles
