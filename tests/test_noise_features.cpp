@@ -69,6 +69,24 @@ TEST(NoiseFeatures, ShortRunsGoWhereTheyAreManyAndEndAtSharpTurns) {
   EXPECT_EQ(mesh::drop_short_sharp_runs(one_points, one, 0.5, 30), 0u);
 }
 
+TEST(NoiseFeatures, ACreaseRunsOnPastTheNoiseEdgesThatMeetIt) {
+  // The straight rows again, each with a spur 0.1 long across it at its three inner vertices
+  // (a rough scan's sharp edges meeting a crease; 3 cell lengths of them): the rows stay
+  // whole, the spurs go.
+  std::vector<Vec3> points;
+  std::vector<mesh::FeatureEdge> edges = rows(points, false);
+  const size_t row_edges = edges.size();
+  for (uint32_t row = 0; row < 10; ++row)
+    for (uint32_t i = 1; i <= 3; ++i) {
+      const uint32_t at = 5 * row + i;
+      points.push_back(points[at] + Vec3{0, 0, 0.1});
+      edges.push_back({at, uint32_t(points.size() - 1), mesh::FeatureKind::Sharp});
+    }
+  EXPECT_EQ(mesh::drop_short_sharp_runs(points, edges, 0.5, 30), 30u);
+  EXPECT_EQ(edges.size(), row_edges);
+  for (const auto& e : edges) EXPECT_EQ(points[e.a][2], points[e.b][2]);  // the rows' own edges
+}
+
 TEST(NoiseFeatures, ASmallBoxKeepsItsEdges) {
   // Edges 1, 2 and 3 long against runs of 1.5: short, but 24 cell lengths over 8 cells.
   const prep::PreparedInput box = prep::prepare(box_mesh({0, 0, 0}, {1, 2, 3}), prep::PrepareParams{}, nullptr);

@@ -30,30 +30,33 @@ size_t drop_short_sharp_runs(const std::vector<Vec3>& points, std::vector<Featur
     auto hi = std::lower_bound(lo, at.end(), std::pair<uint32_t, uint32_t>{v + 1, 0});
     return std::make_pair(lo, hi);
   };
-  auto degree = [&](uint32_t v) {
-    const auto [lo, hi] = around(v);
-    return size_t(hi - lo);
-  };
   // The runs: each sharp edge's run number, and each run's length.
   std::vector<uint32_t> run_of(edges.size(), UINT32_MAX);
   std::vector<double> run_length;
-  std::vector<uint32_t> run;
   for (uint32_t first = 0; first < edges.size(); ++first) {
     if (edges[first].kind != FeatureKind::Sharp || run_of[first] != UINT32_MAX) continue;
-    // Walk both ways from the edge through vertices on exactly two sharp edges.
+    // Walk both ways from the edge.
     const uint32_t number = uint32_t(run_length.size());
     run_of[first] = number;
     double length = norm(points[edges[first].b] - points[edges[first].a]);
     for (uint32_t from : {edges[first].a, edges[first].b}) {
       uint32_t v = from, e = first;
-      while (degree(v) == 2) {
-        const auto [lo, hi] = around(v);
-        const uint32_t next = lo->second == e ? (lo + 1)->second : lo->second;
-        if (run_of[next] != UINT32_MAX) break;  // a closed loop, walked round
-        // A turn sharper than the corner angle ends the run, as it ends a feature curve.
+      while (true) {
+        // On through the straightest other edge at v, where it turns less than the corner
+        // angle: a crease runs on past the noise edges that meet it (at a vertex of two
+        // sharp edges this is the other one; at a corner of a part none is straight).
         const uint32_t back = edges[e].a == v ? edges[e].b : edges[e].a;
-        const uint32_t ahead = edges[next].a == v ? edges[next].b : edges[next].a;
-        if (dot(normalized(points[back] - points[v]), normalized(points[ahead] - points[v])) > -cos_corner) break;
+        const Vec3 in = normalized(points[back] - points[v]);
+        const auto [lo, hi] = around(v);
+        uint32_t next = UINT32_MAX;
+        double straightest = -cos_corner;
+        for (auto it = lo; it != hi; ++it) {
+          if (it->second == e) continue;
+          const uint32_t ahead = edges[it->second].a == v ? edges[it->second].b : edges[it->second].a;
+          const double turn = dot(in, normalized(points[ahead] - points[v]));  // -1: straight on
+          if (turn < straightest) straightest = turn, next = it->second;
+        }
+        if (next == UINT32_MAX || run_of[next] != UINT32_MAX) break;  // a turn, or a loop walked round
         run_of[next] = number;
         length += norm(points[edges[next].b] - points[edges[next].a]);
         v = edges[next].a == v ? edges[next].b : edges[next].a;

@@ -12,10 +12,10 @@ namespace vdbwrap::mesh {
 
 // Drops the sharp edges (FeatureKind::Sharp; boundary and non-manifold edges stay) of every run
 // shorter than `shortest` in a cell (2 x `shortest` wide) holding more than two cell lengths of
-// such short runs: a small part's edges are short too, but few. A run is a path of sharp edges between two corners, or
-// a closed loop of them: a corner is a vertex where other than two sharp edges meet, or where the path turns by more
-// than `corner_angle_deg` (as build_feature_curves ends a curve). `edges` keeps its order. Returns the number of sharp
-// edges dropped.
+// such short runs: a small part's edges are short too, but few. A run is a path of sharp edges
+// that goes on at each vertex along the straightest other sharp edge there, while that turns
+// by less than `corner_angle_deg`: a crease runs on past the noise edges that meet it, and
+// ends at a part's corner. `edges` keeps its order. Returns the number of sharp edges dropped.
 size_t drop_short_sharp_runs(const std::vector<Vec3>& points, std::vector<FeatureEdge>& edges, double shortest,
                              double corner_angle_deg);
 
