@@ -6,6 +6,7 @@
 
 #include <unordered_map>
 
+#include "common/compressed_lists.h"
 #include "common/grid_key.h"
 #include "common/vec.h"
 
@@ -19,17 +20,12 @@ size_t drop_short_sharp_runs(const std::vector<Vec3>& points, std::vector<Featur
                              double corner_angle_deg) {
   if (!(shortest > 0)) return 0;
   const double cos_corner = std::cos(corner_angle_deg * M_PI / 180.0);
-  // The sharp edges around each vertex, as (vertex, edge index) pairs sorted by vertex.
-  std::vector<std::pair<uint32_t, uint32_t>> at;
-  for (uint32_t i = 0; i < edges.size(); ++i)
-    if (edges[i].kind == FeatureKind::Sharp) at.push_back({edges[i].a, i}), at.push_back({edges[i].b, i});
-  if (at.empty()) return 0;
-  std::sort(at.begin(), at.end());
-  auto around = [&](uint32_t v) {
-    auto lo = std::lower_bound(at.begin(), at.end(), std::pair<uint32_t, uint32_t>{v, 0});
-    auto hi = std::lower_bound(lo, at.end(), std::pair<uint32_t, uint32_t>{v + 1, 0});
-    return std::make_pair(lo, hi);
-  };
+  // The sharp edges around each vertex, in increasing order.
+  const CompressedLists around = compressed_lists(points.size(), [&](auto&& emit) {
+    for (uint32_t i = 0; i < edges.size(); ++i)
+      if (edges[i].kind == FeatureKind::Sharp) emit(edges[i].a, i), emit(edges[i].b, i);
+  });
+  if (around.items.size() == 0) return 0;
   // The runs: each sharp edge's run number, and each run's length.
   std::vector<uint32_t> run_of(edges.size(), UINT32_MAX);
   std::vector<double> run_length;
@@ -47,14 +43,13 @@ size_t drop_short_sharp_runs(const std::vector<Vec3>& points, std::vector<Featur
         // sharp edges this is the other one; at a corner of a part none is straight).
         const uint32_t back = edges[e].a == v ? edges[e].b : edges[e].a;
         const Vec3 in = normalized(points[back] - points[v]);
-        const auto [lo, hi] = around(v);
         uint32_t next = UINT32_MAX;
         double straightest = -cos_corner;
-        for (auto it = lo; it != hi; ++it) {
-          if (it->second == e) continue;
-          const uint32_t ahead = edges[it->second].a == v ? edges[it->second].b : edges[it->second].a;
+        for (uint32_t other : around[v]) {
+          if (other == e) continue;
+          const uint32_t ahead = edges[other].a == v ? edges[other].b : edges[other].a;
           const double turn = dot(in, normalized(points[ahead] - points[v]));  // -1: straight on
-          if (turn < straightest) straightest = turn, next = it->second;
+          if (turn < straightest) straightest = turn, next = other;
         }
         if (next == UINT32_MAX || run_of[next] != UINT32_MAX) break;  // a turn, or a loop walked round
         run_of[next] = number;

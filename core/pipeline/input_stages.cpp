@@ -38,15 +38,15 @@ void prepare_input(WrapRun& run) {
   report.features.intersection_segments = prepared.intersections.size();
   report.diagonal = prepared.diagonal;
   run.base = run.params.base_size.resolve(prepared.diagonal);
-  // A rough surface's sharp edges (a scan's noise) form runs shorter than the wrap can follow:
-  // they would become thousands of feature curves, each with nodes snapped and inserted.
-  report.features.noise_sharp_edges = mesh::drop_short_sharp_runs(
-      run.prepared.mesh.points, run.prepared.feature_edges, kShortestSharpRun * run.base, run.params.corner_angle_deg);
   report.base_size = run.base;
   if (prepared.diagonal / run.base > kMostCellsAcross)
     throw Error(ErrorKind::InvalidArgument, "base size " + run.params.base_size.to_string() +
                                                 " is too small for this model (over " +
                                                 std::to_string(kMostCellsAcross) + " cells across its diagonal)");
+  // A rough surface's sharp edges (a scan's noise) form runs shorter than the wrap can follow:
+  // they would become thousands of feature curves, each with nodes snapped and inserted.
+  report.features.noise_sharp_edges = mesh::drop_short_sharp_runs(
+      run.prepared.mesh.points, run.prepared.feature_edges, kShortestSharpRun * run.base, run.params.corner_angle_deg);
 }
 
 }  // namespace vdbwrap::pipeline
