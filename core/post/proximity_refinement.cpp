@@ -55,14 +55,14 @@ class ProximityRefiner : LocalEdits {
 
  private:
   // The triangle's farthest corner goes onto the input when it is far; else (or when that is
-  // refused) its far edges are split, the farthest midpoint first.
+  // refused) its far edges are split, the farthest midpoint first. A node of a traced feature
+  // edge is pulled too: one that far off the input is off its curve (the validity loop held
+  // it back), and the check of the input's sharp edges keeps the curve as near.
   void bring_nearer(uint32_t f) {
     const Tri t = s_.triangles[f];
     uint32_t corner = kNone;
     for (uint32_t v : t)
-      if (v < dist_.size() && dist_[v] > prm_.far_distance && !fixed(v) &&
-          (corner == kNone || dist_[v] > dist_[corner]))
-        corner = v;
+      if (v < dist_.size() && dist_[v] > prm_.far_distance && (corner == kNone || dist_[v] > dist_[corner])) corner = v;
     if (corner != kNone && pull(corner)) return;
     std::array<std::pair<double, int>, 3> edges;
     for (int i = 0; i < 3; ++i) edges[i] = {-distance_to_input((s_.points[t[i]] + s_.points[t[(i + 1) % 3]]) * 0.5), i};
