@@ -140,6 +140,7 @@ json quality_json(const QualityReport& q, const WrapParams& p) {
                 {"far_triangles_after", q.proximity_refinement.far_triangles_after},
                 {"pulls", q.proximity_refinement.pulls},
                 {"splits", q.proximity_refinement.splits},
+                {"collapses", q.proximity_refinement.collapses},
                 {"refusals", q.proximity_refinement.refusals}}},
               {"sliver_removal",
                {{"enabled", p.remove_slivers},

@@ -61,7 +61,7 @@ void refine_proximity(WrapRun& run) {
   ProximityRefinementReport& out = run.report.quality.proximity_refinement;
   out.ran = true, out.far_distance = pp.far_distance;
   out.far_triangles_before = st.far_before, out.far_triangles_after = st.far_after;
-  out.pulls = st.pulls, out.splits = st.splits;
+  out.pulls = st.pulls, out.splits = st.splits, out.collapses = st.collapses;
   out.refusals = st.refusals;
 }
 

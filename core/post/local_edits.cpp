@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iterator>
 #include <unordered_set>
 
 #include "common/closest_point.h"
@@ -195,6 +196,43 @@ bool LocalEdits::propose_split(uint32_t a, uint32_t b, const Vec3& x) {
   change_.add(Change::kNoSlot, Tri{m, b, c});
   change_.add(Change::kNoSlot, Tri{m, a, d});
   return true;
+}
+
+const char* LocalEdits::propose_collapse(uint32_t u, uint32_t v, const Vec3& x) {
+  uint32_t f1, f2;
+  if (!edge_triangles(u, v, f1, f2)) return "";
+  const uint32_t c = third(s_.triangles[f1], u, v), d = third(s_.triangles[f2], u, v);
+  // Link condition: u and v share exactly the two neighbours across the edge.
+  std::vector<uint32_t> nu, nv, common;
+  neighbours(u, nu), neighbours(v, nv);
+  std::set_intersection(nu.begin(), nu.end(), nv.begin(), nv.end(), std::back_inserter(common));
+  if (common.size() != 2 || c == d) return "link";
+  // c and d each lose an edge: keep them at three or more.
+  std::vector<uint32_t> nc, nd;
+  neighbours(c, nc), neighbours(d, nd);
+  if (nc.size() < 4 || nd.size() < 4) return "valence";
+  change_.clear();
+  change_.moved = u;
+  change_.to = x;
+  for (uint32_t g : vt_[u]) change_.add(g, s_.triangles[g], g == f1 || g == f2);
+  for (uint32_t g : vt_[v]) {
+    if (g == f1 || g == f2) continue;
+    Tri t = s_.triangles[g];
+    for (uint32_t& w : t)
+      if (w == v) w = u;
+    change_.add(g, t);
+  }
+  return nullptr;
+}
+
+void LocalEdits::hand_over(uint32_t u, uint32_t v) {
+  vt_[v].clear();
+  for (uint32_t w : feature_[v]) {
+    auto& list = feature_[w];
+    list.erase(std::remove(list.begin(), list.end(), v), list.end());
+    if (w != u && !feature_edge(u, w)) feature_[u].push_back(w), list.push_back(u);
+  }
+  feature_[v].clear();
 }
 
 void LocalEdits::apply(const Change& c) {

@@ -49,6 +49,7 @@ class ProximityRefiner : LocalEdits {
       }
       last_round_changed = stats_.pulls + stats_.splits > edits;
     }
+    if (stats_.collapses > 0) compact();  // the merged nodes and their triangles go
     stats_.refusals = refusals();
     return stats_;
   }
@@ -63,7 +64,7 @@ class ProximityRefiner : LocalEdits {
     uint32_t corner = kNone;
     for (uint32_t v : t)
       if (v < dist_.size() && dist_[v] > prm_.far_distance && (corner == kNone || dist_[v] > dist_[corner])) corner = v;
-    if (corner != kNone && pull(corner)) return;
+    if (corner != kNone && (pull(corner) || collapse(corner))) return;
     std::array<std::pair<double, int>, 3> edges;
     for (int i = 0; i < 3; ++i) edges[i] = {-distance_to_input((s_.points[t[i]] + s_.points[t[(i + 1) % 3]]) * 0.5), i};
     std::sort(edges.begin(), edges.end());
@@ -84,6 +85,31 @@ class ProximityRefiner : LocalEdits {
     return false;
   }
 
+  // Node v, where no pull is allowed, merged into its neighbour nearest the input, which stays
+  // where it is. A node in a pleat (its fan folded over itself, as where the validity loop held
+  // back one side of a crease) does not come nearer by moving: every move turns the folded
+  // triangles over. Merged away, it takes the pleat with it.
+  bool collapse(uint32_t v) {
+    std::vector<uint32_t> around;
+    neighbours(v, around);
+    std::sort(around.begin(), around.end(),
+              [&](uint32_t a, uint32_t b) { return node_distance(a) < node_distance(b); });
+    for (uint32_t u : around) {
+      if (node_distance(u) >= dist_[v]) break;
+      if (const char* why = propose_collapse(u, v, s_.points[u])) {
+        if (*why) refuse(std::string("collapse: ") + why);
+        continue;
+      }
+      if (!nearer(change_)) continue;
+      apply(change_);
+      hand_over(u, v);
+      ++stats_.collapses;
+      return true;
+    }
+    return false;
+  }
+  double node_distance(uint32_t v) { return v < dist_.size() ? dist_[v] : distance_to_input(s_.points[v]); }
+
   // Edge (a, b) split at its midpoint, the new node placed on the input.
   bool split(uint32_t a, uint32_t b) {
     if (feature_edge(a, b)) return false;  // a traced feature edge stays one edge
@@ -101,7 +127,9 @@ class ProximityRefiner : LocalEdits {
   // Does the change bring the patch nearer the input and keep the surface valid, its
   // triangles no worse shaped and the input's sharp edges as near?
   bool nearer(const Change& c) {
-    const char* kind = c.added != kNone ? "split: " : "pull: ";
+    const char* kind = c.added != kNone                                             ? "split: "
+                       : std::find(c.dies.begin(), c.dies.end(), 1) != c.dies.end() ? "collapse: "
+                                                                                    : "pull: ";
     auto no = [&](const char* why) { return refuse(std::string(kind) + why); };
     double old_min = 180, new_min = 180;
     Spread old_d, new_d;
@@ -109,6 +137,11 @@ class ProximityRefiner : LocalEdits {
     std::vector<check::Corners> made_at;
     for (size_t i = 0; i < c.slots.size(); ++i) {
       const Tri& t = c.tris[i];
+      if (c.dies[i]) {  // a collapse's triangle on the edge: weighed as it was only
+        const Tri& o = s_.triangles[c.slots[i]];
+        old_min = std::min(old_min, min_angle_deg(s_.points[o[0]], s_.points[o[1]], s_.points[o[2]]));
+        continue;
+      }
       const check::Corners at = {this->at(t[0], c), this->at(t[1], c), this->at(t[2], c)};
       if (check::triangle_is_degenerate(at, t)) return no("degenerate");
       if (c.slots[i] != Change::kNoSlot) {

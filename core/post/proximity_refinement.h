@@ -1,12 +1,14 @@
 // Stage 4, proximity refinement: where the wrap is still farther from the input than a
 // fraction of a base cell, it is brought nearer by local edits. Two kinds of place:
 // - nodes the validity loop held back at their lattice positions (at the corners of coarse
-//   cells they can be over a base cell off): each is moved onto the input, or part of the way;
+//   cells they can be over a base cell off): each is moved onto the input, or part of the way,
+//   or, in a pleat where no move helps, merged into its neighbour nearest the input;
 // - faces bridging a concave corner or a narrow gap, their corners on the input and their
 //   interior off it: the far edges are split and the new node goes onto the input.
 // Every edit keeps the surface valid (no fold, no intersection, exact predicates), makes no
 // triangle under the target angle that was not there, keeps the input's sharp edges as near,
-// and brings the patch nearer the input (its farthest point no farther, its mean nearer).
+// and brings the patch nearer the input (its farthest point no farther, the integral of the
+// distance over it smaller).
 // Bridges over openings wider than a few cells stay bridges: a node moves at most `max_reach`.
 #pragma once
 #include <cstddef>
@@ -35,11 +37,12 @@ ProximityRefinementParams proximity_refinement_params(double base, double offset
 
 struct ProximityRefinementStats {
   size_t far_before = 0, far_after = 0;  // triangles with a point farther than far_distance
-  size_t pulls = 0, splits = 0;
+  size_t pulls = 0, splits = 0, collapses = 0;
   std::map<std::string, size_t> refusals;  // edits refused, by the first check they failed
 };
 
-// Works on `surface` in place (new points and triangles appended; none removed).
+// Works on `surface` in place (new points and triangles appended; compacted when nodes were
+// merged away).
 ProximityRefinementStats refine_proximity(PostSurface& surface, const QualityReference& ref,
                                           const ProximityRefinementParams& params);
 

@@ -361,18 +361,6 @@ class SliverRemover : LocalEdits {
 
   // v goes into u (u's index stays).
   bool collapse_into(uint32_t u, uint32_t v) {
-    uint32_t f1, f2;
-    if (!edge_triangles(u, v, f1, f2)) return false;
-    const uint32_t c = third(s_.triangles[f1], u, v), d = third(s_.triangles[f2], u, v);
-    // Link condition: u and v share exactly the two neighbours across the edge.
-    std::vector<uint32_t> nu, nv, common;
-    neighbours(u, nu), neighbours(v, nv);
-    std::set_intersection(nu.begin(), nu.end(), nv.begin(), nv.end(), std::back_inserter(common));
-    if (common.size() != 2 || c == d) return refuse("collapse: link");
-    // c and d each lose an edge: keep them at three or more.
-    std::vector<uint32_t> nc, nd;
-    neighbours(c, nc), neighbours(d, nd);
-    if (nc.size() < 4 || nd.size() < 4) return refuse("collapse: valence");
     std::vector<Vec3> places;
     if (fixed(u)) {
       places.push_back(s_.points[u]);
@@ -384,27 +372,10 @@ class SliverRemover : LocalEdits {
       places.push_back(s_.points[v]);
     }
     for (const Vec3& x : places) {
-      change_.clear();
-      change_.moved = u;
-      change_.to = x;
-      for (uint32_t g : vt_[u]) change_.add(g, s_.triangles[g], g == f1 || g == f2);
-      for (uint32_t g : vt_[v]) {
-        if (g == f1 || g == f2) continue;
-        Tri t = s_.triangles[g];
-        for (uint32_t& w : t)
-          if (w == v) w = u;
-        change_.add(g, t);
-      }
+      if (const char* why = propose_collapse(u, v, x)) return *why && refuse(std::string("collapse: ") + why);
       if (!acceptable(change_)) continue;
       commit(change_);
-      vt_[v].clear();
-      // v's traced edges go to u.
-      for (uint32_t w : feature_[v]) {
-        auto& list = feature_[w];
-        list.erase(std::remove(list.begin(), list.end(), v), list.end());
-        if (w != u && !feature_edge(u, w)) feature_[u].push_back(w), list.push_back(u);
-      }
-      feature_[v].clear();
+      hand_over(u, v);
       ++stats_.collapses;
       return true;
     }

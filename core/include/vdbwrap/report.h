@@ -113,7 +113,7 @@ struct ProximityRefinementReport {
   bool ran = false;
   double far_distance = 0;  // model units
   size_t far_triangles_before = 0, far_triangles_after = 0;
-  size_t pulls = 0, splits = 0;  // nodes moved onto the input; edges split
+  size_t pulls = 0, splits = 0, collapses = 0;  // nodes moved onto the input; edges split; nodes merged away
   std::map<std::string, size_t> refusals;
 };
 
