@@ -107,6 +107,15 @@ void print_repair_report(const std::string& output, const RepairReport& r) {
 }
 
 // --deviation: a .vtp or .ply in a folder that exists, checked before any work.
+// A mesh read, and what reading it had to assume (a binary STL's stale count) said on stderr,
+// also with -q: the user should know. `progress`: its redrawn line is ended first.
+Mesh read_input(const std::string& path, cli::StderrProgress* progress = nullptr) {
+  Mesh mesh = io::read_mesh(path);
+  if (!mesh.notes.empty() && progress) progress->finish();
+  for (const std::string& note : mesh.notes) std::fprintf(stderr, "vdbwrap: note: %s\n", note.c_str());
+  return mesh;
+}
+
 void check_deviation_path(const std::string& path) {
   if (path.empty()) return;
   if (!is_deviation_path(path))
@@ -323,7 +332,7 @@ int main(int argc, char** argv) {
       check_deviation_path(deviation_path);
       cli::StderrProgress progress(quiet, cli::wrap_stage_weights());
       progress.progress("read", 0.0, input);
-      Mesh mesh = io::read_mesh(input);
+      Mesh mesh = read_input(input, &progress);
       progress.progress("read", 1.0, std::to_string(mesh.triangles.size()) + " triangles");
       const WrapReport::Source source = source_of(input, mesh);
       WrapResult result;
@@ -401,7 +410,7 @@ int main(int argc, char** argv) {
       cli::check_output_path("--report", repair_report);
       cli::StderrProgress progress(repair_quiet, cli::repair_stage_weights());
       progress.progress("read", 0.0, repair_input);
-      Mesh mesh = io::read_mesh(repair_input);
+      Mesh mesh = read_input(repair_input, &progress);
       RepairResult result = repair(mesh, rparams, &progress);
       progress.progress("write", 0.0, repair_output);
       io::write_mesh(result.mesh, repair_output, repair_write_options);
@@ -417,12 +426,12 @@ int main(int argc, char** argv) {
         throw Error(ErrorKind::InvalidArgument,
                     "--deviation needs --against REFERENCE (the distances are to the reference)");
       check_deviation_path(check_deviation);
-      Mesh mesh = io::read_mesh(check_input);
+      Mesh mesh = read_input(check_input);
       MeshDiagnostics d = diagnose(mesh, true);
       print_diagnostics(check_input, d);
       std::string json = "{\"diagnostics\": " + to_json(d);
       if (!against.empty()) {
-        Mesh ref = io::read_mesh(against);
+        Mesh ref = read_input(against);
         DistanceStats ab = sampled_distance(mesh, ref), ba = sampled_distance(ref, mesh);
         double diag = ab.diagonal;
         std::printf("distance to %s (percent of its diagonal %.6g):\n", against.c_str(), diag);

@@ -309,6 +309,7 @@ std::string to_json(const WrapReport& r, int indent) {
     json parts = json::array();
     for (const auto& [name, triangles] : r.source.parts) parts.push_back({{"name", name}, {"triangles", triangles}});
     j["source"] = {{"file_name", r.source.file_name}, {"parts", parts}};
+    if (!r.source.notes.empty()) j["source"]["notes"] = r.source.notes;
   }
   return j.dump(indent);
 }

@@ -34,6 +34,7 @@ WrapReport::Source source_of(const std::string& input_name, const Mesh& mesh) {
   }
   for (size_t p = 0; p < counts.size(); ++p)
     src.parts.emplace_back(p < mesh.part_names.size() ? as_utf8(mesh.part_names[p]) : std::string(), counts[p]);
+  for (const std::string& note : mesh.notes) src.notes.push_back(as_utf8(note));
   return src;
 }
 
@@ -44,6 +45,7 @@ std::string with_source(const std::string& report_json, const WrapReport::Source
   nlohmann::json parts = nlohmann::json::array();
   for (const auto& [name, triangles] : src.parts) parts.push_back({{"name", name}, {"triangles", triangles}});
   j["source"] = {{"file_name", src.file_name}, {"parts", parts}};
+  if (!src.notes.empty()) j["source"]["notes"] = src.notes;
   return j.dump(2);
 }
 

@@ -16,6 +16,7 @@
 #include "vdbwrap/io.h"
 #include "vdbwrap/errors.h"
 #include "vdbwrap/mesh.h"
+#include "vdbwrap/source.h"
 
 #ifndef VDBWRAP_TEST_DATA_DIR
 #define VDBWRAP_TEST_DATA_DIR "tests/data"
@@ -525,11 +526,31 @@ TEST_F(IoTest, TruncatedBinaryStl) {
   expect_read_error(write_file("short.stl", std::string(40, '\x01')), {"truncated", "84"});
 }
 
-TEST_F(IoTest, BinaryStlLongerThanItsCount) {
+// A writer that left the count at 0 or stale: the whole records the file holds are read (as
+// slicers do), and the mesh says so. Bytes past the last whole record stay an error, and so
+// does a count above the records held (TruncatedBinaryStl).
+TEST_F(IoTest, BinaryStlWithAStaleCountReadsTheRecordsItHolds) {
+  for (uint32_t declared : {0u, 2u}) {
+    std::string bytes = binary_stl_header(declared);
+    for (int i = 0; i < 3; ++i) bytes += binary_stl_record(float(i + 1));
+    const std::string path = write_file("stale.stl", bytes);
+    const Mesh m = vdbwrap::io::read_mesh(path);
+    EXPECT_EQ(m.triangles.size(), 3u);
+    EXPECT_FLOAT_EQ(float(m.points[6][0]), 3.0f);
+    ASSERT_EQ(m.notes.size(), 1u);
+    EXPECT_NE(m.notes[0].find("declares " + std::to_string(declared) + " triangles but holds 3"), std::string::npos)
+        << m.notes[0];
+    EXPECT_NE(m.notes[0].find("stale.stl"), std::string::npos) << m.notes[0];
+    // The report names it.
+    const std::string json = vdbwrap::with_source("{}", vdbwrap::source_of(path, m));
+    EXPECT_NE(json.find("holds 3 whole records"), std::string::npos) << json;
+  }
   std::string bytes = binary_stl_header(2);
   for (int i = 0; i < 3; ++i) bytes += binary_stl_record(1);
-  expect_read_error(write_file("long.stl", bytes),
-                    {"declares 2 triangles (needs 184 bytes)", "has 234 bytes", "too long"});
+  expect_read_error(write_file("long.stl", bytes + "tail"),
+                    {"declares 2 triangles (needs 184 bytes)", "has 238 bytes", "too long"});
+  // A file read as it says carries no note.
+  EXPECT_TRUE(vdbwrap::io::read_mesh(write_file("ok.stl", binary_stl_header(3) + bytes.substr(84))).notes.empty());
 }
 
 TEST_F(IoTest, HugeCountsAreErrorsNotAllocations) {

@@ -28,8 +28,8 @@ uint64_t declared_count(std::string_view bytes) { return load<uint32_t>(bytes.da
                  (bytes.size() < needed ? "truncated" : "too long") + ")");
 }
 
-Mesh read_binary_stl(std::string_view bytes, const std::string& name) {
-  const size_t count = size_t(declared_count(bytes));  // validated by is_binary_stl_size
+// `count` records, validated against the file's size by the caller.
+Mesh read_binary_stl(std::string_view bytes, const std::string& name, size_t count) {
   check_point_count(name, uint64_t(count) * 3);
   Mesh mesh;
   mesh.points.resize(count * 3);
@@ -244,8 +244,19 @@ bool looks_like_ascii_stl(std::string_view bytes) {
 }
 
 Mesh read_stl(std::string_view bytes, const std::string& name) {
-  if (is_binary_stl_size(bytes)) return read_binary_stl(bytes, name);
+  if (is_binary_stl_size(bytes)) return read_binary_stl(bytes, name, size_t(declared_count(bytes)));
   if (looks_like_ascii_stl(bytes)) return AsciiStlReader(bytes, name).read();
+  // More whole records after the header than it declares: a writer that left the count at 0
+  // or stale. The records the file holds are read (as slicers do), and the user is told. Fewer
+  // than declared is a cut file, and bytes past the last whole record are no record: errors.
+  const size_t held = bytes.size() > kHeaderBytes ? (bytes.size() - kHeaderBytes) / kRecordBytes : 0;
+  if (held > declared_count(bytes) && (bytes.size() - kHeaderBytes) % kRecordBytes == 0) {
+    Mesh mesh = read_binary_stl(bytes, name, held);
+    mesh.notes.push_back(name + ": binary STL declares " + std::to_string(declared_count(bytes)) +
+                         " triangles but holds " + std::to_string(held) + " whole records: read all " +
+                         std::to_string(held));
+    return mesh;
+  }
   fail_binary_size(bytes, name);
 }
 

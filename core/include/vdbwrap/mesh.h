@@ -18,6 +18,9 @@ struct Mesh {
   std::vector<Tri> triangles;
   std::vector<int32_t> triangle_part;
   std::vector<std::string> part_names;
+  // What reading the file had to assume, in words for the user (a binary STL whose declared
+  // count disagrees with the records it holds); empty for a file read as it says.
+  std::vector<std::string> notes;
 
   int32_t part_of(size_t t) const { return triangle_part.empty() ? 0 : triangle_part[t]; }
 };

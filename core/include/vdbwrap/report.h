@@ -179,6 +179,7 @@ struct WrapReport {
     std::string tool_version;                           // "0.1.0"
     std::string file_name;                              // the input's file name, without its folder
     std::vector<std::pair<std::string, size_t>> parts;  // each input part's name and triangle count
+    std::vector<std::string> notes;                     // what reading the input assumed (Mesh::notes)
   } source;
 };
 
