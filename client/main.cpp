@@ -106,7 +106,6 @@ void print_repair_report(const std::string& output, const RepairReport& r) {
   std::printf("  %.2fs; %s\n", r.total_seconds, r.all_fixed() ? "no intersections left" : "INTERSECTIONS LEFT");
 }
 
-// --deviation: a .vtp or .ply in a folder that exists, checked before any work.
 // A mesh read, and what reading it had to assume (a binary STL's stale count) said on stderr,
 // also with -q: the user should know. `progress`: its redrawn line is ended first.
 Mesh read_input(const std::string& path, cli::StderrProgress* progress = nullptr) {
@@ -116,6 +115,7 @@ Mesh read_input(const std::string& path, cli::StderrProgress* progress = nullptr
   return mesh;
 }
 
+// --deviation: a .vtp or .ply in a folder that exists, checked before any work.
 void check_deviation_path(const std::string& path) {
   if (path.empty()) return;
   if (!is_deviation_path(path))

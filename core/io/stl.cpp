@@ -250,7 +250,7 @@ Mesh read_stl(std::string_view bytes, const std::string& name) {
   // or stale. The records the file holds are read (as slicers do), and the user is told. Fewer
   // than declared is a cut file, and bytes past the last whole record are no record: errors.
   const size_t held = bytes.size() > kHeaderBytes ? (bytes.size() - kHeaderBytes) / kRecordBytes : 0;
-  if (held > declared_count(bytes) && (bytes.size() - kHeaderBytes) % kRecordBytes == 0) {
+  if (held > 0 && held > declared_count(bytes) && (bytes.size() - kHeaderBytes) % kRecordBytes == 0) {
     Mesh mesh = read_binary_stl(bytes, name, held);
     mesh.notes.push_back(name + ": binary STL declares " + std::to_string(declared_count(bytes)) +
                          " triangles but holds " + std::to_string(held) + " whole records: read all " +

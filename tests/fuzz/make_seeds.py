@@ -64,6 +64,8 @@ put(M, "stl_binary", STL + binary_stl(tet))
 # Header starting with "solid": must still be read as binary (the size matches).
 put(M, "stl_binary_solid_header", SNIFF + binary_stl(tet[:2], b"solid but binary"))
 put(M, "stl_binary_degenerate", STL + binary_stl([((1, 1, 1), (1, 1, 1), (2, 2, 2)), ((0, 0, 0), (1, 1, 1), (2, 2, 2))]))
+# A count left at 0 by the writer: the records the file holds are read, with a note.
+put(M, "stl_binary_stale_count", STL + binary_stl(tet[:2])[:80] + struct.pack("<I", 0) + binary_stl(tet[:2])[84:])
 
 obj = """# a quad, a triangle with texture/normal indices, groups, negative indices
 v 0 0 0
