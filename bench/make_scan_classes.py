@@ -7,14 +7,14 @@
   voxels    voxel art for printing: every voxel of a noisy blob its own closed cube, so the
             shared faces coincide with opposite orientation and every edge is non-manifold;
   islands   a raw scan: an open, slightly noisy surface (a turntable scan's open base and five
-            holes) with floating fragments near it, small fans of 1-19 triangles;
+            holes) with floating fragments near it (3,000 by default), fans of 1-19 triangles;
   views     an unmerged multi-view scan: three overlapping open partial shells of one shape,
             each a little off the others (registration error), so the views cross.
 
 Deterministic (Python's own `random` with a fixed seed). Pure Python: the largest level takes a
 minute or so.
 
-  bench/make_scan_classes.py OUT_DIR [--level L] [--seed S]
+  bench/make_scan_classes.py OUT_DIR [--level L] [--seed S] [--fragments N]
 
 writes OUT_DIR/sculpt_L.stl, voxels_N.stl, islands_L.stl, views_L.stl. See
 bench/results/2026-11-26-new-classes.md for what they showed.
@@ -115,7 +115,7 @@ def centroid_dir(v, t):
     return unit(tuple(v[t[0]][i] + v[t[1]][i] + v[t[2]][i] for i in range(3)))
 
 
-def islands(level, rng):
+def islands(level, rng, fragments=3000):
     v, f = icosphere(level)
     stretch = (1.0, 0.8, 1.3)
     pts = [tuple(p[i] * shape_radius(p, 0.002 * rng.gauss(0, 1)) * stretch[i] for i in range(3)) for p in v]
@@ -126,7 +126,7 @@ def islands(level, rng):
         if c[2] > -0.7 and all(dot(c, d) < lim for d, lim in holes):
             tris.append((pts[t[0]], pts[t[1]], pts[t[2]]))
     edge = math.dist(pts[f[0][0]], pts[f[0][1]])
-    for _ in range(3000):  # floating fragments: small flat fans near the surface, a little rough
+    for _ in range(fragments):  # floating fragments: small flat fans near the surface, a little rough
         d = random_unit(rng)
         c = tuple(d[i] * stretch[i] * rng.uniform(0.9, 1.15) for i in range(3))
         t1 = unit((d[1] * 0.8 - d[2] * 0.5, d[2] * 0.3 - d[0] * 0.8, d[0] * 0.5 - d[1] * 0.3))
@@ -165,13 +165,14 @@ def main():
     ap.add_argument('out_dir')
     ap.add_argument('--level', type=int, default=6, help='sphere subdivisions (6: 82k triangles, 7: 328k)')
     ap.add_argument('--seed', type=int, default=1)
+    ap.add_argument('--fragments', type=int, default=3000, help='floating fragments of the islands scan')
     a = ap.parse_args()
     os.makedirs(a.out_dir, exist_ok=True)
     rng = random.Random(a.seed)
     write_stl(os.path.join(a.out_dir, f'sculpt_{a.level}.stl'), sculpt(a.level, rng))
     n = 10 * (a.level - 3)
     write_stl(os.path.join(a.out_dir, f'voxels_{n}.stl'), voxels(n, rng))
-    write_stl(os.path.join(a.out_dir, f'islands_{a.level}.stl'), islands(a.level, rng))
+    write_stl(os.path.join(a.out_dir, f'islands_{a.level}.stl'), islands(a.level, rng, a.fragments))
     write_stl(os.path.join(a.out_dir, f'views_{a.level}.stl'), views(a.level, rng))
 
 
