@@ -7,6 +7,7 @@
 #include <cmath>
 #include <sstream>
 
+#include "source_json.h"
 #include "vdbwrap/report.h"
 
 namespace vdbwrap {
@@ -306,10 +307,7 @@ std::string to_json(const WrapReport& r, int indent) {
   // New keys only, and only when the caller set them: older readers see the report unchanged.
   if (!r.source.tool_version.empty()) j["vdbwrap_version"] = r.source.tool_version;
   if (!r.source.file_name.empty() || !r.source.parts.empty()) {
-    json parts = json::array();
-    for (const auto& [name, triangles] : r.source.parts) parts.push_back({{"name", name}, {"triangles", triangles}});
-    j["source"] = {{"file_name", r.source.file_name}, {"parts", parts}};
-    if (!r.source.notes.empty()) j["source"]["notes"] = r.source.notes;
+    j["source"] = source_json(r.source);
   }
   return j.dump(indent);
 }

@@ -81,11 +81,9 @@ size_t drop_short_sharp_runs(const std::vector<Vec3>& points, std::vector<Featur
     decided[run_of[i]] = 1;
     noise[run_of[i]] = density[grid_key((points[edges[i].a] + points[edges[i].b]) * 0.5, inv_cell)] > kDense;
   }
-  std::vector<uint8_t> drop(edges.size(), 0);
-  for (size_t i = 0; i < edges.size(); ++i) drop[i] = run_of[i] != UINT32_MAX && noise[run_of[i]];
   size_t dropped = 0, kept = 0;
   for (size_t i = 0; i < edges.size(); ++i) {
-    if (drop[i]) {
+    if (run_of[i] != UINT32_MAX && noise[run_of[i]]) {
       ++dropped;
       continue;
     }

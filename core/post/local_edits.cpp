@@ -198,7 +198,7 @@ bool LocalEdits::propose_split(uint32_t a, uint32_t b, const Vec3& x) {
   return true;
 }
 
-const char* LocalEdits::propose_collapse(uint32_t u, uint32_t v, const Vec3& x) {
+const char* LocalEdits::collapse_blocked(uint32_t u, uint32_t v) const {
   uint32_t f1, f2;
   if (!edge_triangles(u, v, f1, f2)) return "";
   const uint32_t c = third(s_.triangles[f1], u, v), d = third(s_.triangles[f2], u, v);
@@ -211,6 +211,12 @@ const char* LocalEdits::propose_collapse(uint32_t u, uint32_t v, const Vec3& x) 
   std::vector<uint32_t> nc, nd;
   neighbours(c, nc), neighbours(d, nd);
   if (nc.size() < 4 || nd.size() < 4) return "valence";
+  return nullptr;
+}
+
+void LocalEdits::propose_collapse(uint32_t u, uint32_t v, const Vec3& x) {
+  uint32_t f1, f2;
+  edge_triangles(u, v, f1, f2);
   change_.clear();
   change_.moved = u;
   change_.to = x;
@@ -222,7 +228,6 @@ const char* LocalEdits::propose_collapse(uint32_t u, uint32_t v, const Vec3& x) 
       if (w == v) w = u;
     change_.add(g, t);
   }
-  return nullptr;
 }
 
 void LocalEdits::hand_over(uint32_t u, uint32_t v) {

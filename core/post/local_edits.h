@@ -119,11 +119,13 @@ class LocalEdits {
   // change_ made the split of edge (a, b) at a new node x: its two triangles become four.
   // False where the edge does not have two triangles with different third corners.
   bool propose_split(uint32_t a, uint32_t b, const Vec3& x);
+  // Why the collapse of edge (u, v) would pinch the surface ("link": u and v share more
+  // neighbours than the two across the edge; "valence": those would be left with under three
+  // edges), "" where (u, v) is no edge between two triangles, or null when it may be made.
+  const char* collapse_blocked(uint32_t u, uint32_t v) const;
   // change_ made the collapse of edge (u, v) into u, placed at x: the two triangles on the
-  // edge die and v's others take u. Null, or why the collapse would pinch the surface ("link":
-  // u and v share more neighbours than the two across the edge; "valence": those would be left
-  // with under three edges), or "" where (u, v) is no edge between two triangles.
-  const char* propose_collapse(uint32_t u, uint32_t v, const Vec3& x);
+  // edge die and v's others take u. Only where collapse_blocked(u, v) is null.
+  void propose_collapse(uint32_t u, uint32_t v, const Vec3& x);
   void apply(const Change& c);
   // After a collapse of v into u is applied: v is gone, and its traced feature edges run
   // through u.

@@ -96,10 +96,11 @@ class ProximityRefiner : LocalEdits {
               [&](uint32_t a, uint32_t b) { return node_distance(a) < node_distance(b); });
     for (uint32_t u : around) {
       if (node_distance(u) >= dist_[v]) break;
-      if (const char* why = propose_collapse(u, v, s_.points[u])) {
+      if (const char* why = collapse_blocked(u, v)) {
         if (*why) refuse(std::string("collapse: ") + why);
         continue;
       }
+      propose_collapse(u, v, s_.points[u]);
       if (!nearer(change_)) continue;
       apply(change_);
       hand_over(u, v);

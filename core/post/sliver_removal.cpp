@@ -361,6 +361,7 @@ class SliverRemover : LocalEdits {
 
   // v goes into u (u's index stays).
   bool collapse_into(uint32_t u, uint32_t v) {
+    if (const char* why = collapse_blocked(u, v)) return *why && refuse(std::string("collapse: ") + why);
     std::vector<Vec3> places;
     if (fixed(u)) {
       places.push_back(s_.points[u]);
@@ -372,7 +373,7 @@ class SliverRemover : LocalEdits {
       places.push_back(s_.points[v]);
     }
     for (const Vec3& x : places) {
-      if (const char* why = propose_collapse(u, v, x)) return *why && refuse(std::string("collapse: ") + why);
+      propose_collapse(u, v, x);
       if (!acceptable(change_)) continue;
       commit(change_);
       hand_over(u, v);
