@@ -312,4 +312,13 @@ std::string to_json(const WrapReport& r, int indent) {
   return j.dump(indent);
 }
 
+// Here, not in source.cpp: the fuzzers' API library links the report without the rest.
+nlohmann::json source_json(const WrapReport::Source& src) {
+  nlohmann::json parts = nlohmann::json::array();
+  for (const auto& [name, triangles] : src.parts) parts.push_back({{"name", name}, {"triangles", triangles}});
+  nlohmann::json j = {{"file_name", src.file_name}, {"parts", parts}};
+  if (!src.notes.empty()) j["notes"] = src.notes;
+  return j;
+}
+
 }  // namespace vdbwrap

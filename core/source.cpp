@@ -39,14 +39,6 @@ WrapReport::Source source_of(const std::string& input_name, const Mesh& mesh) {
   return src;
 }
 
-nlohmann::json source_json(const WrapReport::Source& src) {
-  nlohmann::json parts = nlohmann::json::array();
-  for (const auto& [name, triangles] : src.parts) parts.push_back({{"name", name}, {"triangles", triangles}});
-  nlohmann::json j = {{"file_name", src.file_name}, {"parts", parts}};
-  if (!src.notes.empty()) j["notes"] = src.notes;
-  return j;
-}
-
 std::string with_source(const std::string& report_json, const WrapReport::Source& src) {
   nlohmann::json j = nlohmann::json::parse(report_json, nullptr, false);
   if (!j.is_object()) throw Error(ErrorKind::Internal, "with_source: the report is not a JSON object");
