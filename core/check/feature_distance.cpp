@@ -32,10 +32,13 @@ DistanceStats sharp_edge_distance(const Mesh& input, const Mesh& surface, double
   // Orientation matters for the dihedral angle: make it consistent first. One edge listing
   // serves both (flips change no triangle's edges), as in prepare.
   const EdgeTriangles listing = edge_triangles(tris);
+  // The creases of solids that touch in faces (voxel art) count, as the wrap sees them; read in
+  // the input's orientation, before orienting.
+  const auto contact = mesh::contact_edges(welded, tris, {}, listing, std::vector<uint8_t>(tris.size(), 0), angle_deg);
   mesh::orient_pieces(welded, tris, &listing);
   for (size_t t = 0; t < tris.size(); ++t)
     normals[t] = normalized(area_vector(welded[tris[t][0]], welded[tris[t][1]], welded[tris[t][2]]));
-  auto edges = mesh::find_feature_edges(welded, tris, normals, angle_deg, &listing);
+  auto edges = mesh::find_feature_edges(welded, tris, normals, angle_deg, &listing, &contact);
   const double spacing = spacing_fraction * s.diagonal;
   std::vector<Vec3> samples;
   for (const auto& e : edges) {

@@ -8,8 +8,7 @@ namespace vdbwrap::mesh {
 
 std::vector<FeatureEdge> find_feature_edges(const std::vector<Vec3>& points, const std::vector<Tri>& triangles,
                                             const std::vector<Vec3>& normals, double feature_angle_deg,
-                                            const EdgeTriangles* edges) {
-  (void)points;
+                                            const EdgeTriangles* edges, const std::vector<ContactEdge>* contact) {
   EdgeTriangles made;
   const EdgeTriangles& edge_tris = edges ? *edges : (made = edge_triangles(triangles));
   const double cos_limit = std::cos(feature_angle_deg * M_PI / 180.0);
@@ -22,7 +21,9 @@ std::vector<FeatureEdge> find_feature_edges(const std::vector<Vec3>& points, con
     if (edge_tris.size(i) == 1) {
       out.push_back({a, b, FeatureKind::Boundary});
     } else if (edge_tris.size(i) > 2) {
-      out.push_back({a, b, FeatureKind::NonManifold});
+      const ContactEdge kind = contact ? (*contact)[i] : ContactEdge::NonManifold;
+      if (kind == ContactEdge::NonManifold) out.push_back({a, b, FeatureKind::NonManifold});
+      if (kind == ContactEdge::Sharp) out.push_back({a, b, FeatureKind::Sharp});
     } else if (dot(normals[tris[0]], normals[tris[1]]) < cos_limit) {
       out.push_back({a, b, FeatureKind::Sharp});
     }

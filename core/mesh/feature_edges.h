@@ -4,6 +4,7 @@
 #include <vector>
 
 #include "common/edge_triangles.h"
+#include "mesh/contact_faces.h"
 #include "vdbwrap/mesh.h"
 
 namespace vdbwrap::mesh {
@@ -16,8 +17,11 @@ struct FeatureEdge {
 };
 
 // Sharp (dihedral angle over feature_angle_deg), boundary and non-manifold edges, sorted by (a, b).
+// `contact` (optional, per edge of `edges`): what faces where solids touch make of the edges with
+// more than two faces (see contact_faces.h).
 std::vector<FeatureEdge> find_feature_edges(const std::vector<Vec3>& points, const std::vector<Tri>& triangles,
                                             const std::vector<Vec3>& normals, double feature_angle_deg,
-                                            const EdgeTriangles* edges = nullptr);
+                                            const EdgeTriangles* edges = nullptr,
+                                            const std::vector<ContactEdge>* contact = nullptr);
 
 }  // namespace vdbwrap::mesh

@@ -3,7 +3,9 @@
 namespace vdbwrap::pipeline {
 
 prep::PrepareParams prepare_params(const WrapParams& params) {
-  return {params.weld_tolerance, params.feature_angle_deg};
+  // Only around the outside: the inside volume and a seed point's can lie between the solids.
+  return {params.weld_tolerance, params.feature_angle_deg, params.volume == VolumeChoice::Outside,
+          !params.contact_prevention.empty()};
 }
 
 grid::SizeRequests size_requests(const WrapParams& params) {

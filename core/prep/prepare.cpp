@@ -16,6 +16,7 @@
 #include "common/grid_key.h"
 #include "common/sorted_point_grid.h"
 #include "common/vec.h"
+#include "mesh/contact_faces.h"
 #include "mesh/orient.h"
 #include "mesh/weld.h"
 #include "vdbwrap/errors.h"
@@ -91,6 +92,12 @@ void drop_stray_needles(const std::vector<Tri>& tris, const std::vector<uint8_t>
     for (int k = 0; k < 3; ++k) alone = alone && uses[edge_key(tris[t][k], tris[t][(k + 1) % 3])] == 1;
     if (alone) degenerate[t] = 1;
   }
+}
+
+// Whether two triangles on the same corners run them the same way round.
+bool same_turn(const Tri& a, const Tri& b) {
+  const int k = b[0] == a[0] ? 0 : b[1] == a[0] ? 1 : 2;
+  return b[(k + 1) % 3] == a[1];
 }
 
 }  // namespace
@@ -169,16 +176,21 @@ PreparedInput prepare(const Mesh& input, const PrepareParams& params, ProgressSi
   drop_stray_needles(welded_tris, needle, degenerate);
   tbb::parallel_sort(corners.begin(), corners.end());
   std::vector<uint32_t> copy_of(n, UINT32_MAX);  // the first non-degenerate triangle with the same corners
+  std::vector<uint8_t> turned(n, 0);             // of those, the ones given again turned: between solids?
   for (size_t k = 0; k < n;) {
     size_t e = k;
     uint32_t first = UINT32_MAX;
     for (; e < n && corners[e].sorted == corners[k].sorted; ++e)
-      if (!degenerate[corners[e].t]) {
-        if (first == UINT32_MAX) first = corners[e].t;
-        copy_of[corners[e].t] = first;
+      if (const uint32_t t = corners[e].t; !degenerate[t]) {
+        if (first == UINT32_MAX) first = t;
+        copy_of[t] = first;
+        if (params.contact_faces_inside && !same_turn(welded_tris[t], welded_tris[first]) &&
+            (!params.parts_kept_apart || input.part_of(t) == input.part_of(first)))
+          turned[first] = 1;
       }
     k = e;
   }
+  std::vector<uint8_t> twin;  // per mesh triangle: turned
   out.input_to_mesh.assign(n, UINT32_MAX);
   for (size_t t = 0; t < n; ++t) {
     if (degenerate[t]) {
@@ -190,6 +202,7 @@ PreparedInput prepare(const Mesh& input, const PrepareParams& params, ProgressSi
       out.input_to_mesh[t] = uint32_t(m.triangles.size());
       m.triangles.push_back(welded_tris[t]);
       m.triangle_part.push_back(input.part_of(t));
+      twin.push_back(turned[t]);
     }
   }
   if (m.triangles.empty())
@@ -200,6 +213,11 @@ PreparedInput prepare(const Mesh& input, const PrepareParams& params, ProgressSi
   if (progress) progress->progress("prepare", 0.3, "orienting connected pieces");
   // One edge listing for orienting and for the feature edges: flips change no triangle's edges.
   const EdgeTriangles edges = edge_triangles(m.triangles);
+  std::vector<mesh::ContactEdge> contact;  // read in the input's orientation, before orienting
+  if (params.contact_faces_inside)
+    contact =
+        mesh::contact_edges(m.points, m.triangles, params.parts_kept_apart ? m.triangle_part : std::vector<int32_t>{},
+                            edges, twin, params.feature_angle_deg);
   out.flipped_triangles = mesh::orient_pieces(m.points, m.triangles, &edges, &out.closed_piece);
   out.closed_piece_size = closed_piece_sizes(m, out.closed_piece);
 
@@ -211,7 +229,8 @@ PreparedInput prepare(const Mesh& input, const PrepareParams& params, ProgressSi
     }
   });
   if (progress) progress->progress("prepare", 0.5, "finding feature edges");
-  out.feature_edges = mesh::find_feature_edges(m.points, m.triangles, out.normals, params.feature_angle_deg, &edges);
+  out.feature_edges = mesh::find_feature_edges(m.points, m.triangles, out.normals, params.feature_angle_deg, &edges,
+                                               params.contact_faces_inside ? &contact : nullptr);
 
   if (progress) progress->progress("prepare", 0.7, "finding self-intersection lines");
   out.intersecting_pairs = check::find_intersecting_pairs(m.points, m.triangles, check::SoupKind::kInput, &edges);

@@ -67,6 +67,11 @@ InputIntersections input_intersections(const std::vector<check::TrianglePair>& m
 struct PrepareParams {
   double weld_tolerance = 1e-7;   // fraction of the diagonal under which vertices merge
   double feature_angle_deg = 30;  // dihedral angle (between normals) that makes an edge sharp
+  // A face given twice with opposite orientations in one part lies between two solids that
+  // touch (voxel art: every voxel its own cube). Wrapping the outside, such a face is inside
+  // the material, and the edges it makes non-manifold are judged by the faces around it.
+  bool contact_faces_inside = false;
+  bool parts_kept_apart = false;  // contact prevention: a contact between two parts stays a feature
 };
 PreparedInput prepare(const Mesh& input, const PrepareParams& params, ProgressSink* progress,
                       const ExactWeld* input_weld = nullptr);

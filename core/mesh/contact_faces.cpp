@@ -1,0 +1,94 @@
+#include "mesh/contact_faces.h"
+
+#include <cmath>
+
+#include "mesh/edge_fin.h"
+
+namespace vdbwrap::mesh {
+
+namespace {
+
+// Contact faces: the twins, and coincident pairs facing apart at non-manifold edges.
+std::vector<uint8_t> contact_faces(const std::vector<Vec3>& points, const std::vector<Tri>& triangles,
+                                   const std::vector<int32_t>& triangle_part, const EdgeTriangles& edges,
+                                   const std::vector<uint8_t>& twin) {
+  std::vector<uint8_t> contact = twin;
+  // Coincident within half a degree: the same plane in float coordinates.
+  const double coincident = std::cos(0.5 * M_PI / 180.0);
+  auto part = [&](uint32_t t) { return triangle_part.empty() ? 0 : triangle_part[t]; };
+  for (size_t i = 0; i < edges.edges(); ++i) {
+    const size_t n = edges.size(i);
+    if (n < 3) continue;
+    const uint32_t a = uint32_t(edges.keys[i] >> 32), b = uint32_t(edges.keys[i] & 0xffffffffu);
+    const uint32_t* tris = edges.begin(i);
+    for (size_t k = 0; k < n; ++k)
+      for (size_t l = k + 1; l < n; ++l) {
+        const uint32_t s = tris[k], t = tris[l];
+        // In one half-plane, facing apart means running the edge opposite ways.
+        if (part(s) != part(t) || (directed_side(triangles[s], a, b) >= 0) == (directed_side(triangles[t], a, b) >= 0))
+          continue;
+        if (dot(edge_fin(points, triangles[s], a, b), edge_fin(points, triangles[t], a, b)) > coincident)
+          contact[s] = contact[t] = 1;
+      }
+  }
+  return contact;
+}
+
+// Angle of `f` from `f0` about the unit edge direction `e`, in [0, 2 pi).
+double turn(const Vec3& f0, const Vec3& f, const Vec3& e) {
+  const double angle = std::atan2(dot(cross(f0, f), e), dot(f0, f));
+  return angle < 0 ? angle + 2 * M_PI : angle;
+}
+
+}  // namespace
+
+std::vector<ContactEdge> contact_edges(const std::vector<Vec3>& points, const std::vector<Tri>& triangles,
+                                       const std::vector<int32_t>& triangle_part, const EdgeTriangles& edges,
+                                       const std::vector<uint8_t>& twin, double feature_angle_deg) {
+  const std::vector<uint8_t> contact = contact_faces(points, triangles, triangle_part, edges, twin);
+  const double cos_limit = std::cos(feature_angle_deg * M_PI / 180.0);
+  std::vector<ContactEdge> out(edges.edges(), ContactEdge::NonManifold);
+  for (size_t i = 0; i < edges.edges(); ++i) {
+    const size_t n = edges.size(i);
+    if (n < 3) continue;
+    const uint32_t a = uint32_t(edges.keys[i] >> 32), b = uint32_t(edges.keys[i] & 0xffffffffu);
+    const uint32_t* tris = edges.begin(i);
+    uint32_t outer[2];
+    size_t outers = 0, inners = 0;
+    for (size_t k = 0; k < n; ++k) {
+      if (contact[tris[k]]) {
+        ++inners;
+        continue;
+      }
+      if (outers < 2) outer[outers] = tris[k];
+      ++outers;
+    }
+    if (inners == 0) continue;
+    if (outers == 0) {
+      out[i] = ContactEdge::Inside;
+      continue;
+    }
+    if (outers != 2) continue;
+    // The material wedge: from the first face's fin, turning towards its back, to the second's.
+    // Both faces must have their backs in it, and every contact face must lie in it.
+    const Vec3 e = normalized(points[b] - points[a]);
+    const Vec3 f0 = edge_fin(points, triangles[outer[0]], a, b), f1 = edge_fin(points, triangles[outer[1]], a, b);
+    const Vec3 back0 = -1.0 * area_vector(points[triangles[outer[0]][0]], points[triangles[outer[0]][1]],
+                                          points[triangles[outer[0]][2]]);
+    const Vec3 back1 = -1.0 * area_vector(points[triangles[outer[1]][0]], points[triangles[outer[1]][1]],
+                                          points[triangles[outer[1]][2]]);
+    const bool forward = dot(back0, cross(e, f0)) > 0;  // the wedge turns the positive way from f0
+    const double end = turn(f0, f1, e);
+    if ((dot(back1, cross(e, f1)) > 0) == forward) continue;  // the second face's back points out of it
+    bool behind = true;
+    for (size_t k = 0; k < n && behind; ++k) {
+      if (!contact[tris[k]]) continue;
+      const double at = turn(f0, edge_fin(points, triangles[tris[k]], a, b), e);
+      behind = forward ? at > 0 && at < end : at > end;
+    }
+    if (behind) out[i] = dot(f0, f1) > -cos_limit ? ContactEdge::Sharp : ContactEdge::Flat;
+  }
+  return out;
+}
+
+}  // namespace vdbwrap::mesh
