@@ -249,6 +249,7 @@ std::string to_json(const WrapReport& r, int indent) {
            {"boundary_edges", r.features.boundary_edges},
            {"nonmanifold_edges", r.features.nonmanifold_edges},
            {"noise_sharp_edges", r.features.noise_sharp_edges},
+           {"small_rim_edges", r.features.small_rim_edges},
            {"intersection_segments", r.features.intersection_segments},
            {"curves", r.features.curves},
            {"corners", r.features.corners},

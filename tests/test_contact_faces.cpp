@@ -97,8 +97,7 @@ void expect_union_features(const std::set<Cell>& voxels, const prep::PreparedInp
             EXPECT_TRUE(it == found.end()) << where << " is flat or inside the union, yet a feature";
           } else {
             ASSERT_TRUE(it != found.end()) << where << " is a crease of the union, yet no feature";
-            EXPECT_EQ(it->second,
-                      want == Expect::Sharp ? prep::FeatureKind::Sharp : prep::FeatureKind::NonManifold)
+            EXPECT_EQ(it->second, want == Expect::Sharp ? prep::FeatureKind::Sharp : prep::FeatureKind::NonManifold)
                 << where;
             sharp += want == Expect::Sharp;
           }

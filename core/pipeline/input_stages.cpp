@@ -2,6 +2,7 @@
 #include "check/diagnostics.h"
 #include "common/stage_timer.h"
 #include "mesh/short_feature_runs.h"
+#include "mesh/small_rims.h"
 #include "pipeline/stage_params.h"
 #include "pipeline/stages.h"
 
@@ -47,6 +48,10 @@ void prepare_input(WrapRun& run) {
   // they would become thousands of feature curves, each with nodes snapped and inserted.
   report.features.noise_sharp_edges = mesh::drop_short_sharp_runs(
       run.prepared.mesh.points, run.prepared.feature_edges, kShortestSharpRun * run.base, run.params.corner_angle_deg);
+  // A raw scan's floating fragments, a cell or two across, are wrapped as blobs: their rims
+  // would be thousands more curves, folding the blobs into slivers.
+  report.features.small_rim_edges =
+      mesh::drop_small_rims(run.prepared.mesh.points, run.prepared.feature_edges, kSmallestRim * run.base);
 }
 
 }  // namespace vdbwrap::pipeline

@@ -20,6 +20,9 @@ inline constexpr double kMostCellsAcross = 20000;
 // Runs of sharp edges shorter than this many base cells, many to a cell, are dropped as noise
 // (mesh/short_feature_runs.h).
 inline constexpr double kShortestSharpRun = 1.0;
+// Rims of open pieces and holes smaller than this many base cells across are no feature curves
+// (mesh/small_rims.h).
+inline constexpr double kSmallestRim = 3.0;
 // Unresolved contacts listed in the report, one per base cell.
 inline constexpr size_t kMostContactLocations = 100;
 // The refit where the first fit is far from the input (refine_where_far): it looks at triangles
