@@ -250,6 +250,7 @@ std::string to_json(const WrapReport& r, int indent) {
            {"nonmanifold_edges", r.features.nonmanifold_edges},
            {"noise_sharp_edges", r.features.noise_sharp_edges},
            {"small_rim_edges", r.features.small_rim_edges},
+           {"inside_faces", r.features.inside_faces},
            {"intersection_segments", r.features.intersection_segments},
            {"curves", r.features.curves},
            {"corners", r.features.corners},

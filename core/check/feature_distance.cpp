@@ -34,7 +34,8 @@ DistanceStats sharp_edge_distance(const Mesh& input, const Mesh& surface, double
   const EdgeTriangles listing = edge_triangles(tris);
   // The creases of solids that touch in faces (voxel art) count, as the wrap sees them; read in
   // the input's orientation, before orienting.
-  const auto contact = mesh::contact_edges(welded, tris, {}, listing, std::vector<uint8_t>(tris.size(), 0), angle_deg);
+  const auto contact =
+      mesh::contact_faces(welded, tris, {}, listing, std::vector<uint8_t>(tris.size(), 0), angle_deg).edges;
   mesh::orient_pieces(welded, tris, &listing);
   for (size_t t = 0; t < tris.size(); ++t)
     normals[t] = normalized(area_vector(welded[tris[t][0]], welded[tris[t][1]], welded[tris[t][2]]));

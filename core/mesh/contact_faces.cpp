@@ -8,17 +8,21 @@ namespace vdbwrap::mesh {
 
 namespace {
 
+constexpr size_t kMostAtAnEdge = 16;
+
 // Contact faces: the twins, and coincident pairs facing apart at non-manifold edges.
-std::vector<uint8_t> contact_faces(const std::vector<Vec3>& points, const std::vector<Tri>& triangles,
-                                   const std::vector<int32_t>& triangle_part, const EdgeTriangles& edges,
-                                   const std::vector<uint8_t>& twin) {
+std::vector<uint8_t> paired_faces(const std::vector<Vec3>& points, const std::vector<Tri>& triangles,
+                                  const std::vector<int32_t>& triangle_part, const EdgeTriangles& edges,
+                                  const std::vector<uint8_t>& twin) {
   std::vector<uint8_t> contact = twin;
   // Coincident within half a degree: the same plane in float coordinates.
   const double coincident = std::cos(0.5 * M_PI / 180.0);
   auto part = [&](uint32_t t) { return triangle_part.empty() ? 0 : triangle_part[t]; };
   for (size_t i = 0; i < edges.edges(); ++i) {
     const size_t n = edges.size(i);
-    if (n < 3) continue;
+    // Solids touching in faces put three or four at an edge; hundreds (a fan of copies) are
+    // no contact, and pairing them would take their square.
+    if (n < 3 || n > kMostAtAnEdge) continue;
     const uint32_t a = uint32_t(edges.keys[i] >> 32), b = uint32_t(edges.keys[i] & 0xffffffffu);
     const uint32_t* tris = edges.begin(i);
     for (size_t k = 0; k < n; ++k)
@@ -42,12 +46,14 @@ double turn(const Vec3& f0, const Vec3& f, const Vec3& e) {
 
 }  // namespace
 
-std::vector<ContactEdge> contact_edges(const std::vector<Vec3>& points, const std::vector<Tri>& triangles,
-                                       const std::vector<int32_t>& triangle_part, const EdgeTriangles& edges,
-                                       const std::vector<uint8_t>& twin, double feature_angle_deg) {
-  const std::vector<uint8_t> contact = contact_faces(points, triangles, triangle_part, edges, twin);
+ContactFaces contact_faces(const std::vector<Vec3>& points, const std::vector<Tri>& triangles,
+                           const std::vector<int32_t>& triangle_part, const EdgeTriangles& edges,
+                           const std::vector<uint8_t>& twin, double feature_angle_deg) {
+  const std::vector<uint8_t> contact = paired_faces(points, triangles, triangle_part, edges, twin);
   const double cos_limit = std::cos(feature_angle_deg * M_PI / 180.0);
-  std::vector<ContactEdge> out(edges.edges(), ContactEdge::NonManifold);
+  ContactFaces result;
+  std::vector<ContactEdge>& out = result.edges;
+  out.assign(edges.edges(), ContactEdge::NonManifold);
   for (size_t i = 0; i < edges.edges(); ++i) {
     const size_t n = edges.size(i);
     if (n < 3) continue;
@@ -88,7 +94,52 @@ std::vector<ContactEdge> contact_edges(const std::vector<Vec3>& points, const st
     }
     if (behind) out[i] = dot(f0, f1) > -cos_limit ? ContactEdge::Sharp : ContactEdge::Flat;
   }
-  return out;
+  // Inside: judged at every non-manifold edge it has, and it has one (a double-sided sheet on
+  // its own has none).
+  result.inside.assign(triangles.size(), 0);
+  for (size_t t = 0; t < triangles.size(); ++t) {
+    if (!contact[t]) continue;
+    int judged = 0;
+    bool unjudged = false;
+    for (int k = 0; k < 3; ++k) {
+      const size_t i = edges.find(edge_key(triangles[t][k], triangles[t][(k + 1) % 3]));
+      if (edges.size(i) < 3) continue;
+      if (out[i] == ContactEdge::NonManifold) unjudged = true;
+      ++judged;
+    }
+    result.inside[t] = judged > 0 && !unjudged;
+  }
+  // A face paired at one edge can reach past its partner (a large box's top under a small
+  // one's bottom, split its own way): only whole patches of them go, whose every side off a
+  // judged non-manifold edge is shared with another face of the patch. Dropping them leaves no
+  // hole.
+  std::vector<uint32_t> check;
+  for (size_t t = 0; t < triangles.size(); ++t)
+    if (result.inside[t]) check.push_back(uint32_t(t));
+  while (!check.empty()) {  // a face that stays puts its neighbours in the patch back to check
+    const uint32_t t = check.back();
+    check.pop_back();
+    if (!result.inside[t]) continue;
+    uint32_t across[3];
+    int sides = 0;
+    bool whole = true;
+    for (int k = 0; k < 3; ++k) {
+      const size_t i = edges.find(edge_key(triangles[t][k], triangles[t][(k + 1) % 3]));
+      if (edges.size(i) > 2) continue;
+      const uint32_t* two = edges.begin(i);
+      if (edges.size(i) < 2) {
+        whole = false;
+        continue;
+      }
+      across[sides++] = two[0] == t ? two[1] : two[0];
+      whole = whole && result.inside[across[sides - 1]];
+    }
+    if (whole) continue;
+    result.inside[t] = 0;
+    for (int k = 0; k < sides; ++k)
+      if (result.inside[across[k]]) check.push_back(across[k]);
+  }
+  return result;
 }
 
 }  // namespace vdbwrap::mesh

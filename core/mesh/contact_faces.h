@@ -18,7 +18,15 @@ enum class ContactEdge : uint8_t {
   Sharp,        // two faces left that meet at an angle (a concave step of voxels): a sharp edge
 };
 
-// Per edge of `edges`. A contact face is one of a pair of triangles of one part (`triangle_part`
+struct ContactFaces {
+  std::vector<ContactEdge> edges;  // per edge of the listing
+  // Per triangle: a contact face whose every edge with more than two faces was judged (not
+  // NonManifold), in a patch of such faces bounded by those edges alone: inside the
+  // material, and the outside wrap does without it.
+  std::vector<uint8_t> inside;
+};
+
+// A contact face is one of a pair of triangles of one part (`triangle_part`
 // may be empty: one part) meeting at a non-manifold edge in one half-plane from it (coincident
 // fins) and running it opposite ways (facing apart), each triangulated its own way; or one of
 // `twin` (per triangle), the kept copy of a face given twice, turned. An edge is judged only when
@@ -26,8 +34,8 @@ enum class ContactEdge : uint8_t {
 // double-sided sheet that sticks out of a solid keeps its edge a feature. The triangles must be
 // in the input's orientation, which says where the material is (the pieces of such a mesh between
 // non-manifold edges are small, and orienting them guesses).
-std::vector<ContactEdge> contact_edges(const std::vector<Vec3>& points, const std::vector<Tri>& triangles,
-                                       const std::vector<int32_t>& triangle_part, const EdgeTriangles& edges,
-                                       const std::vector<uint8_t>& twin, double feature_angle_deg);
+ContactFaces contact_faces(const std::vector<Vec3>& points, const std::vector<Tri>& triangles,
+                           const std::vector<int32_t>& triangle_part, const EdgeTriangles& edges,
+                           const std::vector<uint8_t>& twin, double feature_angle_deg);
 
 }  // namespace vdbwrap::mesh

@@ -29,8 +29,7 @@ size_t drop_small_rims(const std::vector<Vec3>& points, std::vector<FeatureEdge>
   const size_t before = edges.size();
   edges.erase(std::remove_if(edges.begin(), edges.end(),
                              [&](const FeatureEdge& e) {
-                               return e.kind == FeatureKind::Boundary &&
-                                      box[find(dense.at(e.a))].diagonal() < smallest;
+                               return e.kind == FeatureKind::Boundary && box[find(dense.at(e.a))].diagonal() < smallest;
                              }),
               edges.end());
   return before - edges.size();

@@ -37,6 +37,7 @@ void prepare_input(WrapRun& run) {
     if (f.kind == prep::FeatureKind::NonManifold) ++report.features.nonmanifold_edges;
   }
   report.features.intersection_segments = prepared.intersections.size();
+  report.features.inside_faces = prepared.dropped_inside;
   report.diagonal = prepared.diagonal;
   run.base = run.params.base_size.resolve(prepared.diagonal);
   report.base_size = run.base;

@@ -94,6 +94,37 @@ void drop_stray_needles(const std::vector<Tri>& tris, const std::vector<uint8_t>
   }
 }
 
+// Drops the faces where solids touch from the mesh (`inside`, per triangle): the outside wrap
+// does without them, and the union they leave is closed where the solids were (one piece to
+// orient, no coplanar overlaps to search, no cells refined for their normals). Renumbers the
+// input's triangles and lists the edges again, with their contact verdicts by key.
+void drop_inside_faces(PreparedInput& out, const std::vector<uint8_t>& inside, EdgeTriangles& edges,
+                       std::vector<mesh::ContactEdge>& contact) {
+  Mesh& m = out.mesh;
+  const size_t kept = size_t(std::count(inside.begin(), inside.end(), 0));
+  if (kept == m.triangles.size() || kept == 0) return;
+  std::vector<uint32_t> renumber(m.triangles.size(), UINT32_MAX);
+  size_t next = 0;
+  for (size_t t = 0; t < m.triangles.size(); ++t)
+    if (!inside[t]) {
+      renumber[t] = uint32_t(next);
+      m.triangles[next] = m.triangles[t];
+      m.triangle_part[next] = m.triangle_part[t];
+      ++next;
+    }
+  m.triangles.resize(next);
+  m.triangle_part.resize(next);
+  for (uint32_t& t : out.input_to_mesh)
+    if (t != UINT32_MAX) t = renumber[t];
+  out.dropped_inside = inside.size() - kept;
+  EdgeTriangles listed = edge_triangles(m.triangles);
+  std::vector<mesh::ContactEdge> verdicts(listed.edges(), mesh::ContactEdge::NonManifold);
+  for (size_t i = 0; i < listed.edges(); ++i)
+    if (listed.size(i) > 2) verdicts[i] = contact[edges.find(listed.keys[i])];
+  edges = std::move(listed);
+  contact = std::move(verdicts);
+}
+
 // Whether two triangles on the same corners run them the same way round.
 bool same_turn(const Tri& a, const Tri& b) {
   const int k = b[0] == a[0] ? 0 : b[1] == a[0] ? 1 : 2;
@@ -212,12 +243,15 @@ PreparedInput prepare(const Mesh& input, const PrepareParams& params, ProgressSi
 
   if (progress) progress->progress("prepare", 0.3, "orienting connected pieces");
   // One edge listing for orienting and for the feature edges: flips change no triangle's edges.
-  const EdgeTriangles edges = edge_triangles(m.triangles);
+  EdgeTriangles edges = edge_triangles(m.triangles);
   std::vector<mesh::ContactEdge> contact;  // read in the input's orientation, before orienting
-  if (params.contact_faces_inside)
-    contact =
-        mesh::contact_edges(m.points, m.triangles, params.parts_kept_apart ? m.triangle_part : std::vector<int32_t>{},
+  if (params.contact_faces_inside) {
+    mesh::ContactFaces faces =
+        mesh::contact_faces(m.points, m.triangles, params.parts_kept_apart ? m.triangle_part : std::vector<int32_t>{},
                             edges, twin, params.feature_angle_deg);
+    contact = std::move(faces.edges);
+    drop_inside_faces(out, faces.inside, edges, contact);
+  }
   out.flipped_triangles = mesh::orient_pieces(m.points, m.triangles, &edges, &out.closed_piece);
   out.closed_piece_size = closed_piece_sizes(m, out.closed_piece);
 

@@ -43,9 +43,10 @@ struct PreparedInput {
   // input_intersections).
   std::vector<check::TrianglePair> intersecting_pairs;
   // Input triangle t became mesh triangle input_to_mesh[t]; an exact duplicate points at the
-  // copy that was kept; UINT32_MAX for a triangle dropped as degenerate.
+  // copy that was kept; UINT32_MAX for a triangle dropped as degenerate or inside the material.
   std::vector<uint32_t> input_to_mesh;
   size_t dropped_degenerate = 0, dropped_duplicate = 0, welded_vertices = 0, flipped_triangles = 0;
+  size_t dropped_inside = 0;  // faces where solids touch, inside the material (contact_faces.h)
 };
 
 // Intersection counts of the input mesh (MeshDiagnostics::intersecting_pairs / _triangles)
