@@ -120,24 +120,24 @@ ContactFaces contact_faces(const std::vector<Vec3>& points, const std::vector<Tr
     const uint32_t t = check.back();
     check.pop_back();
     if (!result.inside[t]) continue;
-    uint32_t across[3];
-    int sides = 0;
+    // Its neighbours across sides of two faces and edges inside the material (every face
+    // there a contact face): all of them must go with it, or a rim would be left.
     bool whole = true;
-    for (int k = 0; k < 3; ++k) {
+    for (int k = 0; k < 3 && whole; ++k) {
       const size_t i = edges.find(edge_key(triangles[t][k], triangles[t][(k + 1) % 3]));
-      if (edges.size(i) > 2) continue;
-      const uint32_t* two = edges.begin(i);
-      if (edges.size(i) < 2) {
-        whole = false;
-        continue;
-      }
-      across[sides++] = two[0] == t ? two[1] : two[0];
-      whole = whole && result.inside[across[sides - 1]];
+      if (edges.size(i) < 2) whole = false;
+      if (edges.size(i) == 2 || out[i] == ContactEdge::Inside)
+        for (const uint32_t* o = edges.begin(i); o != edges.begin(i) + edges.size(i); ++o)
+          whole = whole && result.inside[*o];
     }
     if (whole) continue;
     result.inside[t] = 0;
-    for (int k = 0; k < sides; ++k)
-      if (result.inside[across[k]]) check.push_back(across[k]);
+    for (int k = 0; k < 3; ++k) {
+      const size_t i = edges.find(edge_key(triangles[t][k], triangles[t][(k + 1) % 3]));
+      if (edges.size(i) == 2 || out[i] == ContactEdge::Inside)
+        for (const uint32_t* o = edges.begin(i); o != edges.begin(i) + edges.size(i); ++o)
+          if (result.inside[*o]) check.push_back(*o);
+    }
   }
   return result;
 }
