@@ -56,7 +56,7 @@ ContactFaces contact_faces(const std::vector<Vec3>& points, const std::vector<Tr
   out.assign(edges.edges(), ContactEdge::NonManifold);
   for (size_t i = 0; i < edges.edges(); ++i) {
     const size_t n = edges.size(i);
-    if (n < 3) continue;
+    if (n < 3 || n > kMostAtAnEdge) continue;  // (a face's checks below then stay short too)
     const uint32_t a = uint32_t(edges.keys[i] >> 32), b = uint32_t(edges.keys[i] & 0xffffffffu);
     const uint32_t* tris = edges.begin(i);
     uint32_t outer[2];
