@@ -2,13 +2,22 @@
 
 #include <cmath>
 
-#include "mesh/edge_fin.h"
+#include "common/vec.h"
 
 namespace vdbwrap::mesh {
 
 namespace {
 
 constexpr size_t kMostAtAnEdge = 16;
+
+// Unit direction from edge (a, b) towards the triangle's third corner, square to the edge. Around
+// an edge with many triangles, the angles between fins say which are flat, folded or coincident
+// whatever the triangles' orientations.
+inline Vec3 edge_fin(const std::vector<Vec3>& points, const Tri& t, uint32_t a, uint32_t b) {
+  const uint32_t c = t[0] != a && t[0] != b ? t[0] : t[1] != a && t[1] != b ? t[1] : t[2];
+  const Vec3 e = points[b] - points[a], d = points[c] - points[a];
+  return normalized(d - e * (dot(d, e) / dot(e, e)));
+}
 
 // Contact faces: the twins, and coincident pairs facing apart at non-manifold edges.
 std::vector<uint8_t> paired_faces(const std::vector<Vec3>& points, const std::vector<Tri>& triangles,
@@ -122,22 +131,23 @@ ContactFaces contact_faces(const std::vector<Vec3>& points, const std::vector<Tr
     if (!result.inside[t]) continue;
     // Its neighbours across sides of two faces and edges inside the material (every face
     // there a contact face): all of them must go with it, or a rim would be left.
+    size_t side[3];
     bool whole = true;
-    for (int k = 0; k < 3 && whole; ++k) {
-      const size_t i = edges.find(edge_key(triangles[t][k], triangles[t][(k + 1) % 3]));
-      if (edges.size(i) < 2) whole = false;
-      if (edges.size(i) == 2 || out[i] == ContactEdge::Inside)
+    for (int k = 0; k < 3; ++k) {
+      side[k] = edges.find(edge_key(triangles[t][k], triangles[t][(k + 1) % 3]));
+      if (edges.size(side[k]) < 2) whole = false;
+    }
+    auto ties = [&](size_t i) { return edges.size(i) == 2 || out[i] == ContactEdge::Inside; };
+    for (size_t i : side)
+      if (ties(i))
         for (const uint32_t* o = edges.begin(i); o != edges.begin(i) + edges.size(i); ++o)
           whole = whole && result.inside[*o];
-    }
     if (whole) continue;
     result.inside[t] = 0;
-    for (int k = 0; k < 3; ++k) {
-      const size_t i = edges.find(edge_key(triangles[t][k], triangles[t][(k + 1) % 3]));
-      if (edges.size(i) == 2 || out[i] == ContactEdge::Inside)
+    for (size_t i : side)
+      if (ties(i))
         for (const uint32_t* o = edges.begin(i); o != edges.begin(i) + edges.size(i); ++o)
           if (result.inside[*o]) check.push_back(*o);
-    }
   }
   return result;
 }
