@@ -248,6 +248,7 @@ std::string to_json(const WrapReport& r, int indent) {
           {{"sharp_edges", r.features.sharp_edges},
            {"boundary_edges", r.features.boundary_edges},
            {"nonmanifold_edges", r.features.nonmanifold_edges},
+           {"noise_intersection_segments", r.features.noise_intersection_segments},
            {"noise_sharp_edges", r.features.noise_sharp_edges},
            {"small_rim_edges", r.features.small_rim_edges},
            {"inside_faces", r.features.inside_faces},

@@ -3,6 +3,7 @@
 // direction. Runs shorter than the wrap can follow are dropped before the feature curves are
 // built from them.
 #pragma once
+#include <cstdint>
 #include <vector>
 
 #include "mesh/feature_edges.h"
@@ -18,5 +19,13 @@ namespace vdbwrap::mesh {
 // ends at a part's corner. `edges` keeps its order. Returns the number of sharp edges dropped.
 size_t drop_short_sharp_runs(const std::vector<Vec3>& points, std::vector<FeatureEdge>& edges, double shortest,
                              double corner_angle_deg);
+
+// The same test for lines given by their ends, segment i from ends[2i] to ends[2i + 1], ends
+// within `weld` of each other one point: the self-intersection lines of rough sheets that cross
+// (an unmerged scan's overlapping views) meander in short runs as densely as a rough
+// surface's sharp edges, while parts that cross meet along long runs. Per segment, whether it
+// is noise.
+std::vector<uint8_t> short_line_runs(const std::vector<Vec3>& ends, double shortest, double corner_angle_deg,
+                                     double weld);
 
 }  // namespace vdbwrap::mesh

@@ -49,6 +49,19 @@ void prepare_input(WrapRun& run) {
   // they would become thousands of feature curves, each with nodes snapped and inserted.
   report.features.noise_sharp_edges = mesh::drop_short_sharp_runs(
       run.prepared.mesh.points, run.prepared.feature_edges, kShortestSharpRun * run.base, run.params.corner_angle_deg);
+  // Where rough sheets cross, so do their self-intersection lines, in short runs just as dense.
+  {
+    std::vector<Vec3> ends;
+    for (const auto& s : run.prepared.intersections) ends.push_back(s.a), ends.push_back(s.b);
+    const std::vector<uint8_t> noise = mesh::short_line_runs(
+        ends, kShortestSharpRun * run.base, run.params.corner_angle_deg, kLineWeld * prepared.diagonal);
+    auto& lines = run.prepared.intersections;
+    size_t kept = 0;
+    for (size_t i = 0; i < lines.size(); ++i)
+      if (!noise[i]) lines[kept++] = lines[i];
+    report.features.noise_intersection_segments = lines.size() - kept;
+    lines.resize(kept);
+  }
   // A raw scan's floating fragments, a cell or two across, are wrapped as blobs: their rims
   // would be thousands more curves, folding the blobs into slivers.
   report.features.small_rim_edges =

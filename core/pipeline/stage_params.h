@@ -23,6 +23,9 @@ inline constexpr double kShortestSharpRun = 1.0;
 // Rims of open pieces and holes smaller than this many base cells across are no feature curves
 // (mesh/small_rims.h).
 inline constexpr double kSmallestRim = 3.0;
+// Self-intersection line ends closer than this fraction of the diagonal are one point, as the
+// feature curves join them (fit/features.cpp).
+inline constexpr double kLineWeld = 1e-9;
 // Unresolved contacts listed in the report, one per base cell.
 inline constexpr size_t kMostContactLocations = 100;
 // The refit where the first fit is far from the input (refine_where_far): it looks at triangles

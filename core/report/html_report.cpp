@@ -223,6 +223,7 @@ std::string numbers_html(const json& r, bool has_wrap) {
   t.section("Features", "features");
   t.rows({{"Sharp edges", "features.sharp_edges"},
           {"Sharp edges left out as noise", "features.noise_sharp_edges"},
+          {"Intersection segments left out as noise", "features.noise_intersection_segments"},
           {"Boundary edges of small rims left out", "features.small_rim_edges"},
           {"Faces where solids touch left out", "features.inside_faces"},
           {"Curves", "features.curves"},

@@ -44,8 +44,10 @@ struct MeshDiagnostics {
 
 struct FeatureStats {
   size_t sharp_edges = 0, boundary_edges = 0, nonmanifold_edges = 0, intersection_segments = 0;
-  size_t inside_faces = 0;       // faces where solids touch (voxel art), inside the material: left out
-  size_t small_rim_edges = 0;    // of the boundary edges, those of rims under 3 base cells across: not used
+  size_t inside_faces = 0;     // faces where solids touch (voxel art), inside the material: left out
+  size_t small_rim_edges = 0;  // of the boundary edges, those of rims under 3 base cells across: not used
+  // Of the intersection segments, those in runs too short to follow (rough sheets crossing): not used.
+  size_t noise_intersection_segments = 0;
   size_t noise_sharp_edges = 0;  // of the sharp edges, those in runs too short to follow (a rough surface): not used
   size_t curves = 0, corners = 0, curves_captured = 0, corners_captured = 0, nodes_snapped = 0;
   // Curve points the traced chains missed (sampled every half finest cell), and what was done
