@@ -10,6 +10,8 @@
 #include "common/vec.h"
 #include "prep/prepare.h"
 #include "test_meshes.h"
+#include "vdbwrap/check.h"
+#include "vdbwrap/wrap.h"
 
 using namespace vdbwrap;
 
@@ -227,4 +229,27 @@ TEST(ContactFaces, AnInsideOutVoxelModelKeepsItsFacesWhole) {
     const auto p = prep::prepare(m, outside(), nullptr);
     for (const auto& f : p.feature_edges) EXPECT_NE(f.kind, prep::FeatureKind::Boundary) << "seed " << seed;
   }
+}
+
+// The report measures the wrap against the input as prepared (the projection's index), with
+// the contact faces left out: the distance to the union's surface. It is the distance to the
+// input as given (`vdbwrap check --against`) but where the wrap dips into the material (a
+// chord across a concave step) and a face inside is nearer than the surface: never nearer.
+TEST(ContactFaces, TheReportMeasuresTheWrapAgainstTheUnionsSurface) {
+  std::mt19937 rng(3);
+  const Mesh m = voxel_mesh(voxel_blob(rng), rng);
+  WrapParams p;
+  p.base_size = Length{4, true};
+  const WrapResult r = wrap(m, p);
+  ASSERT_GT(r.report.features.inside_faces, 0u);
+  const DistanceStats given = sampled_distance(r.surface, m);
+  const DistanceStats& reported = r.report.output_to_input;
+  EXPECT_EQ(reported.samples, given.samples);
+  EXPECT_DOUBLE_EQ(reported.diagonal, given.diagonal);
+  const double eps = 1e-9 * given.diagonal;
+  EXPECT_GE(reported.mean, given.mean - eps);
+  EXPECT_LE(reported.mean, 1.05 * given.mean + eps);
+  EXPECT_GE(reported.p95, given.p95 - eps);
+  EXPECT_GE(reported.max, given.max - eps);
+  EXPECT_LE(reported.max, 1.05 * given.max + eps);
 }

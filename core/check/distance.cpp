@@ -24,10 +24,11 @@ namespace {
 constexpr double kMostAreaSamples = 1e5;
 constexpr double kLeastAreaSamples = 2e4;  // on small or slender surfaces, whatever the spacing
 
-std::vector<double> distances_of(const std::vector<Vec3>& samples, const mesh::SurfaceIndex& index) {
+std::vector<double> distances_of(const std::vector<Vec3>& samples, const check::IndexedSurface& to) {
   std::vector<double> dist(samples.size());
   tbb::parallel_for(tbb::blocked_range<size_t>(0, samples.size(), 1024), [&](const tbb::blocked_range<size_t>& r) {
-    for (size_t i = r.begin(); i != r.end(); ++i) dist[i] = std::sqrt(index.squared_distance(samples[i]));
+    for (size_t i = r.begin(); i != r.end(); ++i)
+      dist[i] = std::sqrt(to.index.squared_distance(samples[i] - to.origin));
   });
   return dist;
 }
@@ -55,7 +56,7 @@ DistanceStats stats_of(std::vector<double> dist, const std::vector<Vec3>& sample
 // those of the even sampling).
 void refine_max(DistanceStats& s, const Mesh& from, const std::vector<uint32_t>& on_triangle,
                 const std::vector<uint32_t>& at_vertex, const std::vector<double>& dist,
-                const mesh::SurfaceIndex& index, const std::function<bool(const Vec3&)>& skip) {
+                const check::IndexedSurface& index, const std::function<bool(const Vec3&)>& skip) {
   constexpr size_t kTriangles = 256;
   constexpr int kSteps = 12;  // 91 points per triangle
   std::vector<double> vertex_distance(from.points.size(), 0);
@@ -131,11 +132,22 @@ void refine_max(DistanceStats& s, const Mesh& from, const std::vector<uint32_t>&
 
 DistanceStats check::sampled_distance_skipping(const Mesh& from, const Mesh& to, double samples_per_diagonal,
                                                const std::function<bool(const Vec3&)>& skip) {
-  DistanceStats s;
   Box3 box;
   for (const auto& p : to.points) box.add(p);
-  s.diagonal = box.diagonal();
-  if (from.triangles.empty() || to.triangles.empty()) return s;
+  if (from.triangles.empty() || to.triangles.empty()) {
+    DistanceStats s;
+    s.diagonal = box.diagonal();
+    return s;
+  }
+  const mesh::SurfaceIndex index(to.points, to.triangles);
+  return sampled_distance_to(from, IndexedSurface{index, {0, 0, 0}, box.diagonal()}, samples_per_diagonal, skip);
+}
+
+DistanceStats check::sampled_distance_to(const Mesh& from, const IndexedSurface& to, double samples_per_diagonal,
+                                         const std::function<bool(const Vec3&)>& skip) {
+  DistanceStats s;
+  s.diagonal = to.diagonal;
+  if (from.triangles.empty()) return s;
   // Samples: the vertices (every one up to half a million, evenly strided beyond), plus
   // points spread by area (a stratified count per triangle).
   double area = 0;
@@ -177,8 +189,7 @@ DistanceStats check::sampled_distance_skipping(const Mesh& from, const Mesh& to,
     samples.resize(kept), on_triangle.resize(kept), at_vertex.resize(kept);
   }
   if (samples.empty()) return s;
-  const mesh::SurfaceIndex index(to.points, to.triangles);
-  const std::vector<double> dist = distances_of(samples, index);
+  const std::vector<double> dist = distances_of(samples, to);
   // The mean and p95 of the area samples (the vertices, as many as half a million, would weigh
   // a dense patch of the mesh over the rest); the max of all.
   std::vector<double> spread;
@@ -189,7 +200,7 @@ DistanceStats check::sampled_distance_skipping(const Mesh& from, const Mesh& to,
   s.samples = samples.size();
   const size_t farthest = size_t(std::max_element(dist.begin(), dist.end()) - dist.begin());
   if (dist[farthest] > s.max) s.max = dist[farthest], s.max_at = samples[farthest];
-  refine_max(s, from, on_triangle, at_vertex, dist, index, skip);
+  refine_max(s, from, on_triangle, at_vertex, dist, to, skip);
   return s;
 }
 
@@ -200,7 +211,7 @@ DistanceStats distances_to(const std::vector<Vec3>& samples, const Mesh& to, dou
   s.diagonal = diagonal;
   if (samples.empty() || to.triangles.empty()) return s;
   const mesh::SurfaceIndex index(to.points, to.triangles);
-  return stats_of(distances_of(samples, index), samples, diagonal);
+  return stats_of(distances_of(samples, IndexedSurface{index, {0, 0, 0}, diagonal}), samples, diagonal);
 }
 
 }  // namespace check

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstdio>
 
+#include "check/distance_stats.h"
 #include "check/intersections.h"
 #include "common/debug_switch.h"
 #include "common/stage_timer.h"
@@ -121,7 +122,14 @@ void measure_distances(WrapRun& run) {
   if (run.params.compute_distances) {
     StageTimer timer("distances", run.report.stages);
     if (run.progress) run.progress->progress("distances", 0.0, "sampling distances between the wrap and the input");
-    run.report.output_to_input = sampled_distance(run.result.surface, run.input);
+    // To the input as prepared, whose index the projection built (a second index over a large
+    // input took seconds): the same surface up to the weld, less degenerate triangles and faces
+    // inside the material (voxel art's contact faces), which only a point inside the material
+    // can have nearer than the surface.
+    Box3 box;
+    for (const Vec3& p : run.input.points) box.add(p);
+    run.report.output_to_input = check::sampled_distance_to(
+        run.result.surface, check::IndexedSurface{run.index(), run.prepared.origin, box.diagonal()}, 1000);
     run.check_cancel();
     run.report.input_to_output = sampled_distance(run.input, run.result.surface);
     run.check_cancel();
