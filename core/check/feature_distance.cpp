@@ -11,6 +11,10 @@
 
 namespace vdbwrap {
 
+namespace {
+constexpr size_t kMostSamples = 200000;  // far below that, the mean and p95 hardly move
+}  // namespace
+
 DistanceStats sharp_edge_distance(const Mesh& input, const Mesh& surface, double angle_deg, double spacing_fraction) {
   DistanceStats s;
   Box3 box;
@@ -41,12 +45,23 @@ DistanceStats sharp_edge_distance(const Mesh& input, const Mesh& surface, double
     normals[t] = normalized(area_vector(welded[tris[t][0]], welded[tris[t][1]], welded[tris[t][2]]));
   auto edges = mesh::find_feature_edges(welded, tris, normals, angle_deg, &listing, &contact);
   const double spacing = spacing_fraction * s.diagonal;
+  auto steps = [&](const mesh::FeatureEdge& e) {
+    return std::max<size_t>(1, size_t(std::ceil(norm(welded[e.b] - welded[e.a]) / spacing)));
+  };
+  // A rough scan has a million short sharp edges, each sampled at both ends: every stride-th
+  // sample keeps the count near kMostSamples, evenly over all of them.
+  size_t count = 0;
+  for (const auto& e : edges)
+    if (e.kind == mesh::FeatureKind::Sharp) count += steps(e) + 1;
+  const size_t stride = std::max<size_t>(1, (count + kMostSamples - 1) / kMostSamples);
   std::vector<Vec3> samples;
+  size_t at = 0;
   for (const auto& e : edges) {
     if (e.kind != mesh::FeatureKind::Sharp) continue;
     const Vec3 &a = welded[e.a], &b = welded[e.b];
-    size_t k = std::max<size_t>(1, size_t(std::ceil(norm(b - a) / spacing)));
-    for (size_t i = 0; i <= k; ++i) samples.push_back(lerp(a, b, double(i) / double(k)));
+    const size_t k = steps(e);
+    for (size_t i = 0; i <= k; ++i, ++at)
+      if (at % stride == 0) samples.push_back(lerp(a, b, double(i) / double(k)));
   }
   return check::distances_to(samples, surface, s.diagonal);
 }
