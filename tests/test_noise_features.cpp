@@ -38,6 +38,16 @@ Mesh rough_sphere(int level, double amplitude, uint32_t seed) {
   return m;
 }
 
+// The wrap at 2 %, checked valid.
+WrapResult valid_wrap_at_2_percent(const Mesh& m) {
+  WrapParams p;
+  p.base_size = Length{2, true};
+  WrapResult r = wrap(m, p);
+  auto v = valid_closed_surface(r.surface);
+  EXPECT_TRUE(v.ok) << v.why;
+  return r;
+}
+
 }  // namespace
 
 // Ten rows of four sharp edges 0.2 long, 0.05 apart, straight or zigzagging by 90 degrees:
@@ -162,12 +172,7 @@ TEST(NoiseFeatures, RoughShellsCrossingAreNotTracedAlongTheirIntersections) {
   for (const Tri& t : other.triangles) views.triangles.push_back({t[0] + offset, t[1] + offset, t[2] + offset});
   const prep::PreparedInput in = prep::prepare(views, prep::PrepareParams{}, nullptr);
   ASSERT_GT(in.intersections.size(), 1000u);
-
-  WrapParams p;
-  p.base_size = Length{2, true};
-  const WrapResult r = wrap(views, p);
-  auto v = valid_closed_surface(r.surface);
-  EXPECT_TRUE(v.ok) << v.why;
+  const WrapResult r = valid_wrap_at_2_percent(views);
   const auto& f = r.report.features;
   std::printf("[rough shells] intersection segments %zu, dropped %zu; curves %zu\n", f.intersection_segments,
               f.noise_intersection_segments, f.curves);
@@ -185,11 +190,7 @@ TEST(NoiseFeatures, PartsThatCrossKeepTheirIntersectionLines) {
   add_cylinder(m, {3.5, 3.5, -1}, 0.05, 3, 12);  // a pin through it: a loop 0.3 long
   const prep::PreparedInput in = prep::prepare(m, prep::PrepareParams{}, nullptr);
   ASSERT_GT(in.intersections.size(), 12u);
-  WrapParams p;
-  p.base_size = Length{2, true};
-  const WrapResult r = wrap(m, p);
-  auto v = valid_closed_surface(r.surface);
-  EXPECT_TRUE(v.ok) << v.why;
+  const WrapResult r = valid_wrap_at_2_percent(m);
   EXPECT_EQ(r.report.features.noise_intersection_segments, 0u);
   // The block's crease with the plate is in the wrap (the pin is thinner than a cell).
   std::vector<Vec3> on_block;
