@@ -16,21 +16,12 @@
 #include "common/exact_weld.h"
 #include "common/fill_vector.h"
 #include "common/radix_sort.h"
+#include "common/union_find.h"
 #include "common/vec.h"
 #include "vdbwrap/check.h"
 
 namespace vdbwrap {
 namespace {
-
-struct UnionFind {
-  std::vector<uint32_t> parent;
-  explicit UnionFind(size_t n) : parent(n) { std::iota(parent.begin(), parent.end(), 0); }
-  uint32_t find(uint32_t x) {
-    while (parent[x] != x) x = parent[x] = parent[parent[x]];
-    return x;
-  }
-  void unite(uint32_t a, uint32_t b) { parent[find(a)] = find(b); }
-};
 
 // The edges of a triangle set by how they are used: by one triangle (a border), by more than
 // two (non-manifold), or by two that traverse it the same way (misoriented). Counted from a

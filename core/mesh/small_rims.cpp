@@ -1,35 +1,32 @@
 #include "mesh/small_rims.h"
 
 #include <algorithm>
-#include <unordered_map>
 
+#include "common/union_find.h"
 #include "common/vec.h"
 
 namespace vdbwrap::mesh {
 
 size_t drop_small_rims(const std::vector<Vec3>& points, std::vector<FeatureEdge>& edges, double smallest) {
   if (!(smallest > 0)) return 0;
-  // Union-find over the rims' vertices, numbered densely.
-  std::unordered_map<uint32_t, uint32_t> dense;
-  auto number = [&](uint32_t v) { return dense.emplace(v, uint32_t(dense.size())).first->second; };
-  std::vector<uint32_t> parent;
-  auto find = [&](uint32_t x) {
-    while (parent[x] != x) x = parent[x] = parent[parent[x]];
-    return x;
+  // The rims: boundary edges joined at their vertices, each with its box.
+  UnionFind rims(points.size());
+  for (const FeatureEdge& e : edges)
+    if (e.kind == FeatureKind::Boundary) rims.unite(e.a, e.b);
+  std::vector<uint32_t> rim_of(points.size(), UINT32_MAX);  // a rim's root -> its box
+  std::vector<Box3> box;
+  auto rim_box = [&](const FeatureEdge& e) -> Box3& {
+    uint32_t& slot = rim_of[rims.find(e.a)];
+    if (slot == UINT32_MAX) slot = uint32_t(box.size()), box.emplace_back();
+    return box[slot];
   };
-  for (const FeatureEdge& e : edges) {
-    if (e.kind != FeatureKind::Boundary) continue;
-    const uint32_t a = number(e.a), b = number(e.b);
-    while (parent.size() < dense.size()) parent.push_back(uint32_t(parent.size()));
-    parent[find(a)] = find(b);
-  }
-  if (parent.empty()) return 0;
-  std::vector<Box3> box(parent.size());
-  for (const auto& [v, i] : dense) box[find(i)].add(points[v]);
+  for (const FeatureEdge& e : edges)
+    if (e.kind == FeatureKind::Boundary) rim_box(e).add(points[e.a]), rim_box(e).add(points[e.b]);
+  if (box.empty()) return 0;
   const size_t before = edges.size();
   edges.erase(std::remove_if(edges.begin(), edges.end(),
                              [&](const FeatureEdge& e) {
-                               return e.kind == FeatureKind::Boundary && box[find(dense.at(e.a))].diagonal() < smallest;
+                               return e.kind == FeatureKind::Boundary && rim_box(e).diagonal() < smallest;
                              }),
               edges.end());
   return before - edges.size();

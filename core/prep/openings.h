@@ -4,9 +4,9 @@
 #pragma once
 #include <algorithm>
 #include <cmath>
-#include <numeric>
 #include <vector>
 
+#include "common/union_find.h"
 #include "common/vec.h"
 #include "prep/prepare.h"
 
@@ -23,15 +23,10 @@ inline std::vector<Opening> find_openings(const PreparedInput& in) {
   std::vector<std::pair<uint32_t, uint32_t>> edges;
   for (const FeatureEdge& f : in.feature_edges)
     if (f.kind == FeatureKind::Boundary) edges.push_back({f.a, f.b});
-  std::vector<uint32_t> parent(in.mesh.points.size());
-  std::iota(parent.begin(), parent.end(), 0u);
-  auto find = [&](uint32_t v) {
-    while (parent[v] != v) v = parent[v] = parent[parent[v]];
-    return v;
-  };
-  for (const auto& [a, b] : edges) parent[find(a)] = find(b);
+  UnionFind rims(in.mesh.points.size());
+  for (const auto& [a, b] : edges) rims.unite(a, b);
   std::vector<uint32_t> root_of(edges.size()), roots;
-  for (size_t e = 0; e < edges.size(); ++e) roots.push_back(root_of[e] = find(edges[e].first));
+  for (size_t e = 0; e < edges.size(); ++e) roots.push_back(root_of[e] = rims.find(edges[e].first));
   std::sort(roots.begin(), roots.end());
   roots.erase(std::unique(roots.begin(), roots.end()), roots.end());
   std::vector<Opening> out(roots.size());
