@@ -146,6 +146,30 @@ TEST(Deviation, SampledMaxIsFoundBetweenTheSamples) {
   EXPECT_NEAR(d.max_at[2], 0.0, 1e-12);
 }
 
+// A part loose deep inside a round housing: every query from it opens a large share of the
+// housing's index, so the search for the max skips the triangles whose samples bound them
+// below the max found (distance changes no faster than the point moves). What it reports must
+// still be the farthest point: a dense lattice on every triangle finds nothing farther.
+TEST(Deviation, SampledMaxOfAPartDeepInsideAHousingIsTheFarthestPoint) {
+  const Mesh housing = icosphere_mesh(1.0, 4);
+  Mesh part = sphere_mesh(0.25, 16, 32);
+  for (Vec3& p : part.points) p = p + Vec3{0.2, -0.1, 0.05};
+  const DistanceStats d = sampled_distance(part, housing);
+  mesh::SurfaceIndex index(housing.points, housing.triangles);
+  double dense = 0;
+  constexpr int kSteps = 12;
+  for (const Tri& t : part.triangles)
+    for (int i = 0; i <= kSteps; ++i)
+      for (int j = 0; i + j <= kSteps; ++j) {
+        const Vec3 &a = part.points[t[0]], &b = part.points[t[1]], &c = part.points[t[2]];
+        const Vec3 p = a + (b - a) * (double(i) / kSteps) + (c - a) * (double(j) / kSteps);
+        dense = std::max(dense, std::sqrt(index.squared_distance(p)));
+      }
+  EXPECT_GT(dense, 0.6);  // the part is far inside, as the test means
+  EXPECT_GE(d.max, dense - 1e-6 * d.diagonal);
+  EXPECT_NEAR(std::sqrt(index.squared_distance(d.max_at)), d.max, 1e-12 * d.diagonal);
+}
+
 // The mean and p95 weigh the surface by area, not by vertex: a fan of a thousand small
 // triangles at one corner of a plate (on the plate, as far as the rest from the reference)
 // does not move them. A point of the file no triangle uses is no part of the surface.

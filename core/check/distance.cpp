@@ -26,7 +26,9 @@ constexpr double kLeastAreaSamples = 2e4;  // on small or slender surfaces, what
 
 std::vector<double> distances_of(const std::vector<Vec3>& samples, const check::IndexedSurface& to) {
   std::vector<double> dist(samples.size());
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, samples.size(), 1024), [&](const tbb::blocked_range<size_t>& r) {
+  // Small grains: a query far from the surface opens hundreds of index boxes, and the search
+  // for the max asks a few hundred at a time.
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, samples.size(), 64), [&](const tbb::blocked_range<size_t>& r) {
     for (size_t i = r.begin(); i != r.end(); ++i)
       dist[i] = std::sqrt(to.index.squared_distance(samples[i] - to.origin));
   });
@@ -54,25 +56,48 @@ DistanceStats stats_of(std::vector<double> dist, const std::vector<Vec3>& sample
 // beyond the farthest of them: the triangles nearest to it by their farthest sample or vertex
 // are sampled again on a fine barycentric lattice, for the max alone (the mean and p95 stay
 // those of the even sampling).
-void refine_max(DistanceStats& s, const Mesh& from, const std::vector<uint32_t>& on_triangle,
-                const std::vector<uint32_t>& at_vertex, const std::vector<double>& dist,
-                const check::IndexedSurface& index, const std::function<bool(const Vec3&)>& skip) {
+//
+// Distance to a surface changes no faster than the point moves, so a triangle can hold no
+// point farther than any of its samples' distance plus that sample's reach to the triangle's
+// farthest corner. Triangles whose bound is below the max found so far are not sampled: far
+// from the surface measured against (a part deep inside a round wrap) each query opens
+// hundreds of index boxes, and the lattice would spend them where nothing can be gained.
+void refine_max(DistanceStats& s, const Mesh& from, const std::vector<Vec3>& samples,
+                const std::vector<uint32_t>& on_triangle, const std::vector<uint32_t>& at_vertex,
+                const std::vector<double>& dist, const check::IndexedSurface& index,
+                const std::function<bool(const Vec3&)>& skip) {
   constexpr size_t kTriangles = 256;
-  constexpr int kSteps = 12;  // 91 points per triangle
-  std::vector<double> vertex_distance(from.points.size(), 0);
+  constexpr size_t kBatch = 32;  // triangles sampled between two updates of the bound
+  constexpr int kSteps = 12;     // 91 points per triangle
+  constexpr double kUnknown = -1;
+  std::vector<double> vertex_distance(from.points.size(), kUnknown);
   std::vector<double> score(from.triangles.size(), 0);
+  std::vector<double> bound(from.triangles.size(), INFINITY);
+  auto reach = [&](uint32_t t, const Vec3& p) {  // to the triangle's farthest corner
+    double r2 = 0;
+    for (uint32_t v : from.triangles[t]) r2 = std::max(r2, norm2(from.points[v] - p));
+    return std::sqrt(r2);
+  };
   for (size_t i = 0; i < dist.size(); ++i)
-    if (on_triangle[i] != UINT32_MAX)
-      score[on_triangle[i]] = std::max(score[on_triangle[i]], dist[i]);
-    else
+    if (on_triangle[i] != UINT32_MAX) {
+      const uint32_t t = on_triangle[i];
+      score[t] = std::max(score[t], dist[i]);
+      bound[t] = std::min(bound[t], dist[i] + reach(t, samples[i]));
+    } else {
       vertex_distance[at_vertex[i]] = dist[i];
+    }
   std::vector<std::pair<double, uint32_t>> far(from.triangles.size());
   for (uint32_t t = 0; t < from.triangles.size(); ++t) {
-    for (uint32_t v : from.triangles[t]) score[t] = std::max(score[t], vertex_distance[v]);
+    for (uint32_t v : from.triangles[t]) {
+      const double d = vertex_distance[v];
+      if (d == kUnknown) continue;
+      score[t] = std::max(score[t], d);
+      bound[t] = std::min(bound[t], d + reach(t, from.points[v]));
+    }
     far[t] = {score[t], t};
   }
   const size_t k = std::min(kTriangles, far.size());
-  std::nth_element(far.begin(), far.begin() + (k - 1), far.end(), std::greater<>());
+  std::partial_sort(far.begin(), far.begin() + k, far.end(), std::greater<>());
   // A point of triangle t at barycentric (u, v) from its first corner.
   struct Spot {
     uint32_t t;
@@ -83,17 +108,27 @@ void refine_max(DistanceStats& s, const Mesh& from, const std::vector<uint32_t>&
     const Vec3& a = from.points[tri[0]];
     return a + (from.points[tri[1]] - a) * u + (from.points[tri[2]] - a) * v;
   };
+  // A bound within rounding of the max is no reason to look (it cannot raise the figure).
+  const double margin = 1e-9 * s.diagonal;
+  double best = s.max;
   std::vector<Spot> spots;
   std::vector<Vec3> points;
-  for (size_t f = 0; f < k; ++f)
-    for (int i = 0; i <= kSteps; ++i)
-      for (int j = 0; i + j <= kSteps; ++j) {
-        const Spot spot{far[f].second, double(i) / kSteps, double(j) / kSteps, 0};
-        const Vec3 p = at(spot.t, spot.u, spot.v);
-        if (!skip || !skip(p)) spots.push_back(spot), points.push_back(p);
-      }
-  std::vector<double> d = distances_of(points, index);
-  for (size_t i = 0; i < spots.size(); ++i) spots[i].d = d[i];
+  for (size_t first = 0; first < k; first += kBatch) {
+    const size_t batch_start = spots.size();
+    points.clear();
+    for (size_t f = first; f < std::min(k, first + kBatch); ++f) {
+      const uint32_t t = far[f].second;
+      if (bound[t] < best - margin) continue;
+      for (int i = 0; i <= kSteps; ++i)
+        for (int j = 0; i + j <= kSteps; ++j) {
+          const Spot spot{t, double(i) / kSteps, double(j) / kSteps, 0};
+          const Vec3 p = at(spot.t, spot.u, spot.v);
+          if (!skip || !skip(p)) spots.push_back(spot), points.push_back(p);
+        }
+    }
+    const std::vector<double> d = distances_of(points, index);
+    for (size_t i = 0; i < d.size(); ++i) spots[batch_start + i].d = d[i], best = std::max(best, d[i]);
+  }
   // Then uphill from the farthest lattice points: each tries six steps across its triangle,
   // moves to the farthest that is farther, and halves the step where none is.
   constexpr size_t kClimbers = 32;
@@ -103,19 +138,29 @@ void refine_max(DistanceStats& s, const Mesh& from, const std::vector<uint32_t>&
                     [](const Spot& x, const Spot& y) { return x.d > y.d; });
   spots.resize(m);
   std::vector<double> step(m, 1.0 / kSteps);
+  // A climber moves at most a step across its triangle a round: one that could not pass the
+  // farthest point found in the rounds left stops.
+  std::vector<double> longest_edge(m, 0);
+  for (size_t c = 0; c < m; ++c)
+    for (int e = 0; e < 3; ++e) {
+      const Tri& tri = from.triangles[spots[c].t];
+      longest_edge[c] = std::max(longest_edge[c], norm(from.points[tri[e]] - from.points[tri[(e + 1) % 3]]));
+    }
   static constexpr double kDirections[6][2] = {{1, 0}, {-1, 0}, {0, 1}, {0, -1}, {1, -1}, {-1, 1}};
   for (int round = 0; round < kRounds; ++round) {
+    for (size_t c = 0; c < m; ++c) best = std::max(best, spots[c].d);
     std::vector<Spot> tries;
     points.clear();
     for (size_t c = 0; c < m; ++c)
-      for (const auto& dir : kDirections) {
-        const double u = spots[c].u + step[c] * dir[0], v = spots[c].v + step[c] * dir[1];
-        if (u < 0 || v < 0 || u + v > 1) continue;
-        const Vec3 p = at(spots[c].t, u, v);
-        if (skip && skip(p)) continue;
-        tries.push_back({uint32_t(c), u, v, 0}), points.push_back(p);  // t: the climber here
-      }
-    d = distances_of(points, index);
+      if (spots[c].d + (kRounds - round) * step[c] * longest_edge[c] >= best - margin)
+        for (const auto& dir : kDirections) {
+          const double u = spots[c].u + step[c] * dir[0], v = spots[c].v + step[c] * dir[1];
+          if (u < 0 || v < 0 || u + v > 1) continue;
+          const Vec3 p = at(spots[c].t, u, v);
+          if (skip && skip(p)) continue;
+          tries.push_back({uint32_t(c), u, v, 0}), points.push_back(p);  // t: the climber here
+        }
+    const std::vector<double> d = distances_of(points, index);
     std::vector<uint8_t> moved(m, 0);
     for (size_t i = 0; i < tries.size(); ++i) {
       Spot& c = spots[tries[i].t];
@@ -200,7 +245,7 @@ DistanceStats check::sampled_distance_to(const Mesh& from, const IndexedSurface&
   s.samples = samples.size();
   const size_t farthest = size_t(std::max_element(dist.begin(), dist.end()) - dist.begin());
   if (dist[farthest] > s.max) s.max = dist[farthest], s.max_at = samples[farthest];
-  refine_max(s, from, on_triangle, at_vertex, dist, to, skip);
+  refine_max(s, from, samples, on_triangle, at_vertex, dist, to, skip);
   return s;
 }
 
