@@ -360,6 +360,30 @@ INSTANTIATE_TEST_SUITE_P(Cad, CorpusFeatures,
                                            "angle_block.STL", "busted.STL", "20mm-xyz-cube.stl"),
                          [](const ::testing::TestParamInfo<const char*>& info) { return test_name_of(info.param); });
 
+// The same parts turned so that no edge lies along the lattice. A narrow groove oblique to the
+// lattice takes no cell near its bottom: the wrap bridges it more than a base cell above its
+// crease, and feature insertion must reach that far (two base cells) to put nodes on it.
+class TurnedCadFeatures : public ::testing::TestWithParam<std::tuple<const char*, int>> {};
+
+TEST_P(TurnedCadFeatures, EdgesStayOnTheWrap) {
+  static constexpr double kTurns[3][3] = {{0.3, 0.5, 0.9}, {1.1, 0.2, 2.3}, {2.0, 1.3, 0.4}};
+  const auto& [name, turn] = GetParam();
+  const double* a = kTurns[turn];
+  EdgeFit on = wrap_edges(rotated(io::read_mesh(data_path(name)), a[0], a[1], a[2]), true);
+  const double diag = on.edges.diagonal;
+  ASSERT_GT(on.edges.samples, 0u);
+  EXPECT_LE(on.edges.mean, 0.0001 * diag) << "mean " << 100 * on.edges.mean / diag << "%";
+  EXPECT_LE(on.edges.p95, 0.0005 * diag) << "p95 " << 100 * on.edges.p95 / diag << "%";
+}
+
+INSTANTIATE_TEST_SUITE_P(Cad, TurnedCadFeatures,
+                         ::testing::Combine(::testing::Values("angle_block.STL", "octagonal_pocket.stl"),
+                                            ::testing::Values(0, 1, 2)),
+                         [](const ::testing::TestParamInfo<std::tuple<const char*, int>>& info) {
+                           return test_name_of(std::get<0>(info.param)) + "_turn" +
+                                  std::to_string(std::get<1>(info.param));
+                         });
+
 // The sharp-edge distance samples every spacing along the edges, but no more than two hundred
 // thousand points in all (a rough scan's million noise edges were three million points, 1.3 s
 // of a report): past that every k-th, which measures the same edges as densely as the figures
