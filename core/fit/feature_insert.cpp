@@ -368,8 +368,24 @@ class Inserter {
     if (edges.size() < 6) look_around(q, 0.5 * r, scratch, false);
     if (edges.size() < 6) look_around(q, r, scratch, false);
     pl.missed = true;
-    // The nearest edges first: the nearest may fold where the next one does not. (A total
-    // order: the six are the same whatever order the scan found them in.)
+    const bool few = edges.size() < 6;
+    if (try_nearest_edges(q, -1, pl, scratch) || !few || !(prm_.far_reach > r)) return pl;
+    // None of the few edges within max_move took the point: where the wrap bridges a crease (a
+    // narrow groove oblique to the lattice takes no cell near it), the edges beyond, out to
+    // far_reach, are tried too.
+    look_around(q, prm_.far_reach, scratch, false);
+    pl.read.add(box_around(q, prm_.far_reach));
+    try_nearest_edges(q, r, pl, scratch);
+    return pl;
+  }
+
+  // Tries the six nearest of scratch.edges farther than `beyond` from q, nearest first (the
+  // nearest may fold where the next one does not); true when one takes q (pl then says how).
+  bool try_nearest_edges(const Vec3& q, double beyond, Plan& pl, Scratch& scratch) const {
+    std::vector<Candidate>& edges = scratch.edges;
+    edges.erase(std::remove_if(edges.begin(), edges.end(), [&](const Candidate& c) { return c.distance <= beyond; }),
+                edges.end());
+    // A total order: the six are the same whatever order the scan found them in.
     const size_t tried = std::min<size_t>(edges.size(), 6);
     std::partial_sort(edges.begin(), edges.begin() + tried, edges.end(), [](const Candidate& x, const Candidate& y) {
       return x.distance != y.distance ? x.distance < y.distance : (x.a != y.a ? x.a < y.a : x.b < y.b);
@@ -402,9 +418,9 @@ class Inserter {
       // What changes: the faces of the moved node or split edge, and the new corner.
       for (uint32_t f : kind == Plan::kMove ? vf_[end] : faces_on(c.a, c.b)) pl.write.add(box_of(corners(t_[f])));
       pl.write.add(target);
-      return pl;
+      return true;
     }
-    return pl;
+    return false;
   }
 
   // Makes a planned change; returns the node now at the curve point, if any.
