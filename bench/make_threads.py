@@ -1,0 +1,93 @@
+#!/usr/bin/env python3
+"""Threaded rods: sharp helical crests and roots, oblique to the lattice everywhere.
+
+Usage: bench/make_threads.py OUT_DIR
+Writes (binary STL):
+- screw.stl: a closed rod (radius 5, length 30) with a 60-degree V thread (depth 0.8, pitch 2),
+  on a grid of 180 columns around and 16 rows per pitch, capped by fans at both ends;
+- thread_open.stl: the same thread on helical rows (its crests and roots on vertex rows),
+  open at the ends, where the rows clamped to the end planes fold into non-manifold,
+  self-intersecting fans (a dirty export).
+Pure Python, deterministic.
+"""
+import math
+import os
+import struct
+import sys
+
+R, DEPTH, PITCH, LENGTH = 5.0, 0.8, 2.0, 30.0
+
+
+def radius(theta, z):
+    s = ((z - PITCH * theta / (2 * math.pi)) / PITCH) % 1.0
+    return R - DEPTH * abs(2 * s - 1)
+
+
+def write_stl(path, points, triangles):
+    out = [b"\0" * 80, struct.pack("<I", len(triangles))]
+    for t in triangles:
+        out.append(struct.pack("<12fH", 0, 0, 0, *points[t[0]], *points[t[1]], *points[t[2]], 0))
+    with open(path, "wb") as f:
+        f.write(b"".join(out))
+
+
+def screw(columns=180, rows_per_pitch=16):
+    rows = int(LENGTH / PITCH * rows_per_pitch)
+    points, triangles = [], []
+    for j in range(rows + 1):
+        z = LENGTH * j / rows
+        for i in range(columns):
+            th = 2 * math.pi * i / columns
+            r = radius(th, z)
+            points.append((r * math.cos(th), r * math.sin(th), z))
+
+    def at(i, j):
+        return j * columns + (i % columns)
+
+    for j in range(rows):
+        for i in range(columns):
+            a, b, c, d = at(i, j), at(i + 1, j), at(i + 1, j + 1), at(i, j + 1)
+            triangles += [(a, b, c), (a, c, d)]
+    bottom, top = len(points), len(points) + 1
+    points += [(0, 0, 0), (0, 0, LENGTH)]
+    for i in range(columns):
+        triangles += [(bottom, at(i + 1, 0), at(i, 0)), (top, at(i, rows), at(i + 1, rows))]
+    return points, triangles
+
+
+def open_thread(columns=120, rows_per_pitch=8):
+    rows = int(LENGTH / PITCH * rows_per_pitch) + 2 * rows_per_pitch
+    points, triangles, index = [], [], {}
+
+    def vertex(i, j):
+        if i == columns:  # once around: the same helix one pitch on
+            i, j = 0, j + rows_per_pitch
+        if (i, j) not in index:
+            th = 2 * math.pi * i / columns
+            u = PITCH * (j - rows_per_pitch) / rows_per_pitch
+            s = (u / PITCH) % 1.0
+            r = R - DEPTH * abs(2 * s - 1)
+            z = min(max(u + PITCH * i / columns, 0.0), LENGTH)
+            index[(i, j)] = len(points)
+            points.append((r * math.cos(th), r * math.sin(th), z))
+        return index[(i, j)]
+
+    for j in range(rows - rows_per_pitch):
+        for i in range(columns):
+            a, b, c, d = vertex(i, j), vertex(i + 1, j), vertex(i + 1, j + 1), vertex(i, j + 1)
+            triangles += [(a, b, c), (a, c, d)]
+    return points, triangles
+
+
+def main():
+    if len(sys.argv) != 2:
+        sys.exit(__doc__)
+    out = sys.argv[1]
+    os.makedirs(out, exist_ok=True)
+    for name, (points, triangles) in (("screw", screw()), ("thread_open", open_thread())):
+        write_stl(os.path.join(out, name + ".stl"), points, triangles)
+        print(f"{name}.stl: {len(triangles)} triangles")
+
+
+if __name__ == "__main__":
+    main()
