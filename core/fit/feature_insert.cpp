@@ -368,11 +368,12 @@ class Inserter {
     if (edges.size() < 6) look_around(q, 0.5 * r, scratch, false);
     if (edges.size() < 6) look_around(q, r, scratch, false);
     pl.missed = true;
-    const bool few = edges.size() < 6;
-    if (try_nearest_edges(q, -1, pl, scratch) || !few || !(prm_.far_reach > r)) return pl;
-    // None of the few edges within max_move took the point: where the wrap bridges a crease (a
-    // narrow groove oblique to the lattice takes no cell near it), the edges beyond, out to
-    // far_reach, are tried too.
+    double nearest = INFINITY;
+    for (const Candidate& c : edges) nearest = std::min(nearest, c.distance);
+    if (try_nearest_edges(q, -1, pl, scratch) || !(prm_.far_reach > r) || nearest <= 0.5 * r) return pl;
+    // The wrap passes half a base cell or more from the point and no edge within max_move took
+    // it: where the wrap bridges a crease (a narrow groove oblique to the lattice takes no cell
+    // near it), the edges beyond, out to far_reach, are tried too.
     look_around(q, prm_.far_reach, scratch, false);
     pl.read.add(box_around(q, prm_.far_reach));
     try_nearest_edges(q, r, pl, scratch);

@@ -16,9 +16,9 @@ struct FeatureInsertParams {
   double spacing = 0;    // curve samples this far apart
   double tolerance = 0;  // a sample nearer the wrap than this is kept
   double max_move = 0;   // a node goes at most this far (the wrap's own scale: about a base cell)
-  // Where the few wrap edges within max_move of a point (fewer than six) all refuse it, the
-  // edges beyond, out to this, are tried: a narrow groove oblique to the lattice takes no cell
-  // near its crease, and the wrap bridges it more than a base cell above. (0: max_move.)
+  // Where the wrap passes over half of max_move from a point and no edge within max_move takes
+  // it, the edges beyond, out to this, are tried: a narrow groove oblique to the lattice takes
+  // no cell near its crease, and the wrap bridges it more than a base cell above. (0: max_move.)
   double far_reach = 0;
   double offset = 0;          // new nodes stop this far off the curve, on the wrap's side
   double min_area2 = 0;       // doubled area below which a triangle is degenerate

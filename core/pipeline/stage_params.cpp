@@ -31,7 +31,7 @@ fit::FeatureInsertParams feature_insert_params(const WrapParams& params, double 
   p.spacing = 0.5 * fine;     // curve samples: twice per finest cell, so no cell's worth of curve is skipped
   p.tolerance = 0.02 * fine;  // a sample nearer than this is kept; looser tolerances leave CAD edges visibly off
   p.max_move = base;          // a node moves at most a base cell onto its curve,
-  p.far_reach = 2 * base;     // or two where the wrap bridges the curve and nothing is nearer
+  p.far_reach = 2 * base;     // or two where the wrap bridges the curve over half a cell off
   p.offset = params.surface_offset * fine;
   p.min_area2 = 1e-6 * fine * fine;  // no triangle flatter than this from a split
   p.min_separation = 0.05 * fine;    // nor nodes crowded closer
