@@ -198,6 +198,47 @@ TEST(VolumeChoice, NestedShellsLargestInsideAndSeedPointsInTwoChambers) {
   }
 }
 
+// A seed point between two nested spheres 0.1 apart (about three base cells at 1 %): the
+// flood fill at the base size keeps only part of that thin volume, and the inside and seed
+// volumes are not refined where far (a finer grid could open a leak). The wrap is valid, and
+// the progress log says how far it stays and what to do; the inside of a plain box says nothing.
+TEST(VolumeChoice, AThinSeedVolumeLeftFarFromTheInputIsReportedWithTheRemedy) {
+  struct Messages : ProgressSink {
+    std::vector<std::string> seen;
+    void progress(const std::string&, double, const std::string& message) override { seen.push_back(message); }
+  };
+  auto remedy_said = [](const Messages& m) {
+    for (const std::string& text : m.seen)
+      if (text.find("smaller --base-size") != std::string::npos &&
+          text.find("base cells off the input") != std::string::npos)
+        return true;
+    return false;
+  };
+  Mesh shells = sphere_mesh(1.0, 48, 96);
+  Mesh inner = sphere_mesh(0.9, 48, 96);
+  const uint32_t k = uint32_t(shells.points.size());
+  shells.points.insert(shells.points.end(), inner.points.begin(), inner.points.end());
+  for (const Tri& t : inner.triangles) shells.triangles.push_back({k + t[0], k + t[2], k + t[1]});  // facing inward
+  WrapParams seed;
+  seed.base_size = Length::parse("1%");
+  seed.volume = VolumeChoice::SeedPoints;
+  seed.seed_points = {{0.95, 0, 0}};
+  Messages thin;
+  WrapResult r = wrap(shells, seed, &thin);
+  expect_valid(r.surface);
+  ASSERT_GT(r.report.output_to_input.p95, 0.5 * r.report.base_size) << "the case the test is about";
+  EXPECT_TRUE(remedy_said(thin));
+
+  WrapParams inside;
+  inside.base_size = Length::parse("1%");
+  inside.volume = VolumeChoice::Inside;
+  Messages box;
+  WrapResult plain = wrap(box_mesh({0, 0, 0}, {1, 1, 1}), inside, &box);
+  expect_valid(plain.surface);
+  EXPECT_LE(plain.report.output_to_input.p95, 0.5 * plain.report.base_size);
+  EXPECT_FALSE(remedy_said(box));
+}
+
 TEST(ControlVolumes, RefineOnlyWhereTheyAre) {
   const Mesh sphere = sphere_mesh(1.0, 48, 96);
   WrapParams plain = quick("4%");
