@@ -21,7 +21,10 @@ size_t drop_small_rims(const std::vector<Vec3>& points, std::vector<FeatureEdge>
     return box[slot];
   };
   for (const FeatureEdge& e : edges)
-    if (e.kind == FeatureKind::Boundary) rim_box(e).add(points[e.a]), rim_box(e).add(points[e.b]);
+    if (e.kind == FeatureKind::Boundary) {
+      Box3& b = rim_box(e);
+      b.add(points[e.a]), b.add(points[e.b]);
+    }
   if (box.empty()) return 0;
   const size_t before = edges.size();
   edges.erase(std::remove_if(edges.begin(), edges.end(),

@@ -48,6 +48,24 @@ std::string why_invalid(const WrapRun& run, const check::CgalVerdict& verdict) {
   return why;
 }
 
+// The inside and a seed point's volume are not refined where the fit is far (a finer grid can
+// open a passage: a leak), so where such a volume is thinner than a few base cells the wrap
+// stays off the input, or holds only the piece of it the flood fill kept at this base size.
+// The user is told, with the remedy, when a twentieth of the wrap is over half a cell off (a
+// single far point is a crease the wrap bridges, as the outside's are before their refit).
+void warn_where_far(const WrapRun& run) {
+  const DistanceStats& d = run.report.output_to_input;
+  if (!run.progress || run.params.volume == VolumeChoice::Outside || !(d.p95 > 0.5 * run.base)) return;
+  char text[400];
+  std::snprintf(text, sizeof text,
+                "a twentieth of the wrap is over %.3g base cells off the input (the farthest point %.3g, at %.6g, "
+                "%.6g, %.6g): the %s is not refined where the fit is far, so where it is thinner than a few base "
+                "cells the flood fill may have kept only part of it; a smaller --base-size wraps it closer",
+                d.p95 / run.base, d.max / run.base, d.max_at[0], d.max_at[1], d.max_at[2],
+                run.params.volume == VolumeChoice::Inside ? "inside volume" : "seed point's volume");
+  run.progress->progress("distances", 1.0, text);
+}
+
 }  // namespace
 
 void validate_surface(WrapRun& run) {
@@ -117,26 +135,6 @@ void validate_surface(WrapRun& run) {
   run.result.triangle_flags = post::wrap_defect_flags(run.result.surface.points, run.result.surface.triangles,
                                                       std::move(final_flags), std::move(run.fitted.held_back_points));
 }
-
-// The inside and a seed point's volume are not refined where the fit is far (a finer grid can
-// open a passage: a leak), so where such a volume is thinner than a few base cells the wrap
-// stays off the input, or holds only the piece of it the flood fill kept at this base size.
-// The user is told, with the remedy, when a twentieth of the wrap is over half a cell off (a
-// single far point is a crease the wrap bridges, as the outside's are before their refit).
-namespace {
-void warn_where_far(const WrapRun& run) {
-  const DistanceStats& d = run.report.output_to_input;
-  if (!run.progress || run.params.volume == VolumeChoice::Outside || !(d.p95 > 0.5 * run.base)) return;
-  char text[400];
-  std::snprintf(text, sizeof text,
-                "a twentieth of the wrap is over %.3g base cells off the input (the farthest point %.3g, at %.6g, "
-                "%.6g, %.6g): the %s is not refined where the fit is far, so where it is thinner than a few base "
-                "cells the flood fill may have kept only part of it; a smaller --base-size wraps it closer",
-                d.p95 / run.base, d.max / run.base, d.max_at[0], d.max_at[1], d.max_at[2],
-                run.params.volume == VolumeChoice::Inside ? "inside volume" : "seed point's volume");
-  run.progress->progress("distances", 1.0, text);
-}
-}  // namespace
 
 void measure_distances(WrapRun& run) {
   if (run.params.compute_distances) {
