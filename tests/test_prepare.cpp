@@ -146,6 +146,31 @@ TEST(Orient, AnInsideOutBoxIsTurnedOver) {
   EXPECT_GT(diagnose(m, false).volume, 0);
 }
 
+// Two rods touching along a whole edge, as an unmerged export welds them: the edge has four
+// triangles. Each rod is still a closed solid (its own two triangles there pair around the
+// edge), so its material side is known; a rod turned inside out pairs nothing there.
+TEST(Orient, SolidsWeldedAlongAnEdgeStayClosedPieces) {
+  Mesh m;
+  add_box(m, {0, 0, 0}, {1, 1, 10});
+  add_box(m, {1, 1, 0}, {2, 2, 10});
+  auto prepared_closed = [](const Mesh& mesh) {
+    return prep::prepare(mesh, prep::PrepareParams{}, nullptr).closed_piece;
+  };
+  const std::vector<uint32_t> closed = prepared_closed(m);
+  ASSERT_EQ(closed.size(), 24u);
+  EXPECT_EQ(std::count(closed.begin(), closed.end(), 0u), 12);
+  EXPECT_EQ(std::count(closed.begin(), closed.end(), 1u), 12);
+  // Outward as given: nothing flipped.
+  Mesh same = m;
+  prep::PreparedInput in = prep::prepare(same, prep::PrepareParams{}, nullptr);
+  EXPECT_EQ(in.flipped_triangles, 0u);
+  // The second rod inside out: the four triangles do not bound two wedges of solid.
+  Mesh turned = m;
+  for (size_t t = 12; t < 24; ++t) std::swap(turned.triangles[t][1], turned.triangles[t][2]);
+  const std::vector<uint32_t> open = prepared_closed(turned);
+  EXPECT_EQ(std::count(open.begin(), open.end(), mesh::kOpenPiece), 24);
+}
+
 TEST(Features, BoxHasTwelveSharpEdgesAndAnOpenSquareFourBoundaryEdges) {
   Mesh box = box_mesh({0, 0, 0}, {1, 1, 1});
   std::vector<Vec3> normals;

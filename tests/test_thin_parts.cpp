@@ -153,6 +153,40 @@ TEST(ThinParts, GapsTouchingFacesAndOpenPiecesAreNoParts) {
   EXPECT_EQ(thinnest(in, {0, 0, 0}, 4, 2), 2.0);
 }
 
+// Square rods of a lattice exported unmerged, each touching the next along a whole edge: once
+// welded, those edges have four triangles. Each rod is a closed piece still, so it is a thin
+// part as a lone rod is (it was none: the welded edges left every rod open).
+TEST(ThinParts, RodsWeldedAlongAnEdgeAreThinParts) {
+  Mesh m;
+  for (int i = 0; i < 4; ++i) add_box(m, {0.2 * i, 0.2 * i, -20}, {0.2 * (i + 1), 0.2 * (i + 1), 20});
+  const prep::PreparedInput in = prepared(m);
+  EXPECT_EQ(std::count(in.closed_piece.begin(), in.closed_piece.end(), mesh::kOpenPiece), 0);
+  EXPECT_NEAR(thinnest(in, {0.3, 0.3, 0}, 4, 2), 0.2, 1e-9);
+  const grid::RefineResult grid = refine(m, 10, 1, 2);
+  EXPECT_GT(grid.thin_cells, 0u);
+}
+
+// A line of pixel art extruded: square rods a twentieth of a unit across and 20 long, each
+// touching the next along an edge only, zigzagging. At 1 % the base cell is 4 rods wide. With
+// the rods read as open pieces (their welded edges unpaired) no cell was refined for them and
+// the farthest point was 0.58 base cells off (on 40 rods 30 long: 2.1 % of the triangles under
+// 10 degrees, twice the mean distance; bench/results/2026-11-27-lattices-knurls.md).
+TEST(ThinParts, AnExtrudedPixelLineIsWrappedWithoutSlivers) {
+  Mesh m;
+  const double s = 0.05;
+  for (int i = 0, x = 0, y = 0; i < 24; ++i, ++x, y += (i / 6) % 2 == 0 ? 1 : -1)
+    add_box(m, {x * s, y * s, 0}, {(x + 1) * s, (y + 1) * s, 20});
+  WrapParams p;
+  p.base_size = Length{1, true};
+  const WrapResult r = wrap(m, p);
+  auto v = valid_closed_surface(r.surface);
+  EXPECT_TRUE(v.ok) << v.why;
+  EXPECT_GT(r.report.thin_part_cells, 0u);
+  const double share = double(under_ten_degrees(r.surface)) / double(r.surface.triangles.size());
+  EXPECT_LE(share, 0.01) << under_ten_degrees(r.surface) << " of " << r.surface.triangles.size();
+  EXPECT_LT(r.report.output_to_input.max, 0.5 * r.report.base_size);
+}
+
 TEST(ThinParts, RefinementGoesBelowTheLevelsAroundARodOnly) {
   // A rod a tenth of a base cell thick: two levels below --levels 1 (the cells then a little
   // more than its diameter), the deepest grid level holding cells.

@@ -6,13 +6,15 @@
 
 #include "common/edge_key.h"
 #include "common/vec.h"
+#include "mesh/radial_pairs.h"
 
 namespace vdbwrap::mesh {
 
 size_t orient_pieces(const std::vector<Vec3>& points, std::vector<Tri>& triangles, const EdgeTriangles* edges,
                      std::vector<uint32_t>* closed) {
   // Triangles meeting at an edge used by exactly two of them must traverse it in opposite
-  // directions; a breadth-first walk flips neighbours that disagree.
+  // directions; a breadth-first walk flips neighbours that disagree. At an edge of more, only
+  // triangles paired around it (radial_pairs.h) are neighbours.
   EdgeTriangles made;
   const EdgeTriangles& edge_tris = edges ? *edges : (made = edge_triangles(triangles));
 
@@ -26,9 +28,13 @@ size_t orient_pieces(const std::vector<Vec3>& points, std::vector<Tri>& triangle
       for (int e = 0; e < 3; ++e) {
         const uint32_t a = triangles[t][e], b = triangles[t][(e + 1) % 3];
         const size_t edge = edge_tris.find(edge_key(a, b));
-        if (edge_tris.size(edge) != 2) continue;
         const uint32_t* nb = edge_tris.begin(edge);
-        const uint32_t n = nb[0] == t ? nb[1] : nb[0];
+        // Solids welded along an edge (struts meeting at a lattice node) pair their own
+        // triangles there: each stays one closed piece.
+        const uint32_t n = edge_tris.size(edge) == 2
+                               ? (nb[0] == t ? nb[1] : nb[0])
+                               : radial_partner(points, triangles, a, b, nb, edge_tris.size(edge), t);
+        if (n == none) continue;
         across[3 * t + e] = n;
         same_way[3 * t + e] = directed_side(triangles[n], a, b) >= 0 ? 1 : 0;
       }

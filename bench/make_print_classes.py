@@ -1,0 +1,127 @@
+#!/usr/bin/env python3
+"""Surfaces typical of 3D-printing files: knurled grips, a gyroid infill sheet, extruded pixel art.
+
+Usage: bench/make_print_classes.py OUT_DIR
+Writes (binary STL):
+- knurl_coarse.stl, knurl_fine.stl: a closed cylinder (radius 5, length 20) with a diamond
+  knurl, sharp ridges crossing at 45 degrees oblique to the lattice everywhere; pitch 0.8 (about
+  3 base cells at --base-size 1 %, 126k triangles) and 0.25 (about one cell, 1.29M triangles);
+- gyroid.stl: the zero set of sin x cos y + sin y cos z + sin z cos x over two periods, clipped
+  to a cube (an open, doubly curved sheet with 2,880 border edges, as a TPMS infill exported as a
+  surface), by marching tetrahedra on 48^3 cubes, triangles in no consistent orientation;
+- pixel_line.stl: a line of pixel art extruded, 40 square rods 0.05 across and 30 long
+  zigzagging, each touching the next along an edge only (welded, those edges have four
+  triangles; at 1 % a rod is a sixth of a base cell across).
+Pure Python, deterministic. Strut lattices: bench/make_lattice.py.
+"""
+import math
+import os
+import struct
+import sys
+
+
+def write_stl(path, points, triangles):
+    out = [b"\0" * 80, struct.pack("<I", len(triangles))]
+    for t in triangles:
+        out.append(struct.pack("<12fH", 0, 0, 0, *points[t[0]], *points[t[1]], *points[t[2]], 0))
+    with open(path, "wb") as f:
+        f.write(b"".join(out))
+
+
+def knurl(pitch, radius=5.0, length=20.0):
+    """Two crossing helical saw-tooth grooves: the radius is the deeper of the two."""
+    depth = 0.3 * pitch
+    cols, rows = int(2 * math.pi * radius / pitch * 8), int(length / pitch * 8)
+    points, triangles = [], []
+    for j in range(rows + 1):
+        z = length * j / rows
+        for i in range(cols):
+            th = 2 * math.pi * i / cols
+            s = radius * th
+            a, b = ((s + z) / pitch) % 1.0, ((s - z) / pitch) % 1.0
+            r = radius - depth * max(abs(2 * a - 1), abs(2 * b - 1))
+            points.append((r * math.cos(th), r * math.sin(th), z))
+
+    def at(i, j):
+        return j * cols + (i % cols)
+
+    for j in range(rows):
+        for i in range(cols):
+            a, b, c, d = at(i, j), at(i + 1, j), at(i + 1, j + 1), at(i, j + 1)
+            triangles += [(a, b, c), (a, c, d)]
+    bottom, top = len(points), len(points) + 1
+    points += [(0, 0, 0), (0, 0, length)]
+    for i in range(cols):
+        triangles += [(bottom, at(i + 1, 0), at(i, 0)), (top, at(i, rows), at(i + 1, rows))]
+    return points, triangles
+
+
+def gyroid(n=48, periods=2.0):
+    h = 2 * math.pi * periods / n
+    values = {}
+
+    def value(c):
+        if c not in values:
+            x, y, z = c[0] * h + 0.01, c[1] * h + 0.02, c[2] * h + 0.03
+            values[c] = math.sin(x) * math.cos(y) + math.sin(y) * math.cos(z) + math.sin(z) * math.cos(x)
+        return values[c]
+
+    points, triangles, on_edge = [], [], {}
+
+    def vertex(a, b):
+        key = (min(a, b), max(a, b))
+        if key not in on_edge:
+            fa, fb = value(a), value(b)
+            t = fa / (fa - fb)
+            on_edge[key] = len(points)
+            points.append(tuple((a[m] + (b[m] - a[m]) * t) * h for m in range(3)))
+        return on_edge[key]
+
+    tetrahedra = [(0, 1, 3, 7), (0, 3, 2, 7), (0, 2, 6, 7), (0, 6, 4, 7), (0, 4, 5, 7), (0, 5, 1, 7)]
+    for i in range(n):
+        for j in range(n):
+            for k in range(n):
+                for tet in tetrahedra:
+                    c = [(i + (x & 1), j + ((x >> 1) & 1), k + ((x >> 2) & 1)) for x in tet]
+                    below = [q for q in c if value(q) < 0]
+                    above = [q for q in c if value(q) >= 0]
+                    if len(below) in (1, 3):
+                        a, others = (below[0], above) if len(below) == 1 else (above[0], below)
+                        triangles.append(tuple(vertex(a, o) for o in others))
+                    elif len(below) == 2:
+                        (a, b), (c1, d) = below, above
+                        q = [vertex(a, c1), vertex(a, d), vertex(b, d), vertex(b, c1)]
+                        triangles += [(q[0], q[1], q[2]), (q[0], q[2], q[3])]
+    return points, triangles
+
+
+def pixel_line(rods=40, size=0.05, length=30.0):
+    points, triangles = [], []
+    x = y = 0
+    for i in range(rods):
+        lo, hi = (x * size, y * size, 0.0), ((x + 1) * size, (y + 1) * size, length)
+        base = len(points)
+        for k in range(8):
+            points.append(tuple(hi[a] if k >> a & 1 else lo[a] for a in range(3)))
+        for q in ((0, 2, 3, 1), (4, 5, 7, 6), (0, 1, 5, 4), (2, 6, 7, 3), (0, 4, 6, 2), (1, 3, 7, 5)):
+            a, b, c, d = (base + v for v in q)
+            triangles += [(a, b, c), (a, c, d)]
+        x += 1
+        y += 1 if (i // 8) % 2 == 0 else -1
+    return points, triangles
+
+
+def main():
+    if len(sys.argv) != 2:
+        sys.exit(__doc__)
+    out = sys.argv[1]
+    os.makedirs(out, exist_ok=True)
+    for name, make in (("knurl_coarse", lambda: knurl(0.8)), ("knurl_fine", lambda: knurl(0.25)),
+                       ("gyroid", gyroid), ("pixel_line", pixel_line)):
+        points, triangles = make()
+        write_stl(os.path.join(out, name + ".stl"), points, triangles)
+        print(f"{name}.stl: {len(triangles)} triangles")
+
+
+if __name__ == "__main__":
+    main()
