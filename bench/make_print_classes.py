@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Surfaces typical of 3D-printing files: knurled grips, a gyroid infill sheet, extruded pixel art.
+"""Surfaces typical of 3D-printing files: knurled grips, a gyroid infill sheet, pixel art, a name tag.
 
 Usage: bench/make_print_classes.py OUT_DIR
 Writes (binary STL):
@@ -11,11 +11,15 @@ Writes (binary STL):
   surface), by marching tetrahedra on 48^3 cubes, triangles in no consistent orientation;
 - pixel_line.stl: a line of pixel art extruded, 40 square rods 0.05 across and 30 long
   zigzagging, each touching the next along an edge only (welded, those edges have four
-  triangles; at 1 % a rod is a sixth of a base cell across).
+  triangles; at 1 % a rod is a sixth of a base cell across);
+- name_tag.stl: a tag 100 x 30 x 2 with twelve letters of 3-5 strokes each (boxes 0.6 wide,
+  about half a base cell, and 1 high, sunk 0.1 into the tag, crossing each other at random
+  angles), every stroke its own closed box, nothing merged.
 Pure Python, deterministic. Strut lattices: bench/make_lattice.py.
 """
 import math
 import os
+import random
 import struct
 import sys
 
@@ -111,13 +115,38 @@ def pixel_line(rods=40, size=0.05, length=30.0):
     return points, triangles
 
 
+def add_box(points, triangles, centre, size, angle, z0):
+    """A box `size` (length, width, height) from height z0, turned by `angle` about z."""
+    c, s = math.cos(angle), math.sin(angle)
+    base = len(points)
+    for k in range(8):
+        x = size[0] / 2 * (1 if k & 1 else -1)
+        y = size[1] / 2 * (1 if k & 2 else -1)
+        points.append((centre[0] + c * x - s * y, centre[1] + s * x + c * y, z0 + (size[2] if k & 4 else 0)))
+    for q in ((0, 2, 3, 1), (4, 5, 7, 6), (0, 1, 5, 4), (2, 6, 7, 3), (0, 4, 6, 2), (1, 3, 7, 5)):
+        a, b, c2, d = (base + v for v in q)
+        triangles += [(a, b, c2), (a, c2, d)]
+
+
+def name_tag(letters=12):
+    rng = random.Random(3)
+    points, triangles = [], []
+    add_box(points, triangles, (50, 15), (100, 30, 2), 0, 0)
+    for ch in range(letters):
+        x0 = 5 + ch * 7.8
+        for _ in range(rng.randint(3, 5)):
+            centre = (x0 + rng.uniform(0, 5), 8 + rng.uniform(0, 14))
+            add_box(points, triangles, centre, (rng.uniform(3, 9), 0.6, 1.0), rng.uniform(0, math.pi), 1.9)
+    return points, triangles
+
+
 def main():
     if len(sys.argv) != 2:
         sys.exit(__doc__)
     out = sys.argv[1]
     os.makedirs(out, exist_ok=True)
     for name, make in (("knurl_coarse", lambda: knurl(0.8)), ("knurl_fine", lambda: knurl(0.25)),
-                       ("gyroid", gyroid), ("pixel_line", pixel_line)):
+                       ("gyroid", gyroid), ("pixel_line", pixel_line), ("name_tag", name_tag)):
         points, triangles = make()
         write_stl(os.path.join(out, name + ".stl"), points, triangles)
         print(f"{name}.stl: {len(triangles)} triangles")
