@@ -13,7 +13,8 @@ four or more triangles) and overlapping coplanar faces. Pure Python, determinist
 import argparse
 import math
 import os
-import struct
+
+from mesh_files import write_stl
 
 SIDE = 10.0
 
@@ -55,14 +56,6 @@ def lattice(cells, thickness, coincident):
                     lo[axis], hi[axis] = k * SIDE - h, (k + 1) * SIDE + h
                     box(lo, hi, points, triangles)
     return points, triangles
-
-
-def write_stl(path, points, triangles):
-    out = [b"\0" * 80, struct.pack("<I", len(triangles))]
-    for t in triangles:
-        out.append(struct.pack("<12fH", 0, 0, 0, *points[t[0]], *points[t[1]], *points[t[2]], 0))
-    with open(path, "wb") as f:
-        f.write(b"".join(out))
 
 
 def main():

@@ -20,44 +20,21 @@ Pure Python, deterministic. Strut lattices: bench/make_lattice.py.
 import math
 import os
 import random
-import struct
 import sys
 
-
-def write_stl(path, points, triangles):
-    out = [b"\0" * 80, struct.pack("<I", len(triangles))]
-    for t in triangles:
-        out.append(struct.pack("<12fH", 0, 0, 0, *points[t[0]], *points[t[1]], *points[t[2]], 0))
-    with open(path, "wb") as f:
-        f.write(b"".join(out))
+from mesh_files import revolved, write_stl
 
 
 def knurl(pitch, radius=5.0, length=20.0):
     """Two crossing helical saw-tooth grooves: the radius is the deeper of the two."""
     depth = 0.3 * pitch
-    cols, rows = int(2 * math.pi * radius / pitch * 8), int(length / pitch * 8)
-    points, triangles = [], []
-    for j in range(rows + 1):
-        z = length * j / rows
-        for i in range(cols):
-            th = 2 * math.pi * i / cols
-            s = radius * th
-            a, b = ((s + z) / pitch) % 1.0, ((s - z) / pitch) % 1.0
-            r = radius - depth * max(abs(2 * a - 1), abs(2 * b - 1))
-            points.append((r * math.cos(th), r * math.sin(th), z))
 
-    def at(i, j):
-        return j * cols + (i % cols)
+    def radius_at(th, z):
+        s = radius * th
+        a, b = ((s + z) / pitch) % 1.0, ((s - z) / pitch) % 1.0
+        return radius - depth * max(abs(2 * a - 1), abs(2 * b - 1))
 
-    for j in range(rows):
-        for i in range(cols):
-            a, b, c, d = at(i, j), at(i + 1, j), at(i + 1, j + 1), at(i, j + 1)
-            triangles += [(a, b, c), (a, c, d)]
-    bottom, top = len(points), len(points) + 1
-    points += [(0, 0, 0), (0, 0, length)]
-    for i in range(cols):
-        triangles += [(bottom, at(i + 1, 0), at(i, 0)), (top, at(i, rows), at(i + 1, rows))]
-    return points, triangles
+    return revolved(radius_at, int(2 * math.pi * radius / pitch * 8), int(length / pitch * 8), length)
 
 
 def gyroid(n=48, periods=2.0):

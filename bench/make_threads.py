@@ -12,8 +12,9 @@ Pure Python, deterministic.
 """
 import math
 import os
-import struct
 import sys
+
+from mesh_files import revolved, write_stl
 
 R, DEPTH, PITCH, LENGTH = 5.0, 0.8, 2.0, 30.0
 
@@ -23,36 +24,8 @@ def radius(theta, z):
     return R - DEPTH * abs(2 * s - 1)
 
 
-def write_stl(path, points, triangles):
-    out = [b"\0" * 80, struct.pack("<I", len(triangles))]
-    for t in triangles:
-        out.append(struct.pack("<12fH", 0, 0, 0, *points[t[0]], *points[t[1]], *points[t[2]], 0))
-    with open(path, "wb") as f:
-        f.write(b"".join(out))
-
-
 def screw(columns=180, rows_per_pitch=16):
-    rows = int(LENGTH / PITCH * rows_per_pitch)
-    points, triangles = [], []
-    for j in range(rows + 1):
-        z = LENGTH * j / rows
-        for i in range(columns):
-            th = 2 * math.pi * i / columns
-            r = radius(th, z)
-            points.append((r * math.cos(th), r * math.sin(th), z))
-
-    def at(i, j):
-        return j * columns + (i % columns)
-
-    for j in range(rows):
-        for i in range(columns):
-            a, b, c, d = at(i, j), at(i + 1, j), at(i + 1, j + 1), at(i, j + 1)
-            triangles += [(a, b, c), (a, c, d)]
-    bottom, top = len(points), len(points) + 1
-    points += [(0, 0, 0), (0, 0, LENGTH)]
-    for i in range(columns):
-        triangles += [(bottom, at(i + 1, 0), at(i, 0)), (top, at(i, rows), at(i + 1, rows))]
-    return points, triangles
+    return revolved(radius, columns, int(LENGTH / PITCH * rows_per_pitch), LENGTH)
 
 
 def open_thread(columns=120, rows_per_pitch=8):

@@ -1,4 +1,6 @@
-"""Triangles of STL (binary or ASCII) and OBJ files for the bench scripts, as nine floats each."""
+"""Mesh files for the bench scripts: triangles of STL (binary or ASCII) and OBJ files as nine
+floats each; indexed meshes written as binary STL; the closed revolved grid the generators share."""
+import math
 import struct
 
 
@@ -24,3 +26,37 @@ def read_triangles(path):
     v = [float(w) for line in data.decode(errors="replace").splitlines() if line.strip().startswith("vertex")
          for w in line.split()[1:4]]
     return [tuple(v[i:i + 9]) for i in range(0, len(v) - 8, 9)]
+
+
+def write_stl(path, points, triangles):
+    """Binary STL of an indexed mesh (normals left zero: readers recompute them)."""
+    out = [b"\0" * 80, struct.pack("<I", len(triangles))]
+    for t in triangles:
+        out.append(struct.pack("<12fH", 0, 0, 0, *points[t[0]], *points[t[1]], *points[t[2]], 0))
+    with open(path, "wb") as f:
+        f.write(b"".join(out))
+
+
+def revolved(radius_at, columns, rows, length):
+    """A closed body around the z axis from 0 to `length`: a grid of `columns` around by `rows`
+    along, each node at radius radius_at(theta, z), capped by a fan at each end."""
+    points, triangles = [], []
+    for j in range(rows + 1):
+        z = length * j / rows
+        for i in range(columns):
+            th = 2 * math.pi * i / columns
+            r = radius_at(th, z)
+            points.append((r * math.cos(th), r * math.sin(th), z))
+
+    def at(i, j):
+        return j * columns + (i % columns)
+
+    for j in range(rows):
+        for i in range(columns):
+            a, b, c, d = at(i, j), at(i + 1, j), at(i + 1, j + 1), at(i, j + 1)
+            triangles += [(a, b, c), (a, c, d)]
+    bottom, top = len(points), len(points) + 1
+    points += [(0, 0, 0), (0, 0, length)]
+    for i in range(columns):
+        triangles += [(bottom, at(i + 1, 0), at(i, 0)), (top, at(i, rows), at(i + 1, rows))]
+    return points, triangles

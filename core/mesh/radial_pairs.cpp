@@ -40,8 +40,10 @@ uint32_t radial_partner(const std::vector<Vec3>& points, const std::vector<Tri>&
     fins[i] = {std::atan2(y, x), around[i], forward};
   }
   std::sort(fins.begin(), fins.begin() + count, [](const Fin& u, const Fin& v) { return u.angle < v.angle; });
-  for (size_t i = 0; i + 1 < count; ++i)
-    if (fins[i + 1].angle - fins[i].angle < 1e-12) return none;  // two fins in one half-plane
+  for (size_t i = 0; i < count; ++i) {  // two fins in one half-plane (the last and first across -pi too)
+    const double next = i + 1 < count ? fins[i + 1].angle : fins[0].angle + 2 * M_PI;
+    if (next - fins[i].angle < 1e-12) return none;
+  }
   // A triangle running a to b has its normal along axis x w: its material lies clockwise
   // (towards smaller angles); one running b to a, counter-clockwise. So solid wedges need the
   // fins to alternate, each backward fin followed (counter-clockwise) by a forward one.
