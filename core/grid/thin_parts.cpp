@@ -46,8 +46,10 @@ double thinnest_part(const prep::PreparedInput& in, const std::vector<uint32_t>&
       // thinnest such pair for this face.
       auto it = std::lower_bound(back.begin(), back.end(), least - f.offset,
                                  [](const Face& a, double v) { return a.offset < v; });
+      // Sides of one piece: between faces of two (solids welded along an edge, fanned round
+      // it) the offsets measure no solid, only where the centre lies.
       for (; it != back.end() && f.offset + it->offset < within; ++it)
-        if (dot(in.normals[f.t], in.normals[it->t]) <= kOpposite) {
+        if (in.closed_piece[it->t] == in.closed_piece[f.t] && dot(in.normals[f.t], in.normals[it->t]) <= kOpposite) {
           pairs.push_back({f.offset + it->offset, in.normals[f.t]});
           break;
         }

@@ -13,7 +13,7 @@
 namespace vdbwrap::grid {
 
 // The thickness of the thinnest part among `cell_tris` under `within`, or `within` when none is.
-// A part's side is two triangles of closed pieces whose normals point away from each other
+// A part's side is two triangles of one closed piece whose normals point away from each other
 // (over 143 degrees apart), with solid between them: the distance between their planes,
 // measured through `centre` (the planes' offsets from it along their own normals). A part is
 // thin across two such sides at least 45 degrees apart, and as thick as the thicker; a closed
