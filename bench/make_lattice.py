@@ -12,9 +12,8 @@ four or more triangles) and overlapping coplanar faces. Pure Python, determinist
 """
 import argparse
 import math
-import os
 
-from mesh_files import write_stl
+from mesh_files import add_box, box_corners, write_named
 
 SIDE = 10.0
 
@@ -32,16 +31,6 @@ def turn(p):
             z * c + cz * s + az * d * (1 - c))
 
 
-def box(lo, hi, points, triangles):
-    base = len(points)
-    for k in range(8):
-        points.append(turn(tuple(hi[a] if k >> a & 1 else lo[a] for a in range(3))))
-    # Outward faces of the box on corners 0..7 (bit a set: the high side of axis a).
-    for q in ((0, 2, 3, 1), (4, 5, 7, 6), (0, 1, 5, 4), (2, 6, 7, 3), (0, 4, 6, 2), (1, 3, 7, 5)):
-        a, b, c, d = (base + i for i in q)
-        triangles += [(a, b, c), (a, c, d)]
-
-
 def lattice(cells, thickness, coincident):
     points, triangles = [], []
     for axis in range(3):
@@ -54,7 +43,7 @@ def lattice(cells, thickness, coincident):
                     lo[u], hi[u] = i * SIDE - h, i * SIDE + h
                     lo[v], hi[v] = j * SIDE - h, j * SIDE + h
                     lo[axis], hi[axis] = k * SIDE - h, (k + 1) * SIDE + h
-                    box(lo, hi, points, triangles)
+                    add_box(points, triangles, [turn(c) for c in box_corners(lo, hi)])
     return points, triangles
 
 
@@ -65,13 +54,9 @@ def main():
     parser.add_argument("--thickness", type=float, default=0.05)
     parser.add_argument("--coincident", action="store_true")
     args = parser.parse_args()
-    os.makedirs(args.out, exist_ok=True)
-    for n in args.cells:
-        points, triangles = lattice(n, args.thickness, args.coincident)
-        name = f"lattice_{n}{'_coincident' if args.coincident else ''}.stl"
-        write_stl(os.path.join(args.out, name), points, triangles)
-        print(f"{name}: {len(triangles)} triangles")
-
+    suffix = "_coincident" if args.coincident else ""
+    write_named(args.out, [(f"lattice_{n}{suffix}", lambda n=n: lattice(n, args.thickness, args.coincident))
+                           for n in args.cells])
 
 if __name__ == "__main__":
     main()

@@ -18,11 +18,10 @@ Writes (binary STL):
 Pure Python, deterministic. Strut lattices: bench/make_lattice.py.
 """
 import math
-import os
 import random
 import sys
 
-from mesh_files import revolved, write_stl
+from mesh_files import add_box, box_corners, revolved, write_named
 
 
 def knurl(pitch, radius=5.0, length=20.0):
@@ -81,53 +80,40 @@ def pixel_line(rods=40, size=0.05, length=30.0):
     x = y = 0
     for i in range(rods):
         lo, hi = (x * size, y * size, 0.0), ((x + 1) * size, (y + 1) * size, length)
-        base = len(points)
-        for k in range(8):
-            points.append(tuple(hi[a] if k >> a & 1 else lo[a] for a in range(3)))
-        for q in ((0, 2, 3, 1), (4, 5, 7, 6), (0, 1, 5, 4), (2, 6, 7, 3), (0, 4, 6, 2), (1, 3, 7, 5)):
-            a, b, c, d = (base + v for v in q)
-            triangles += [(a, b, c), (a, c, d)]
+        add_box(points, triangles, box_corners(lo, hi))
         x += 1
         y += 1 if (i // 8) % 2 == 0 else -1
     return points, triangles
 
 
-def add_box(points, triangles, centre, size, angle, z0):
+def turned_box(points, triangles, centre, size, angle, z0):
     """A box `size` (length, width, height) from height z0, turned by `angle` about z."""
     c, s = math.cos(angle), math.sin(angle)
-    base = len(points)
+    corners = []
     for k in range(8):
         x = size[0] / 2 * (1 if k & 1 else -1)
         y = size[1] / 2 * (1 if k & 2 else -1)
-        points.append((centre[0] + c * x - s * y, centre[1] + s * x + c * y, z0 + (size[2] if k & 4 else 0)))
-    for q in ((0, 2, 3, 1), (4, 5, 7, 6), (0, 1, 5, 4), (2, 6, 7, 3), (0, 4, 6, 2), (1, 3, 7, 5)):
-        a, b, c2, d = (base + v for v in q)
-        triangles += [(a, b, c2), (a, c2, d)]
+        corners.append((centre[0] + c * x - s * y, centre[1] + s * x + c * y, z0 + (size[2] if k & 4 else 0)))
+    add_box(points, triangles, corners)
 
 
 def name_tag(letters=12):
     rng = random.Random(3)
     points, triangles = [], []
-    add_box(points, triangles, (50, 15), (100, 30, 2), 0, 0)
+    turned_box(points, triangles, (50, 15), (100, 30, 2), 0, 0)
     for ch in range(letters):
         x0 = 5 + ch * 7.8
         for _ in range(rng.randint(3, 5)):
             centre = (x0 + rng.uniform(0, 5), 8 + rng.uniform(0, 14))
-            add_box(points, triangles, centre, (rng.uniform(3, 9), 0.6, 1.0), rng.uniform(0, math.pi), 1.9)
+            turned_box(points, triangles, centre, (rng.uniform(3, 9), 0.6, 1.0), rng.uniform(0, math.pi), 1.9)
     return points, triangles
 
 
 def main():
     if len(sys.argv) != 2:
         sys.exit(__doc__)
-    out = sys.argv[1]
-    os.makedirs(out, exist_ok=True)
-    for name, make in (("knurl_coarse", lambda: knurl(0.8)), ("knurl_fine", lambda: knurl(0.25)),
-                       ("gyroid", gyroid), ("pixel_line", pixel_line), ("name_tag", name_tag)):
-        points, triangles = make()
-        write_stl(os.path.join(out, name + ".stl"), points, triangles)
-        print(f"{name}.stl: {len(triangles)} triangles")
-
+    write_named(sys.argv[1], [("knurl_coarse", lambda: knurl(0.8)), ("knurl_fine", lambda: knurl(0.25)),
+                              ("gyroid", gyroid), ("pixel_line", pixel_line), ("name_tag", name_tag)])
 
 if __name__ == "__main__":
     main()

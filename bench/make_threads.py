@@ -11,10 +11,9 @@ Writes (binary STL):
 Pure Python, deterministic.
 """
 import math
-import os
 import sys
 
-from mesh_files import revolved, write_stl
+from mesh_files import revolved, write_named
 
 R, DEPTH, PITCH, LENGTH = 5.0, 0.8, 2.0, 30.0
 
@@ -55,12 +54,7 @@ def open_thread(columns=120, rows_per_pitch=8):
 def main():
     if len(sys.argv) != 2:
         sys.exit(__doc__)
-    out = sys.argv[1]
-    os.makedirs(out, exist_ok=True)
-    for name, (points, triangles) in (("screw", screw()), ("thread_open", open_thread())):
-        write_stl(os.path.join(out, name + ".stl"), points, triangles)
-        print(f"{name}.stl: {len(triangles)} triangles")
-
+    write_named(sys.argv[1], [("screw", screw), ("thread_open", open_thread)])
 
 if __name__ == "__main__":
     main()

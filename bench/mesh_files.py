@@ -1,6 +1,8 @@
 """Mesh files for the bench scripts: triangles of STL (binary or ASCII) and OBJ files as nine
-floats each; indexed meshes written as binary STL; the closed revolved grid the generators share."""
+floats each; indexed meshes written as binary STL; the boxes and the closed revolved grid the
+generators share."""
 import math
+import os
 import struct
 
 
@@ -60,3 +62,26 @@ def revolved(radius_at, columns, rows, length):
     for i in range(columns):
         triangles += [(bottom, at(i + 1, 0), at(i, 0)), (top, at(i, rows), at(i + 1, rows))]
     return points, triangles
+
+
+def write_named(out_dir, meshes):
+    """Each (name, make) of `meshes` as OUT_DIR/name.stl, make() giving (points, triangles)."""
+    os.makedirs(out_dir, exist_ok=True)
+    for name, make in meshes:
+        points, triangles = make()
+        write_stl(os.path.join(out_dir, name + ".stl"), points, triangles)
+        print(f"{name}.stl: {len(triangles)} triangles")
+
+
+def add_box(points, triangles, corners):
+    """A closed box on 8 corners in bit order (bit a set: the high side of axis a), faces outward."""
+    base = len(points)
+    points.extend(corners)
+    for q in ((0, 2, 3, 1), (4, 5, 7, 6), (0, 1, 5, 4), (2, 6, 7, 3), (0, 4, 6, 2), (1, 3, 7, 5)):
+        a, b, c, d = (base + i for i in q)
+        triangles += [(a, b, c), (a, c, d)]
+
+
+def box_corners(lo, hi):
+    """The 8 corners of the axis-aligned box lo-hi in add_box's order."""
+    return [tuple(hi[a] if k >> a & 1 else lo[a] for a in range(3)) for k in range(8)]

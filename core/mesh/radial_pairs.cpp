@@ -28,11 +28,10 @@ uint32_t radial_partner(const std::vector<Vec3>& points, const std::vector<Tri>&
   std::array<Fin, kMost> fins;
   for (size_t i = 0; i < count; ++i) {
     const Tri& tri = triangles[around[i]];
-    const int side = directed_side(tri, a, b);
-    const bool forward = side >= 0;
-    if (!forward && directed_side(tri, b, a) < 0) return none;  // a repeated corner
-    const int k = forward ? side : directed_side(tri, b, a);
-    const uint32_t c = tri[(k + 2) % 3];
+    const int ahead = directed_side(tri, a, b), back = directed_side(tri, b, a);
+    if (ahead < 0 && back < 0) return none;  // a repeated corner
+    const bool forward = ahead >= 0;
+    const uint32_t c = tri[((forward ? ahead : back) + 2) % 3];
     if (c == a || c == b) return none;
     const Vec3 w = points[c] - pa;
     const double x = dot(w, e1), y = dot(w, e2);
