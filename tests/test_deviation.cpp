@@ -60,8 +60,10 @@ Mesh scaled_about_centre(Mesh m, double s) {
 class TempDir {
  public:
   TempDir() {
-    path_ = fs::temp_directory_path() / ("vdbwrap_deviation_" + std::to_string(::getpid()) + "_" +
-                                         ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    // A parameterised test's name holds a '/': one directory, not a parent left behind.
+    std::string name = ::testing::UnitTest::GetInstance()->current_test_info()->name();
+    std::replace(name.begin(), name.end(), '/', '_');
+    path_ = fs::temp_directory_path() / ("vdbwrap_deviation_" + std::to_string(::getpid()) + "_" + name);
     fs::create_directories(path_);
   }
   ~TempDir() { fs::remove_all(path_); }
