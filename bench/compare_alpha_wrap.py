@@ -12,8 +12,9 @@ The divisors change alpha wrap's settings (alpha = diag/A, offset = diag/O): a l
 divisor brings its surface as close to the input as vdbwrap's, for a comparison at matched
 distance.
 """
-import argparse, json, math, os, resource, shutil, statistics, subprocess, sys, tempfile, time
+import argparse, json, math, os, shutil, statistics, subprocess, sys, tempfile
 
+from child_peak import run_measured
 from mesh_files import read_triangles
 
 root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
@@ -31,20 +32,6 @@ vdbwrap = os.path.join(args.build, "client", "vdbwrap")
 alpha = os.path.join(args.build, "bench", "alpha_wrap_runner")
 files = args.files or sorted((os.path.join(root, "tests", "data", f) for f in os.listdir(os.path.join(root, "tests", "data"))
                              if f.lower().endswith((".stl", ".obj", ".off", ".ply"))), key=str.lower)
-
-
-def timed(cmd):
-    """Runs cmd; returns (wall seconds, peak RSS MB of that child, completed process)."""
-    before = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss
-    t0 = time.perf_counter()
-    # /usr/bin/time would be simpler but may be missing; run each child alone and read its
-    # peak from wait4.
-    proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    _, status, usage = os.wait4(proc.pid, 0)
-    wall = time.perf_counter() - t0
-    out, err = proc.stdout.read(), proc.stderr.read()
-    proc.returncode = os.waitstatus_to_exitcode(status)
-    return wall, usage.ru_maxrss / 1024.0, subprocess.CompletedProcess(cmd, proc.returncode, out, err)
 
 
 def sliver_share(path, limit_deg=10.0):
@@ -95,7 +82,7 @@ with tempfile.TemporaryDirectory() as tmp:
         for _ in range(args.runs):
             # Distances are the report's business, not the wrap's: measured below with `check`
             # for both tools alike.
-            w, m, p = timed([vdbwrap, "wrap", f, "-o", out_v, "--base-size", args.base_size, "-q", "--no-distances",
+            w, m, p = run_measured([vdbwrap, "wrap", f, "-o", out_v, "--base-size", args.base_size, "-q", "--no-distances",
                              "--report", rep_v])
             if p.returncode != 0:
                 ok = False
@@ -113,7 +100,7 @@ with tempfile.TemporaryDirectory() as tmp:
                     shutil.copyfile(cached + ".stl", out_a)
                     ta, ma = c["seconds"], c["peak_mb"]
             if len(ta) < args.runs:
-                w, m, p = timed([alpha, f, out_a, repr(1.0 / args.alpha_divisor), repr(1.0 / args.offset_divisor)])
+                w, m, p = run_measured([alpha, f, out_a, repr(1.0 / args.alpha_divisor), repr(1.0 / args.offset_divisor)])
                 if p.returncode != 0:
                     ok = False
                     rows.append(f"| {name} | alpha wrap failed ({p.returncode}) |")

@@ -8,7 +8,9 @@ assembly at 0.25 %, the 1M-triangle smooth body). Inputs come from bench/make_in
 Usage: bench/scaling.py [--build build] [--runs 1] [--out bench/results/DATE.md] [--quick]
 Prints Markdown; --out also writes it with the machine's description.
 """
-import argparse, datetime, json, os, platform, resource, statistics, subprocess, sys, tempfile, time
+import argparse, datetime, json, os, platform, statistics, subprocess, sys, tempfile
+
+from child_peak import run_measured
 
 root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 ap = argparse.ArgumentParser()
@@ -39,13 +41,11 @@ def run(mesh, base, threads=0):
             cmd = [vdbwrap, "wrap", mesh, "-o", out, "--base-size", base, "--no-distances", "-q", "--report", rep]
             if threads:
                 cmd += ["--threads", str(threads)]
-            t0 = time.perf_counter()
-            proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-            _, status, usage = os.wait4(proc.pid, 0)
-            walls.append(time.perf_counter() - t0)
-            peaks.append(usage.ru_maxrss / 1024.0)
-            if os.waitstatus_to_exitcode(status) != 0:
-                return None, None, {"error": proc.stderr.read().strip()}
+            wall, peak, proc = run_measured(cmd)
+            walls.append(wall)
+            peaks.append(peak)
+            if proc.returncode != 0:
+                return None, None, {"error": proc.stderr.strip()}
             report = json.load(open(rep))
     return statistics.median(walls), max(peaks), report
 

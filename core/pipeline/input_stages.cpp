@@ -1,6 +1,7 @@
 // Stages 0 and 1: the input's diagnosis and its preparation.
 #include "check/diagnostics.h"
 #include "common/stage_timer.h"
+#include "mesh/narrow_strips.h"
 #include "mesh/short_feature_runs.h"
 #include "mesh/small_rims.h"
 #include "pipeline/stage_params.h"
@@ -66,6 +67,11 @@ void prepare_input(WrapRun& run) {
   // would be thousands more curves, folding the blobs into slivers.
   report.features.small_rim_edges =
       mesh::drop_small_rims(run.prepared.mesh.points, run.prepared.feature_edges, kSmallestRim * run.base);
+  // A thin tube with few sides (hair, a wire) is wrapped as a round blob: the edges between its
+  // sides, narrower than the finest cell, would be parallel curves a fraction of a cell apart.
+  report.features.narrow_strip_edges =
+      mesh::drop_narrow_strip_edges(run.prepared.mesh.points, run.prepared.mesh.triangles, run.prepared.feature_edges,
+                                    run.base / double(int64_t(1) << std::min(run.params.levels, 30)));
 }
 
 }  // namespace vdbwrap::pipeline

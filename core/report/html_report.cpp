@@ -225,6 +225,7 @@ std::string numbers_html(const json& r, bool has_wrap) {
           {"Sharp edges left out as noise", "features.noise_sharp_edges"},
           {"Intersection segments left out as noise", "features.noise_intersection_segments"},
           {"Boundary edges of small rims left out", "features.small_rim_edges"},
+          {"Sharp edges of narrow strips left out", "features.narrow_strip_edges"},
           {"Faces where solids touch left out", "features.inside_faces"},
           {"Curves", "features.curves"},
           {"Corners", "features.corners"},
