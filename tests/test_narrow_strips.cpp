@@ -44,8 +44,8 @@ std::vector<std::array<double, 2>> regular(double cx, double cy, double r, int s
   return p;
 }
 
-// A tube of `sides` flat sides, radius r, from a to b, its ends fanned from their centres.
-void add_rod(Mesh& m, const Vec3& a, const Vec3& b, double r, int sides) {
+// A tube of `sides` flat sides, radius r, from a to b, open at its ends.
+void add_tube(Mesh& m, const Vec3& a, const Vec3& b, double r, int sides) {
   const Vec3 t = normalized(b - a);
   const Vec3 u = normalized(cross(t, std::abs(t[2]) < 0.9 ? Vec3{0, 0, 1} : Vec3{1, 0, 0})), w = cross(t, u);
   const uint32_t o = uint32_t(m.points.size()), n = uint32_t(sides);
@@ -54,14 +54,10 @@ void add_rod(Mesh& m, const Vec3& a, const Vec3& b, double r, int sides) {
       const double angle = 2 * M_PI * k / sides;
       m.points.push_back(c + (u * std::cos(angle) + w * std::sin(angle)) * r);
     }
-  m.points.push_back(a);
-  m.points.push_back(b);
   for (uint32_t i = 0; i < n; ++i) {
     const uint32_t j = (i + 1) % n;
     m.triangles.push_back({o + i, o + j, o + n + j});
     m.triangles.push_back({o + i, o + n + j, o + n + i});
-    m.triangles.push_back({o + 2 * n, o + j, o + i});
-    m.triangles.push_back({o + 2 * n + 1, o + n + i, o + n + j});
   }
 }
 
@@ -97,10 +93,15 @@ TEST(NarrowStrips, ATubesEdgesGoAPartsChamfersAndRimsStay) {
   // A finest cell under the rod's sides (0.05 wide): nothing goes.
   prep::PreparedInput again = prep::prepare(m, prep::PrepareParams{}, nullptr);
   EXPECT_EQ(mesh::drop_narrow_strip_edges(again.mesh.points, again.mesh.triangles, again.feature_edges, 0.04), 0u);
+  // Closed pieces get the thin-part refinement's finer cells (here 0.25 / 8): nothing goes
+  // either, all four parts being closed.
+  EXPECT_EQ(mesh::drop_narrow_strip_edges(again.mesh.points, again.mesh.triangles, again.feature_edges, 0.25,
+                                          &again.closed_piece, 0.25 / 8),
+            0u);
 }
 
-// A ball with 80 hexagonal strands stuck through it, each a third of a base cell across (a
-// sculpt's hair): every side of every strand is narrower than the finest cell. Snapping the
+// A ball with 80 hexagonal strands stuck through it, open tubes a third of a base cell across
+// (a sculpt's hair): every side of every strand is narrower than the finest cell. Snapping the
 // wrap onto the strands' edges made parallel curves a fraction of a cell apart: nodes inserted
 // on each folded the blobs the strands are wrapped as, and left the wrap up to 1.4 base cells
 // from the input.
@@ -110,7 +111,7 @@ TEST(NarrowStrips, HairOfHexagonalStrandsWrapsNearWithoutSlivers) {
     const double a = i * 2.39996, h = 0.2 + 0.4 * std::fmod(i * 0.618034, 1.0);
     const Vec3 s{0.9 * std::cos(a) * h, 0.9 * std::sin(a) * h, 0.9 * std::sqrt(1 - h * h)};
     const Vec3 d = normalized(s + Vec3{0.3 * std::cos(3 * a), 0.3 * std::sin(5 * a), 0});
-    add_rod(m, s, s + d * 0.8, 0.008, 6);
+    add_tube(m, s, s + d * 0.8, 0.008, 6);
   }
   WrapParams p;
   p.base_size = Length{1, true};

@@ -8,11 +8,13 @@
 #include "common/edge_key.h"
 #include "common/edge_triangles.h"
 #include "common/union_find.h"
+#include "mesh/orient.h"
 
 namespace vdbwrap::mesh {
 
 size_t drop_narrow_strip_edges(const std::vector<Vec3>& points, const std::vector<Tri>& triangles,
-                               std::vector<FeatureEdge>& edges, double narrowest) {
+                               std::vector<FeatureEdge>& edges, double narrowest,
+                               const std::vector<uint32_t>* closed_piece, double narrowest_closed) {
   if (!(narrowest > 0) ||
       std::none_of(edges.begin(), edges.end(), [](const FeatureEdge& e) { return e.kind == FeatureKind::Sharp; }))
     return 0;
@@ -37,7 +39,11 @@ size_t drop_narrow_strip_edges(const std::vector<Vec3>& points, const std::vecto
     if (feature[i] != UINT32_MAX && edges[feature[i]].kind == FeatureKind::Sharp)
       for (const uint32_t* t = around.begin(i); t != around.begin(i) + around.size(i); ++t) state[region[*t]] = kNarrow;
   // The rims' edges in a hash grid, each listed at points at most a quarter cell apart along it.
-  const double cell = narrowest, reach = narrowest / 2;
+  const double cell = narrowest;
+  auto reach_of = [&](uint32_t r) {  // r: a region's root triangle
+    const bool closed = closed_piece && closed_piece->size() == triangles.size() && (*closed_piece)[r] != kOpenPiece;
+    return (closed ? std::min(narrowest, narrowest_closed) : narrowest) / 2;
+  };
   CellLists<uint32_t> rims(cell);
   for (uint32_t i = 0; i < around.edges(); ++i) {
     if (feature[i] == UINT32_MAX) continue;
@@ -56,6 +62,7 @@ size_t drop_narrow_strip_edges(const std::vector<Vec3>& points, const std::vecto
   };
   // Whether a point of region r lies within `reach` of r's rim.
   auto near_rim = [&](const Vec3& p, uint32_t r) {
+    const double reach = reach_of(r);
     const Vec3 margin{reach + cell / 4, reach + cell / 4, reach + cell / 4};
     Box3 box;
     box.add(p - margin), box.add(p + margin);

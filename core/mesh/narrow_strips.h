@@ -17,8 +17,11 @@ namespace vdbwrap::mesh {
 // every point of it lies within `narrowest` / 2 of its rim (its feature edges), sampled at its
 // triangles' centres and the middles of its inner edges. A chamfer or a thin wall's top is
 // narrow on one side only and keeps its edges. `edges` keeps its order. Returns the number of
-// sharp edges dropped.
+// sharp edges dropped. `closed_piece` (optional, per triangle: mesh::kOpenPiece or a closed
+// piece): faces of closed pieces are narrow under `narrowest_closed` instead, as the thin-part
+// refinement gives thin closed pieces finer cells, where their edges show.
 size_t drop_narrow_strip_edges(const std::vector<Vec3>& points, const std::vector<Tri>& triangles,
-                               std::vector<FeatureEdge>& edges, double narrowest);
+                               std::vector<FeatureEdge>& edges, double narrowest,
+                               const std::vector<uint32_t>* closed_piece = nullptr, double narrowest_closed = 0);
 
 }  // namespace vdbwrap::mesh

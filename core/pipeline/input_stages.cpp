@@ -69,9 +69,13 @@ void prepare_input(WrapRun& run) {
       mesh::drop_small_rims(run.prepared.mesh.points, run.prepared.feature_edges, kSmallestRim * run.base);
   // A thin tube with few sides (hair, a wire) is wrapped as a round blob: the edges between its
   // sides, narrower than the finest cell, would be parallel curves a fraction of a cell apart.
-  report.features.narrow_strip_edges =
-      mesh::drop_narrow_strip_edges(run.prepared.mesh.points, run.prepared.mesh.triangles, run.prepared.feature_edges,
-                                    run.base / double(int64_t(1) << std::min(run.params.levels, 30)));
+  {
+    const int levels = std::min(run.params.levels, 30), thin = refine_criteria(run.params).thin_levels;
+    const double finest = run.base / double(int64_t(1) << levels);
+    report.features.narrow_strip_edges = mesh::drop_narrow_strip_edges(
+        run.prepared.mesh.points, run.prepared.mesh.triangles, run.prepared.feature_edges, finest,
+        &run.prepared.closed_piece, finest / double(int64_t(1) << std::clamp(thin, 0, 30)));
+  }
 }
 
 }  // namespace vdbwrap::pipeline
