@@ -15,6 +15,7 @@ import math
 import os
 import random
 
+from make_scan_classes import icosphere, unit
 from mesh_files import write_stl
 
 
@@ -24,35 +25,6 @@ def sub(a, b):
 
 def cross(a, b):
     return (a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0])
-
-
-def unit(p):
-    n = math.sqrt(sum(x * x for x in p))
-    return tuple(x / n for x in p)
-
-
-def icosphere(level):
-    t = (1 + 5 ** 0.5) / 2
-    v = [unit(p) for p in [(-1, t, 0), (1, t, 0), (-1, -t, 0), (1, -t, 0), (0, -1, t), (0, 1, t), (0, -1, -t),
-                           (0, 1, -t), (t, 0, -1), (t, 0, 1), (-t, 0, -1), (-t, 0, 1)]]
-    f = [(0, 11, 5), (0, 5, 1), (0, 1, 7), (0, 7, 10), (0, 10, 11), (1, 5, 9), (5, 11, 4), (11, 10, 2), (10, 7, 6),
-         (7, 1, 8), (3, 9, 4), (3, 4, 2), (3, 2, 6), (3, 6, 8), (3, 8, 9), (4, 9, 5), (2, 4, 11), (6, 2, 10),
-         (8, 6, 7), (9, 8, 1)]
-    for _ in range(level):
-        mid, nf = {}, []
-
-        def m(a, b):
-            k = (min(a, b), max(a, b))
-            if k not in mid:
-                v.append(unit(tuple(v[a][i] + v[b][i] for i in range(3))))
-                mid[k] = len(v) - 1
-            return mid[k]
-
-        for a, b, c in f:
-            ab, bc, ca = m(a, b), m(b, c), m(c, a)
-            nf += [(a, ab, ca), (b, bc, ab), (c, ca, bc), (ab, bc, ca)]
-        f = nf
-    return v, f
 
 
 class Model:
