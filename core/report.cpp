@@ -252,6 +252,7 @@ std::string to_json(const WrapReport& r, int indent) {
            {"noise_sharp_edges", r.features.noise_sharp_edges},
            {"small_rim_edges", r.features.small_rim_edges},
            {"narrow_strip_edges", r.features.narrow_strip_edges},
+           {"narrow_strip_intersection_segments", r.features.narrow_strip_intersection_segments},
            {"inside_faces", r.features.inside_faces},
            {"intersection_segments", r.features.intersection_segments},
            {"curves", r.features.curves},

@@ -12,12 +12,16 @@
 
 namespace vdbwrap::mesh {
 
-size_t drop_narrow_strip_edges(const std::vector<Vec3>& points, const std::vector<Tri>& triangles,
-                               std::vector<FeatureEdge>& edges, double narrowest,
-                               const std::vector<uint32_t>* closed_piece, double narrowest_closed) {
-  if (!(narrowest > 0) ||
-      std::none_of(edges.begin(), edges.end(), [](const FeatureEdge& e) { return e.kind == FeatureKind::Sharp; }))
-    return 0;
+NarrowFaces narrow_faces(const std::vector<Vec3>& points, const std::vector<Tri>& triangles,
+                         const std::vector<FeatureEdge>& edges, double narrowest,
+                         const std::vector<uint32_t>* closed_piece, double narrowest_closed,
+                         const std::vector<uint32_t>& also_judged) {
+  NarrowFaces narrow;
+  narrow.triangles.assign(triangles.size(), 0);
+  narrow.between_narrow.assign(edges.size(), 0);
+  const bool any_crease =
+      std::any_of(edges.begin(), edges.end(), [](const FeatureEdge& e) { return e.kind != FeatureKind::Boundary; });
+  if (!(narrowest > 0) || (!any_crease && also_judged.empty())) return narrow;
   const EdgeTriangles around = edge_triangles(triangles);
   // Per edge of `around`, its feature edge (an index into `edges`) or UINT32_MAX.
   std::vector<uint32_t> feature(around.edges(), UINT32_MAX);
@@ -31,13 +35,15 @@ size_t drop_narrow_strip_edges(const std::vector<Vec3>& points, const std::vecto
     if (around.size(i) == 2 && feature[i] == UINT32_MAX) joined.unite(around.begin(i)[0], around.begin(i)[1]);
   std::vector<uint32_t> region(triangles.size());
   for (uint32_t t = 0; t < triangles.size(); ++t) region[t] = joined.find(t);
-  // Only regions beside a sharp edge are asked about; all start narrow until a sample is far
-  // from their rim.
+  // Only regions beside a sharp or a non-manifold edge (and those asked for) are judged; all
+  // start narrow until a sample is far from their rim.
   constexpr uint8_t kUnasked = 0, kNarrow = 1, kWide = 2;
   std::vector<uint8_t> state(triangles.size(), kUnasked);  // by region (its root triangle)
   for (size_t i = 0; i < around.edges(); ++i)
-    if (feature[i] != UINT32_MAX && edges[feature[i]].kind == FeatureKind::Sharp)
+    if (feature[i] != UINT32_MAX && edges[feature[i]].kind != FeatureKind::Boundary)
       for (const uint32_t* t = around.begin(i); t != around.begin(i) + around.size(i); ++t) state[region[*t]] = kNarrow;
+  for (uint32_t t : also_judged)
+    if (t < triangles.size()) state[region[t]] = kNarrow;
   // The rims' edges in a hash grid, each listed at points at most a quarter cell apart along it.
   const double cell = narrowest;
   auto reach_of = [&](uint32_t r) {  // r: a region's root triangle
@@ -87,15 +93,19 @@ size_t drop_narrow_strip_edges(const std::vector<Vec3>& points, const std::vecto
     }
     if (wide) state[r] = kWide;
   }
-  std::vector<uint8_t> drop(edges.size(), 0);
-  for (size_t i = 0; i < around.edges(); ++i) {
-    if (feature[i] == UINT32_MAX || edges[feature[i]].kind != FeatureKind::Sharp) continue;
-    drop[feature[i]] = std::all_of(around.begin(i), around.begin(i) + around.size(i),
-                                   [&](uint32_t t) { return state[region[t]] == kNarrow; });
-  }
+  for (uint32_t t = 0; t < triangles.size(); ++t) narrow.triangles[t] = state[region[t]] == kNarrow;
+  for (size_t i = 0; i < around.edges(); ++i)
+    if (feature[i] != UINT32_MAX && edges[feature[i]].kind != FeatureKind::Boundary)
+      narrow.between_narrow[feature[i]] = std::all_of(around.begin(i), around.begin(i) + around.size(i),
+                                                      [&](uint32_t t) { return narrow.triangles[t] != 0; });
+  return narrow;
+}
+
+size_t drop_narrow_strip_edges(std::vector<FeatureEdge>& edges, const NarrowFaces& narrow) {
+  if (narrow.between_narrow.size() != edges.size()) return 0;
   size_t kept = 0;
   for (size_t i = 0; i < edges.size(); ++i)
-    if (!drop[i]) edges[kept++] = edges[i];
+    if (!narrow.between_narrow[i]) edges[kept++] = edges[i];
   const size_t dropped = edges.size() - kept;
   edges.resize(kept);
   return dropped;

@@ -68,13 +68,24 @@ void prepare_input(WrapRun& run) {
   report.features.small_rim_edges =
       mesh::drop_small_rims(run.prepared.mesh.points, run.prepared.feature_edges, kSmallestRim * run.base);
   // A thin tube with few sides (hair, a wire) is wrapped as a round blob: the edges between its
-  // sides, narrower than the finest cell, would be parallel curves a fraction of a cell apart.
+  // sides, narrower than the finest cell, would be parallel curves a fraction of a cell apart;
+  // so would the lines where such tubes cross (a lattice's struts).
   {
-    const int levels = std::min(run.params.levels, 30), thin = refine_criteria(run.params).thin_levels;
+    const int levels = std::min(run.params.levels, 30);
+    const int thin = std::clamp(refine_criteria(run.params).thin_levels, 0, 30);
     const double finest = run.base / double(int64_t(1) << levels);
-    report.features.narrow_strip_edges = mesh::drop_narrow_strip_edges(
-        run.prepared.mesh.points, run.prepared.mesh.triangles, run.prepared.feature_edges, finest,
-        &run.prepared.closed_piece, finest / double(int64_t(1) << std::clamp(thin, 0, 30)));
+    auto& lines = run.prepared.intersections;
+    std::vector<uint32_t> crossing;
+    for (const auto& s : lines) crossing.push_back(s.tri_a), crossing.push_back(s.tri_b);
+    const mesh::NarrowFaces narrow =
+        mesh::narrow_faces(run.prepared.mesh.points, run.prepared.mesh.triangles, run.prepared.feature_edges, finest,
+                           &run.prepared.closed_piece, finest / double(int64_t(1) << thin), crossing);
+    report.features.narrow_strip_edges = mesh::drop_narrow_strip_edges(run.prepared.feature_edges, narrow);
+    size_t kept = 0;
+    for (size_t i = 0; i < lines.size(); ++i)
+      if (!(narrow.triangles[lines[i].tri_a] && narrow.triangles[lines[i].tri_b])) lines[kept++] = lines[i];
+    report.features.narrow_strip_intersection_segments = lines.size() - kept;
+    lines.resize(kept);
   }
 }
 

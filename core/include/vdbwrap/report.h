@@ -49,9 +49,12 @@ struct FeatureStats {
   // Of the intersection segments, those in runs too short to follow (rough sheets crossing): not used.
   size_t noise_intersection_segments = 0;
   size_t noise_sharp_edges = 0;  // of the sharp edges, those in runs too short to follow (a rough surface): not used
-  // Of the sharp edges, those between faces narrower than the finest cell on both sides (a thin
-  // tube's sides): not used.
+  // Of the sharp and non-manifold edges, those between faces narrower than the finest cell on
+  // every side (a thin tube's sides, struts welded along an edge): not used.
   size_t narrow_strip_edges = 0;
+  // Of the intersection segments, those where two such narrow faces cross (a lattice's thin
+  // struts): not used.
+  size_t narrow_strip_intersection_segments = 0;
   size_t curves = 0, corners = 0, curves_captured = 0, corners_captured = 0, nodes_snapped = 0;
   // Curve points the traced chains missed (sampled every half finest cell), and what was done
   // about them: nodes inserted on the curve by edge splits, nodes moved onto it, points left
