@@ -94,6 +94,34 @@ TEST(ContactPrevention, UnknownPartNamesAreRejectedWithTheKnownOnes) {
   }
 }
 
+// A cube with a hole 0.1 wide in its top, beside two blocks with a slot 0.06 wide between
+// them, wrapped from outside with a gap closure of 0.15: the hole is bridged (the cube's
+// inside stays out of the wrap), and the slot, which leads nowhere, is wrapped as without gap
+// closure. The opening of the free space alone filled the slot (the gap's ball does not enter
+// it): its walls' middle ended half a block from the wrap.
+TEST(GapClosure, OnlyTheOpeningsAreBridgedASlotThatLeadsNowhereIsFollowed) {
+  Mesh m = holed_cube(0.1);
+  add_box(m, {1.3, 0, 0}, {1.7, 1, 1});
+  add_box(m, {1.76, 0, 0}, {2.16, 1, 1});
+  m.triangle_part.clear();  // one part, as the holed cube has no part list
+  WrapParams p;
+  p.base_size = Length::parse("1%");
+  p.gap_closure = Length{0.15, false};
+  const WrapResult r = wrap(m, p);
+  expect_valid(r.surface);
+  EXPECT_GT(r.report.output.volume, 0.95 * (1.0 + 2 * 0.4)) << "the cube's inside is not wrapped";
+  EXPECT_LT(r.report.output.volume, 1.05 * (1.0 + 2 * 0.4));
+  EXPECT_LT(r.report.input_to_output.max, 2 * r.report.finest_size) << "every wall of the slot is followed";
+  // The same without the hole: the wrap over the slot is the same as with a closed cube.
+  WrapParams plain = p;
+  plain.gap_closure.reset();
+  Mesh closed = box_mesh({0, 0, 0}, {1, 1, 1});
+  add_box(closed, {1.3, 0, 0}, {1.7, 1, 1});
+  add_box(closed, {1.76, 0, 0}, {2.16, 1, 1});
+  const WrapResult c = wrap(closed, plain);
+  EXPECT_NEAR(r.report.output.volume, c.report.output.volume, 0.01);
+}
+
 TEST(GapClosure, HoleSmallerThanTheGapIsClosedAndTheLeakIsFoundBelowIt) {
   const Mesh m = holed_cube(0.1);
 

@@ -47,15 +47,21 @@ class FreeLeaves {
     return c.x() == 0 || c.y() == 0 || c.z() == 0 || c.x() == d.x() - 1 || c.y() == d.y() - 1 || c.z() == d.z() - 1;
   }
 
+  // Per leaf, whether its centre lies behind the input (see DistanceToInput); after clearance().
+  const std::vector<uint8_t>& behind() const { return behind_; }
   const std::vector<float>& clearance(const DistanceToInput& distance, ProgressSink* progress) {
     if (!clearance_.empty() || leaves_.empty()) return clearance_;
     if (progress)
       progress->progress("flood fill", 0.2,
                          "measuring the clearance of " + std::to_string(leaves_.size()) + " free cells");
     clearance_.resize(leaves_.size());
+    behind_.resize(leaves_.size());
     tbb::parallel_for(tbb::blocked_range<size_t>(0, leaves_.size(), 1024), [&](const tbb::blocked_range<size_t>& r) {
       if (progress && progress->cancelled()) return;
-      for (size_t i = r.begin(); i != r.end(); ++i) clearance_[i] = float(distance(centre(uint32_t(i))));
+      for (size_t i = r.begin(); i != r.end(); ++i) {
+        const double d = distance(centre(uint32_t(i)));
+        clearance_[i] = float(std::abs(d)), behind_[i] = d < 0;
+      }
     });
     if (progress && progress->cancelled()) throw Error(ErrorKind::Cancelled, "cancelled");
     return clearance_;
@@ -74,6 +80,7 @@ class FreeLeaves {
   std::vector<Leaf> leaves_;
   std::unordered_map<uint64_t, uint32_t> index_;
   std::vector<float> clearance_;
+  std::vector<uint8_t> behind_;
 };
 
 std::string point_text(const Vec3& p) {
@@ -140,6 +147,84 @@ LeakReport widest_path(const AdaptiveGrid& g, FreeLeaves& leaves, const std::vec
   for (size_t k = 0; k < chain.size(); ++k)
     if (k % step == 0 || k == narrowest || k + 1 == chain.size()) leak.path.push_back(leaves.centre(chain[k]));
   return leak;
+}
+
+// Gap closure, last part: the detail the opening took, given back away from the openings. The
+// narrow cells still left are flooded, most open first, from every free volume and from the
+// pockets behind a passage (narrow cells more open than the narrowest place on the widest way
+// to them from the chosen volume: a space between parts reached through a narrower gap); the
+// fronts meet at the narrowest places between them. The chosen volume's front keeps to its
+// own side of the input (in front of it for the outside, behind it for the inside): through a
+// hole in a surface it would reach the surface's other face, and the hole is an opening. A
+// groove or a slot narrower than the gap that leads nowhere is wrapped as without gap closure.
+void reclaim_narrow_cells(AdaptiveGrid& g, const FreeLeaves& leaves, const std::vector<float>& clearance,
+                          int32_t chosen, bool chosen_in_front) {
+  const size_t n = leaves.size();
+  auto narrow = [&](uint32_t i) { return g.get(leaves.level(i), leaves.coord(i)) == kNarrow; };
+  // Cells of a labelled volume beside a narrow cell: where the fronts start.
+  std::vector<uint32_t> starts;
+  for (uint32_t i = 0; i < n; ++i) {
+    if (g.get(leaves.level(i), leaves.coord(i)) < 1) continue;
+    bool beside = false;
+    for (int axis = 0; axis < 3 && !beside; ++axis)
+      for (int dir = -1; dir <= 1 && !beside; dir += 2)
+        g.for_each_face_neighbour(leaves.level(i), leaves.coord(i), axis, dir,
+                                  [&](const LeafRef& r) { beside = beside || (!r.outside_box && r.value == kNarrow); });
+    if (beside) starts.push_back(i);
+  }
+  auto for_narrow_neighbours = [&](uint32_t i, auto&& visit) {
+    for (int axis = 0; axis < 3; ++axis)
+      for (int dir = -1; dir <= 1; dir += 2)
+        g.for_each_face_neighbour(leaves.level(i), leaves.coord(i), axis, dir, [&](const LeafRef& r) {
+          if (r.outside_box || r.value != kNarrow) return;
+          const int64_t j = leaves.find(r.level, r.ijk);
+          if (j >= 0) visit(uint32_t(j));
+        });
+  };
+  // The widest way from the chosen volume to each narrow cell: its narrowest clearance.
+  std::vector<float> widest(n, -1.0f);
+  {
+    std::vector<uint8_t> done(n, 0);
+    std::priority_queue<std::pair<float, uint32_t>> heap;
+    for (uint32_t i : starts)
+      if (g.get(leaves.level(i), leaves.coord(i)) == chosen) widest[i] = clearance[i], heap.push({clearance[i], i});
+    while (!heap.empty()) {
+      const float w = heap.top().first;
+      const uint32_t i = heap.top().second;
+      heap.pop();
+      if (done[i]) continue;
+      done[i] = 1;
+      for_narrow_neighbours(i, [&](uint32_t j) {
+        const float next = std::min(w, clearance[j]);
+        if (!done[j] && next > widest[j]) widest[j] = next, heap.push({next, j});
+      });
+    }
+  }
+  // The flood: from every labelled volume, and from each narrow cell more open (by more than
+  // its own size) than the way to it, narrow cells are taken most open first, each by the
+  // front beside it; the fronts meet at the narrowest places between them, the openings.
+  constexpr int32_t kPocket = 0;
+  std::vector<int32_t> owner(n, kPocket);
+  std::vector<uint8_t> taken(n, 0);
+  std::priority_queue<std::pair<float, uint32_t>> heap;
+  for (uint32_t i : starts)
+    taken[i] = 1, owner[i] = g.get(leaves.level(i), leaves.coord(i)), heap.push({clearance[i], i});
+  for (uint32_t i = 0; i < n; ++i)
+    if (narrow(i) && clearance[i] > widest[i] + g.cell_size(leaves.level(i)))
+      taken[i] = 1, heap.push({clearance[i], i});
+  while (!heap.empty()) {
+    const float level = heap.top().first;
+    const uint32_t i = heap.top().second;
+    heap.pop();
+    const int32_t label = owner[i];
+    if (label == chosen && narrow(i)) g.set(leaves.level(i), leaves.coord(i), chosen);
+    for_narrow_neighbours(i, [&](uint32_t j) {
+      if (taken[j]) return;
+      if (label == chosen && leaves.behind()[j] == chosen_in_front) return;
+      taken[j] = 1, owner[j] = label;
+      heap.push({std::min(level, clearance[j]), j});
+    });
+  }
 }
 
 }  // namespace
@@ -281,6 +366,9 @@ VolumeSelection select_volume(AdaptiveGrid& g, const VolumeRequest& req, const D
             queue.push_back({uint32_t(j), f.source, f.source_half_diagonal});
           });
     }
+    if (req.choice != VolumeChoice::SeedPoints)
+      reclaim_narrow_cells(g, leaves, leaves.clearance(distance, progress), sel.label,
+                           req.choice == VolumeChoice::Outside);
     for (uint32_t i = 0; i < leaves.size(); ++i)
       if (g.get(leaves.level(i), leaves.coord(i)) == sel.label) {
         double h = g.cell_size(leaves.level(i));

@@ -29,13 +29,16 @@ struct VolumeSelection {
   std::vector<Coord> anchors;  // finest-level cells of the seed points: the pieces to keep
 };
 
-// Distance from a point (local frame) to the input.
+// Distance from a point (local frame) to the input, negative behind it (on the back of its
+// nearest triangle, against the prepared input's orientation).
 using DistanceToInput = std::function<double(const Vec3&)>;
 
 // Labels the free cells and picks the volume. With gap closure, free cells whose centre is
 // closer to the input than half the gap are first left out ("narrow"), the volume is flooded
 // through the others, then grown back into the narrow cells that a ball of half the gap
-// centred in it reaches (a morphological opening of the free space). On a leak the
+// centred in it reaches (a morphological opening of the free space), and last into the narrow
+// cells no other volume reaches first and on its own side of the input (so only openings are
+// bridged: holes in a surface, gaps into spaces the volume does not hold). On a leak the
 // selection comes back with leak.detected set and the chosen label 0.
 // Throws Error(WrapFailed) when `inside` finds no enclosed volume, Error(InvalidArgument)
 // for a seed point outside the grid or on the input.

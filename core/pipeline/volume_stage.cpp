@@ -9,6 +9,7 @@
 #include "common/vec.h"
 #include "grid/flood_fill.h"
 #include "grid/volume_select.h"
+#include "mesh/surface_index.h"
 #include "pipeline/stage_params.h"
 #include "pipeline/stages.h"
 
@@ -59,7 +60,12 @@ void choose_volume(WrapRun& run) {
   if (request.gap_closure > 0 || !request.seeds.empty()) run.index();
   grid::VolumeSelection sel = grid::select_volume(
       *run.refined.grid, request,
-      [&](const Vec3& p) { return std::sqrt(run.index_builder->get()->squared_distance(p)); }, run.progress);
+      [&](const Vec3& p) {
+        const mesh::SurfaceIndex::Hit hit = run.index_builder->get()->closest(p);
+        const double d = std::sqrt(hit.squared_distance);
+        return dot(p - hit.point, hit.normal) < 0 ? -d : d;
+      },
+      run.progress);
   run.report.volumes = sel.report;
   if (sel.leak.detected) fail_with_leak(run, sel.leak);
   run.label = sel.label;
