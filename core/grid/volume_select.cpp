@@ -158,13 +158,15 @@ LeakReport widest_path(const AdaptiveGrid& g, FreeLeaves& leaves, const std::vec
 // hole in a surface it would reach the surface's other face, and the hole is an opening. A
 // groove or a slot narrower than the gap that leads nowhere is wrapped as without gap closure.
 void reclaim_narrow_cells(AdaptiveGrid& g, const FreeLeaves& leaves, const std::vector<float>& clearance,
-                          int32_t chosen, bool chosen_in_front) {
+                          double half_gap, int32_t chosen, bool chosen_in_front) {
   const size_t n = leaves.size();
   auto narrow = [&](uint32_t i) { return g.get(leaves.level(i), leaves.coord(i)) == kNarrow; };
-  // Cells of a labelled volume beside a narrow cell: where the fronts start.
+  // Cells of a labelled volume beside a narrow cell: where the fronts start. (A cell farther
+  // from the input than the narrow ones by more than two of the largest cells is beside none.)
   std::vector<uint32_t> starts;
+  const float beyond = float(half_gap + 2 * g.cell_size(0));
   for (uint32_t i = 0; i < n; ++i) {
-    if (g.get(leaves.level(i), leaves.coord(i)) < 1) continue;
+    if (clearance[i] > beyond || g.get(leaves.level(i), leaves.coord(i)) < 1) continue;
     bool beside = false;
     for (int axis = 0; axis < 3 && !beside; ++axis)
       for (int dir = -1; dir <= 1 && !beside; dir += 2)
@@ -210,7 +212,7 @@ void reclaim_narrow_cells(AdaptiveGrid& g, const FreeLeaves& leaves, const std::
   for (uint32_t i : starts)
     taken[i] = 1, owner[i] = g.get(leaves.level(i), leaves.coord(i)), heap.push({clearance[i], i});
   for (uint32_t i = 0; i < n; ++i)
-    if (narrow(i) && clearance[i] > widest[i] + g.cell_size(leaves.level(i)))
+    if (clearance[i] < half_gap && clearance[i] > widest[i] + g.cell_size(leaves.level(i)) && narrow(i))
       taken[i] = 1, heap.push({clearance[i], i});
   while (!heap.empty()) {
     const float level = heap.top().first;
@@ -367,7 +369,7 @@ VolumeSelection select_volume(AdaptiveGrid& g, const VolumeRequest& req, const D
           });
     }
     if (req.choice != VolumeChoice::SeedPoints)
-      reclaim_narrow_cells(g, leaves, leaves.clearance(distance, progress), sel.label,
+      reclaim_narrow_cells(g, leaves, leaves.clearance(distance, progress), r, sel.label,
                            req.choice == VolumeChoice::Outside);
     for (uint32_t i = 0; i < leaves.size(); ++i)
       if (g.get(leaves.level(i), leaves.coord(i)) == sel.label) {
