@@ -154,27 +154,23 @@ LeakReport widest_path(const AdaptiveGrid& g, FreeLeaves& leaves, const std::vec
 // pockets behind a passage (narrow cells more open than the narrowest place on the widest way
 // to them from the chosen volume: a space between parts reached through a narrower gap); the
 // fronts meet at the narrowest places between them. The chosen volume's front keeps to its
-// own side of the input (in front of it for the outside, behind it for the inside): through a
-// hole in a surface it would reach the surface's other face, and the hole is an opening. A
-// groove or a slot narrower than the gap that leads nowhere is wrapped as without gap closure.
+// own side of the input: through a hole in a surface it would reach the surface's other face,
+// and the hole is an opening. A groove or a slot narrower than the gap that leads nowhere is
+// wrapped as without gap closure.
 void reclaim_narrow_cells(AdaptiveGrid& g, const FreeLeaves& leaves, const std::vector<float>& clearance,
-                          double half_gap, int32_t chosen, bool chosen_in_front) {
+                          double half_gap, int32_t chosen, bool outside) {
   const size_t n = leaves.size();
-  auto narrow = [&](uint32_t i) { return g.get(leaves.level(i), leaves.coord(i)) == kNarrow; };
-  // Cells of a labelled volume beside a narrow cell: where the fronts start. (A cell farther
-  // from the input than the narrow ones by more than two of the largest cells is beside none.)
-  std::vector<uint32_t> starts;
+  // The cells that take part: the narrow ones and the labelled ones beside them (none farther
+  // from the input than the narrow ones by more than two of the largest cells), with their
+  // values and their narrow face neighbours (read once, in parallel).
   const float beyond = float(half_gap + 2 * g.cell_size(0));
-  for (uint32_t i = 0; i < n; ++i) {
-    if (clearance[i] > beyond || g.get(leaves.level(i), leaves.coord(i)) < 1) continue;
-    bool beside = false;
-    for (int axis = 0; axis < 3 && !beside; ++axis)
-      for (int dir = -1; dir <= 1 && !beside; dir += 2)
-        g.for_each_face_neighbour(leaves.level(i), leaves.coord(i), axis, dir,
-                                  [&](const LeafRef& r) { beside = beside || (!r.outside_box && r.value == kNarrow); });
-    if (beside) starts.push_back(i);
-  }
-  auto for_narrow_neighbours = [&](uint32_t i, auto&& visit) {
+  std::vector<uint32_t> near;
+  for (uint32_t i = 0; i < n; ++i)
+    if (clearance[i] <= beyond) near.push_back(i);
+  std::vector<int32_t> value(near.size());
+  std::vector<uint32_t> first(near.size() + 1, 0), pos(n, UINT32_MAX);
+  for (uint32_t k = 0; k < near.size(); ++k) pos[near[k]] = k;
+  auto for_narrow_neighbours_in_grid = [&](uint32_t i, auto&& visit) {
     for (int axis = 0; axis < 3; ++axis)
       for (int dir = -1; dir <= 1; dir += 2)
         g.for_each_face_neighbour(leaves.level(i), leaves.coord(i), axis, dir, [&](const LeafRef& r) {
@@ -183,13 +179,47 @@ void reclaim_narrow_cells(AdaptiveGrid& g, const FreeLeaves& leaves, const std::
           if (j >= 0) visit(uint32_t(j));
         });
   };
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, near.size(), 256), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t k = r.begin(); k != r.end(); ++k) {
+      const uint32_t i = near[k];
+      value[k] = g.get(leaves.level(i), leaves.coord(i));
+      if (value[k] != kNarrow && value[k] < 1) continue;
+      uint32_t count = 0;
+      for_narrow_neighbours_in_grid(i, [&](uint32_t) { ++count; });
+      first[k + 1] = count;
+    }
+  });
+  for (size_t k = 0; k < near.size(); ++k) first[k + 1] += first[k];
+  std::vector<uint32_t> neighbours(first.back());
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, near.size(), 256), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t k = r.begin(); k != r.end(); ++k) {
+      uint32_t at = first[k];
+      if (at != first[k + 1]) for_narrow_neighbours_in_grid(near[k], [&](uint32_t j) { neighbours[at++] = j; });
+    }
+  });
+  auto narrow = [&](uint32_t i) { return value[pos[i]] == kNarrow; };
+  auto for_narrow_neighbours = [&](uint32_t i, auto&& visit) {
+    for (uint32_t k = first[pos[i]]; k < first[pos[i] + 1]; ++k) visit(neighbours[k]);
+  };
+  // Cells of a labelled volume beside a narrow cell: where the fronts start.
+  std::vector<uint32_t> starts;
+  for (uint32_t k = 0; k < near.size(); ++k)
+    if (value[k] >= 1 && first[k + 1] > first[k]) starts.push_back(near[k]);
+  // The chosen volume's side of the input: in front of it for the outside (which may get
+  // round to the back of open sheets, through their openings); for an enclosed volume, where
+  // most of its cells beside the narrow ones lie (behind the input inside a solid, in front of
+  // it in a cavity among parts).
+  size_t behind = 0, in_front = 0;
+  for (uint32_t i : starts)
+    if (value[pos[i]] == chosen) ++(leaves.behind()[i] ? behind : in_front);
+  const uint8_t other_side = !outside && behind > in_front ? 0 : 1;
   // The widest way from the chosen volume to each narrow cell: its narrowest clearance.
   std::vector<float> widest(n, -1.0f);
   {
     std::vector<uint8_t> done(n, 0);
     std::priority_queue<std::pair<float, uint32_t>> heap;
     for (uint32_t i : starts)
-      if (g.get(leaves.level(i), leaves.coord(i)) == chosen) widest[i] = clearance[i], heap.push({clearance[i], i});
+      if (value[pos[i]] == chosen) widest[i] = clearance[i], heap.push({clearance[i], i});
     while (!heap.empty()) {
       const float w = heap.top().first;
       const uint32_t i = heap.top().second;
@@ -209,10 +239,9 @@ void reclaim_narrow_cells(AdaptiveGrid& g, const FreeLeaves& leaves, const std::
   std::vector<int32_t> owner(n, kPocket);
   std::vector<uint8_t> taken(n, 0);
   std::priority_queue<std::pair<float, uint32_t>> heap;
-  for (uint32_t i : starts)
-    taken[i] = 1, owner[i] = g.get(leaves.level(i), leaves.coord(i)), heap.push({clearance[i], i});
-  for (uint32_t i = 0; i < n; ++i)
-    if (clearance[i] < half_gap && clearance[i] > widest[i] + g.cell_size(leaves.level(i)) && narrow(i))
+  for (uint32_t i : starts) taken[i] = 1, owner[i] = value[pos[i]], heap.push({clearance[i], i});
+  for (uint32_t i : near)
+    if (narrow(i) && clearance[i] > widest[i] + g.cell_size(leaves.level(i)))
       taken[i] = 1, heap.push({clearance[i], i});
   while (!heap.empty()) {
     const float level = heap.top().first;
@@ -222,7 +251,7 @@ void reclaim_narrow_cells(AdaptiveGrid& g, const FreeLeaves& leaves, const std::
     if (label == chosen && narrow(i)) g.set(leaves.level(i), leaves.coord(i), chosen);
     for_narrow_neighbours(i, [&](uint32_t j) {
       if (taken[j]) return;
-      if (label == chosen && leaves.behind()[j] == chosen_in_front) return;
+      if (label == chosen && leaves.behind()[j] == other_side) return;
       taken[j] = 1, owner[j] = label;
       heap.push({std::min(level, clearance[j]), j});
     });
@@ -368,9 +397,8 @@ VolumeSelection select_volume(AdaptiveGrid& g, const VolumeRequest& req, const D
             queue.push_back({uint32_t(j), f.source, f.source_half_diagonal});
           });
     }
-    if (req.choice != VolumeChoice::SeedPoints)
-      reclaim_narrow_cells(g, leaves, leaves.clearance(distance, progress), r, sel.label,
-                           req.choice == VolumeChoice::Outside);
+    reclaim_narrow_cells(g, leaves, leaves.clearance(distance, progress), r, sel.label,
+                         req.choice == VolumeChoice::Outside);
     for (uint32_t i = 0; i < leaves.size(); ++i)
       if (g.get(leaves.level(i), leaves.coord(i)) == sel.label) {
         double h = g.cell_size(leaves.level(i));
