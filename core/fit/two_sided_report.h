@@ -46,14 +46,16 @@ inline std::string describe_two_sided(const TwoSidedStats& s, const prep::Prepar
   }
   const Vec3& c = r.largest_opening_centre;
   n += std::snprintf(text + n, sizeof text - n,
-                     "; the volume gets in through %zu opening%s, the widest %.4g wide at (%.6g, %.6g, %.6g)",
-                     openings.size(), openings.size() == 1 ? "" : "s", widest->width, c[0], c[1], c[2]);
+                     "; the input has %zu opening%s, the widest %.4g wide at (%.6g, %.6g, %.6g)", openings.size(),
+                     openings.size() == 1 ? "" : "s", widest->width, c[0], c[1], c[2]);
   if (r.suggested_gap_closure > 0) {
     // Rounded up to two significant digits, in percent of the diagonal.
     double pct = 100 * r.suggested_gap_closure / in.diagonal;
     const double step = std::pow(10.0, std::floor(std::log10(pct)) - 1);
     pct = std::ceil(pct / step) * step;
-    std::snprintf(text + n, sizeof text - n, ": --gap-closure %.2g%% would wrap the outside only", pct);
+    // Only a promise about the openings: two-sided places elsewhere (pieces overlapping, a
+    // sheet inside the material) stay as they are.
+    std::snprintf(text + n, sizeof text - n, ": --gap-closure %.2g%% closes them", pct);
   } else {
     std::snprintf(text + n, sizeof text - n, ": an open sheet, which no gap closure closes");
   }
