@@ -10,7 +10,9 @@ model without any, the wrap with it should be the wrap without it. The count at 
 models whose mean and p95 with gap closure are within 10 % of those without. One run each,
 builds alternated per model: times are indicative only.
 """
-import argparse, json, os, subprocess, sys, tempfile, time
+import argparse, json, os, sys, tempfile
+
+from child_peak import run_measured
 
 root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 ap = argparse.ArgumentParser()
@@ -27,16 +29,14 @@ def run(binary, mesh, gap, tmp):
     cmd = [binary, "wrap", mesh, "-o", out, "--base-size", args.base_size, "--report", rep, "-q"]
     if gap:
         cmd += ["--gap-closure", gap]
-    start = time.monotonic()
-    done = subprocess.run(cmd, capture_output=True, text=True)
-    seconds = time.monotonic() - start
+    seconds, _, done = run_measured(cmd)
     if done.returncode != 0:
         return None
     r = json.load(open(rep))
     d, o = r["distance_output_to_input"], r["output"]
-    valid = o["closed"] and o["manifold"] and not o["self_intersecting"] and o["oriented"]
     return {"s": seconds, "mean": d["mean_percent_of_diagonal"], "p95": d["p95_percent_of_diagonal"],
-            "two": r.get("two_sided", {}).get("area_percent", 0.0), "volume": o["volume"], "valid": valid}
+            "two": r.get("two_sided", {}).get("area_percent", 0.0), "volume": o["volume"],
+            "valid": o["valid_closed_surface"]}
 
 
 def near(a, b):  # within 10 % of the wrap without gap closure
