@@ -402,8 +402,11 @@ RefineResult build_refined_grid(const prep::PreparedInput& in, const RefineCrite
           split = has_far_point(ct.tris, lo, h);
         if (!split && criteria && !near_points.empty()) split = near_a_point(lo, h, params.near_reach);
         bool lists = child_lists;
+        // A cell whose parent listed no triangles for it (no thin part near the parent) is not
+        // split for one: without its triangles its children would all count as free, and the
+        // volume outside would leak through them into a closed surface.
         if (thin_here && near_thin[i]) {
-          if (!split && level >= thin_from) split = true, thin_split[i] = 1;
+          if (!split && level >= thin_from && !ct.tris.empty()) split = true, thin_split[i] = 1;
           lists = lists || level + 1 < thin_to;
         }
         if (!split && contact && in_contact()) {
