@@ -10,11 +10,13 @@
 #include "check/distance_stats.h"
 #include "common/vec.h"
 #include "fit/features.h"
+#include "mesh/rough_edges.h"
 #include "mesh/short_feature_runs.h"
 #include "pipeline/stage_params.h"
 #include "prep/prepare.h"
 #include "test_meshes.h"
 #include "vdbwrap/check.h"
+#include "vdbwrap/io.h"
 #include "vdbwrap/wrap.h"
 
 using namespace vdbwrap;
@@ -131,8 +133,9 @@ TEST(NoiseFeatures, ARoughSphereIsNotTracedAsThousandsOfCreases) {
   const WrapResult r = wrap(rough, p);
   auto v = valid_closed_surface(r.surface);
   EXPECT_TRUE(v.ok) << v.why;
-  EXPECT_EQ(r.report.features.noise_sharp_edges, dropped);
-  EXPECT_EQ(r.report.features.curves, curves_after);
+  // At 2 % the runs leave few edges; the cell-scale test (below) may take some of those.
+  EXPECT_GE(r.report.features.noise_sharp_edges, dropped);
+  EXPECT_LE(r.report.features.curves, curves_after);
   // Nearer on average than the roughness itself (its standard deviation, 0.006).
   EXPECT_LT(r.report.output_to_input.mean, 0.006);
   EXPECT_LT(r.report.output_to_input.max, r.report.base_size);
@@ -199,4 +202,59 @@ TEST(NoiseFeatures, PartsThatCrossKeepTheirIntersectionLines) {
   ASSERT_GT(on_block.size(), 8u);
   const DistanceStats d = check::distances_to(on_block, r.surface, r.report.diagonal);
   EXPECT_LT(d.max, 0.05 * r.report.base_size);
+}
+
+// The same sphere at 1 %: its triangles are half a base cell, and its noise edges line up into
+// runs longer than a cell along the straight lines of its regular tessellation, which the
+// short-run test keeps (16.8k curves). Seen over a base cell on either hand the surface is
+// smooth there: those edges go too, and the wrap is near and valid.
+TEST(NoiseFeatures, ARoughSurfaceIsSmoothAtTheCellScale) {
+  const Mesh rough = rough_sphere(6, 0.006, 7);
+  prep::PreparedInput in = prep::prepare(rough, prep::PrepareParams{}, nullptr);
+  const double base = 0.01 * in.diagonal;
+  const std::vector<uint8_t> on_sharp = mesh::on_sharp_edge(in.mesh.points.size(), in.feature_edges);
+  const size_t runs =
+      mesh::drop_short_sharp_runs(in.mesh.points, in.feature_edges, pipeline::kShortestSharpRun * base, 30);
+  const size_t left = sharp(in.feature_edges);
+  const size_t curves_before = fit::build_feature_curves(in, 30).size();
+  const size_t smooth =
+      mesh::drop_edges_smooth_at_scale(in.mesh.points, in.mesh.triangles, in.feature_edges, on_sharp, base, 30);
+  const size_t curves_after = fit::build_feature_curves(in, 30).size();
+  std::printf(
+      "[rough sphere at 1 %%] sharp edges left by the runs %zu, smooth at the cell scale %zu; curves %zu -> %zu\n",
+      left, smooth, curves_before, curves_after);
+  EXPECT_GT(smooth, left * 3 / 4);
+  EXPECT_LT(curves_after, curves_before / 4);
+
+  WrapParams p;
+  p.base_size = Length{1, true};
+  const WrapResult r = wrap(rough, p);
+  auto v = valid_closed_surface(r.surface);
+  EXPECT_TRUE(v.ok) << v.why;
+  EXPECT_EQ(r.report.features.noise_sharp_edges, runs + smooth);
+  EXPECT_EQ(r.report.features.curves, curves_after);
+  EXPECT_LT(r.report.output_to_input.mean, 0.006);
+  EXPECT_LT(r.report.output_to_input.max, r.report.base_size);
+}
+
+// Real parts' creases are no noise at the cell scale, finely tessellated or not: CAD models of
+// the corpus at 1 %, their edges dropped as the wrap drops them (short runs first), keep every
+// sharp edge the runs leave. Without the roughness and face-count tests thingi_99865 lost
+// 1,265 (the creases of small pyramids whose flat faces are finely tessellated: six or seven
+// faces within a cell, their normals a little under 30 degrees apart when averaged).
+// octagonal_pocket and box.STL are not here: one edge between coplanar faces of the one, the
+// other's seams (walls 0.002 apart against a base cell of 0.11) go, as noise does.
+TEST(NoiseFeatures, CreasesOfRealPartsAreSharpAtTheCellScale) {
+  for (const char* name : {"fandisk.obj", "featuretype.STL", "angle_block.STL", "idler_riser.STL", "plate_holes.STL",
+                           "1002_tray_bottom.STL", "busted.STL", "fuze.obj", "thingi_99865.stl"}) {
+    prep::PreparedInput in = prep::prepare(io::read_mesh(data_path(name)), prep::PrepareParams{}, nullptr);
+    const double base = 0.01 * in.diagonal;
+    const std::vector<uint8_t> on_sharp = mesh::on_sharp_edge(in.mesh.points.size(), in.feature_edges);
+    mesh::drop_short_sharp_runs(in.mesh.points, in.feature_edges, pipeline::kShortestSharpRun * base, 30);
+    const size_t left = sharp(in.feature_edges);
+    ASSERT_GT(left, 0u) << name;
+    EXPECT_EQ(mesh::drop_edges_smooth_at_scale(in.mesh.points, in.mesh.triangles, in.feature_edges, on_sharp, base, 30),
+              0u)
+        << name << " (" << left << " sharp edges)";
+  }
 }

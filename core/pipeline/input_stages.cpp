@@ -2,6 +2,7 @@
 #include "check/diagnostics.h"
 #include "common/stage_timer.h"
 #include "mesh/narrow_strips.h"
+#include "mesh/rough_edges.h"
 #include "mesh/short_feature_runs.h"
 #include "mesh/small_rims.h"
 #include "pipeline/stage_params.h"
@@ -48,8 +49,15 @@ void prepare_input(WrapRun& run) {
                                                 std::to_string(kMostCellsAcross) + " cells across its diagonal)");
   // A rough surface's sharp edges (a scan's noise) form runs shorter than the wrap can follow:
   // they would become thousands of feature curves, each with nodes snapped and inserted.
+  const std::vector<uint8_t> on_sharp =
+      mesh::on_sharp_edge(run.prepared.mesh.points.size(), run.prepared.feature_edges);
   report.features.noise_sharp_edges = mesh::drop_short_sharp_runs(
       run.prepared.mesh.points, run.prepared.feature_edges, kShortestSharpRun * run.base, run.params.corner_angle_deg);
+  // The rest of a rough surface's sharp edges line up into longer runs (the straight lines of
+  // a regular tessellation); seen over a base cell on either hand, the surface is smooth there.
+  report.features.noise_sharp_edges +=
+      mesh::drop_edges_smooth_at_scale(run.prepared.mesh.points, run.prepared.mesh.triangles,
+                                       run.prepared.feature_edges, on_sharp, run.base, run.params.feature_angle_deg);
   // Where rough sheets cross, so do their self-intersection lines, in short runs just as dense.
   {
     std::vector<Vec3> ends;

@@ -1,0 +1,102 @@
+#!/usr/bin/env python3
+"""Rough scans whose noise is as coarse as their triangles: the inputs of
+bench/results/2026-11-27-rough-scans.md.
+
+Usage: bench/make_rough_scans.py OUT_DIR
+Writes (binary STL):
+- range_scan_10.stl, range_scan_30.stl, range_scan_45.stl: a bumpy unit sphere on a regular
+  latitude-longitude grid of 400 x 260 (207k triangles, edges about half a base cell at 1 %),
+  every vertex moved at random by up to 10, 30 or 45 % of an edge in each coordinate, as a range
+  scanner's grid of depth samples: folds over the feature angle at almost every edge, lined up
+  along the grid's straight lines, and self-intersections; range_scan_45 keeps the poles'
+  duplicated vertices apart (two small holes);
+- rough_closed_5.stl, rough_closed_6.stl: an icosphere of 20k or 82k triangles whose vertices'
+  coordinates are each scaled by 1 +- up to 5 or 2 % (a watertight reconstruction of a rough
+  scan): the closed surface whose thin bumps let the outside into it before 2026-11-27.
+Pure Python, deterministic.
+"""
+import math
+import os
+import random
+import sys
+
+from mesh_files import write_stl
+
+
+def bumpy_sphere(cols, rows, amp, weld_poles=True):
+    pts = []
+    for j in range(rows + 1):
+        ph = math.pi * j / rows
+        ring = 1 if weld_poles and j in (0, rows) else cols
+        for i in range(ring):
+            th = 2 * math.pi * i / cols
+            r = 1 + amp * math.sin(5 * th) * math.sin(4 * ph)
+            pts.append((r * math.sin(ph) * math.cos(th), r * math.sin(ph) * math.sin(th), r * math.cos(ph)))
+
+    def at(i, j):
+        if weld_poles and j == 0:
+            return 0
+        if weld_poles and j == rows:
+            return len(pts) - 1
+        return (1 if weld_poles else 0) + (j - (1 if weld_poles else 0)) * cols + (i % cols)
+
+    tris = []
+    for j in range(rows):
+        for i in range(cols):
+            a, b, c, d = at(i, j), at(i + 1, j), at(i + 1, j + 1), at(i, j + 1)
+            if j > 0:
+                tris.append((a, c, b))
+            if j < rows - 1:
+                tris.append((a, d, c))
+    return pts, tris
+
+
+def icosphere(level):
+    t = (1 + 5 ** 0.5) / 2
+    pts = [(-1, t, 0), (1, t, 0), (-1, -t, 0), (1, -t, 0), (0, -1, t), (0, 1, t), (0, -1, -t), (0, 1, -t),
+           (t, 0, -1), (t, 0, 1), (-t, 0, -1), (-t, 0, 1)]
+    pts = [tuple(c / math.sqrt(sum(x * x for x in p)) for c in p) for p in pts]
+    faces = [(0, 11, 5), (0, 5, 1), (0, 1, 7), (0, 7, 10), (0, 10, 11), (1, 5, 9), (5, 11, 4), (11, 10, 2),
+             (10, 7, 6), (7, 1, 8), (3, 9, 4), (3, 4, 2), (3, 2, 6), (3, 6, 8), (3, 8, 9), (4, 9, 5), (2, 4, 11),
+             (6, 2, 10), (8, 6, 7), (9, 8, 1)]
+    for _ in range(level):
+        mid = {}
+
+        def middle(a, b):
+            key = (min(a, b), max(a, b))
+            if key not in mid:
+                p = [(x + y) / 2 for x, y in zip(pts[a], pts[b])]
+                n = math.sqrt(sum(c * c for c in p))
+                pts.append(tuple(c / n for c in p))
+                mid[key] = len(pts) - 1
+            return mid[key]
+
+        nxt = []
+        for a, b, c in faces:
+            ab, bc, ca = middle(a, b), middle(b, c), middle(c, a)
+            nxt += [(a, ab, ca), (b, bc, ab), (c, ca, bc), (ab, bc, ca)]
+        faces = nxt
+    return pts, faces
+
+
+def main():
+    out = sys.argv[1]
+    os.makedirs(out, exist_ok=True)
+    edge = 2 * math.pi / 400
+    for share, weld in ((10, True), (30, True), (45, False)):
+        rng = random.Random(share)
+        pts, tris = bumpy_sphere(400, 260, 0.05, weld)
+        e = share / 100 * edge
+        pts = [tuple(c + rng.uniform(-e, e) for c in p) for p in pts]
+        write_stl(f"{out}/range_scan_{share}.stl", pts, tris)
+        print(f"range_scan_{share}.stl: {len(tris)} triangles")
+    for level, amp in ((5, 0.05), (6, 0.02)):
+        rng = random.Random(level)
+        pts, tris = icosphere(level)
+        pts = [tuple(c * (1 + rng.uniform(-amp, amp)) for c in p) for p in pts]
+        write_stl(f"{out}/rough_closed_{level}.stl", pts, tris)
+        print(f"rough_closed_{level}.stl: {len(tris)} triangles")
+
+
+if __name__ == "__main__":
+    main()
