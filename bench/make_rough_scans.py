@@ -20,6 +20,7 @@ import os
 import random
 import sys
 
+from make_scan_classes import icosphere
 from mesh_files import write_stl
 
 
@@ -49,34 +50,6 @@ def bumpy_sphere(cols, rows, amp, weld_poles=True):
             if j < rows - 1:
                 tris.append((a, d, c))
     return pts, tris
-
-
-def icosphere(level):
-    t = (1 + 5 ** 0.5) / 2
-    pts = [(-1, t, 0), (1, t, 0), (-1, -t, 0), (1, -t, 0), (0, -1, t), (0, 1, t), (0, -1, -t), (0, 1, -t),
-           (t, 0, -1), (t, 0, 1), (-t, 0, -1), (-t, 0, 1)]
-    pts = [tuple(c / math.sqrt(sum(x * x for x in p)) for c in p) for p in pts]
-    faces = [(0, 11, 5), (0, 5, 1), (0, 1, 7), (0, 7, 10), (0, 10, 11), (1, 5, 9), (5, 11, 4), (11, 10, 2),
-             (10, 7, 6), (7, 1, 8), (3, 9, 4), (3, 4, 2), (3, 2, 6), (3, 6, 8), (3, 8, 9), (4, 9, 5), (2, 4, 11),
-             (6, 2, 10), (8, 6, 7), (9, 8, 1)]
-    for _ in range(level):
-        mid = {}
-
-        def middle(a, b):
-            key = (min(a, b), max(a, b))
-            if key not in mid:
-                p = [(x + y) / 2 for x, y in zip(pts[a], pts[b])]
-                n = math.sqrt(sum(c * c for c in p))
-                pts.append(tuple(c / n for c in p))
-                mid[key] = len(pts) - 1
-            return mid[key]
-
-        nxt = []
-        for a, b, c in faces:
-            ab, bc, ca = middle(a, b), middle(b, c), middle(c, a)
-            nxt += [(a, ab, ca), (b, bc, ab), (c, ca, bc), (ab, bc, ca)]
-        faces = nxt
-    return pts, faces
 
 
 def main():

@@ -40,15 +40,16 @@ Mesh rough_sphere(int level, double amplitude, uint32_t seed) {
   return m;
 }
 
-// The wrap at 2 %, checked valid.
-WrapResult valid_wrap_at_2_percent(const Mesh& m) {
+// The wrap at `percent` of the diagonal, checked valid.
+WrapResult valid_wrap(const Mesh& m, double percent) {
   WrapParams p;
-  p.base_size = Length{2, true};
+  p.base_size = Length{percent, true};
   WrapResult r = wrap(m, p);
   auto v = valid_closed_surface(r.surface);
   EXPECT_TRUE(v.ok) << v.why;
   return r;
 }
+WrapResult valid_wrap_at_2_percent(const Mesh& m) { return valid_wrap(m, 2); }
 
 }  // namespace
 
@@ -128,11 +129,7 @@ TEST(NoiseFeatures, ARoughSphereIsNotTracedAsThousandsOfCreases) {
   EXPECT_GT(dropped, sharp_before / 2);
   EXPECT_LT(curves_after, curves_before / 4);
 
-  WrapParams p;
-  p.base_size = Length{2, true};
-  const WrapResult r = wrap(rough, p);
-  auto v = valid_closed_surface(r.surface);
-  EXPECT_TRUE(v.ok) << v.why;
+  const WrapResult r = valid_wrap(rough, 2);
   // At 2 % the runs leave few edges; the cell-scale test (below) may take some of those.
   EXPECT_GE(r.report.features.noise_sharp_edges, dropped);
   EXPECT_LE(r.report.features.curves, curves_after);
@@ -226,11 +223,7 @@ TEST(NoiseFeatures, ARoughSurfaceIsSmoothAtTheCellScale) {
   EXPECT_GT(smooth, left * 3 / 4);
   EXPECT_LT(curves_after, curves_before / 4);
 
-  WrapParams p;
-  p.base_size = Length{1, true};
-  const WrapResult r = wrap(rough, p);
-  auto v = valid_closed_surface(r.surface);
-  EXPECT_TRUE(v.ok) << v.why;
+  const WrapResult r = valid_wrap(rough, 1);
   EXPECT_EQ(r.report.features.noise_sharp_edges, runs + smooth);
   EXPECT_EQ(r.report.features.curves, curves_after);
   EXPECT_LT(r.report.output_to_input.mean, 0.006);

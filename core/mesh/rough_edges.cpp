@@ -11,10 +11,10 @@
 namespace vdbwrap::mesh {
 
 namespace {
-constexpr double kCoherent = 0.7;   // a side's |sum of area normals| over its area, to count as smooth
+constexpr double kCoherent = 0.7;    // a side's |sum of area normals| over its area, to count as smooth
 constexpr size_t kFewestFaces = 12;  // faces within the radius to see the surface over a cell at all
 constexpr size_t kMostFaces = 256;   // faces a patch grows to: its normal has settled long before
-constexpr double kRough = 0.5;      // share of a patch's faces with a sharp edge at every corner
+constexpr double kRough = 0.5;       // share of a patch's faces with a sharp edge at every corner
 }  // namespace
 
 std::vector<uint8_t> on_sharp_edge(size_t points, const std::vector<FeatureEdge>& edges) {
@@ -25,8 +25,8 @@ std::vector<uint8_t> on_sharp_edge(size_t points, const std::vector<FeatureEdge>
 }
 
 size_t drop_edges_smooth_at_scale(const std::vector<Vec3>& points, const std::vector<Tri>& triangles,
-                                  std::vector<FeatureEdge>& edges, const std::vector<uint8_t>& on_sharp,
-                                  double radius, double feature_angle_deg) {
+                                  std::vector<FeatureEdge>& edges, const std::vector<uint8_t>& on_sharp, double radius,
+                                  double feature_angle_deg) {
   if (!(radius > 0)) return 0;
   size_t sharp = 0;
   for (const FeatureEdge& e : edges) sharp += e.kind == FeatureKind::Sharp;

@@ -27,7 +27,7 @@ std::vector<uint8_t> on_sharp_edge(size_t points, const std::vector<FeatureEdge>
 // big as the radius leave fewer than kFewestFaces around: a CAD model's creases stay. `edges`
 // keeps its order. Returns the number dropped.
 size_t drop_edges_smooth_at_scale(const std::vector<Vec3>& points, const std::vector<Tri>& triangles,
-                                  std::vector<FeatureEdge>& edges, const std::vector<uint8_t>& on_sharp,
-                                  double radius, double feature_angle_deg);
+                                  std::vector<FeatureEdge>& edges, const std::vector<uint8_t>& on_sharp, double radius,
+                                  double feature_angle_deg);
 
 }  // namespace vdbwrap::mesh
