@@ -10,6 +10,7 @@
 #include "check/distance_stats.h"
 #include "common/vec.h"
 #include "fit/features.h"
+#include "mesh/fold_crossings.h"
 #include "mesh/rough_edges.h"
 #include "mesh/short_feature_runs.h"
 #include "pipeline/stage_params.h"
@@ -209,13 +210,13 @@ TEST(NoiseFeatures, ARoughSurfaceIsSmoothAtTheCellScale) {
   const Mesh rough = rough_sphere(6, 0.006, 7);
   prep::PreparedInput in = prep::prepare(rough, prep::PrepareParams{}, nullptr);
   const double base = 0.01 * in.diagonal;
-  const std::vector<uint8_t> on_sharp = mesh::on_sharp_edge(in.mesh.points.size(), in.feature_edges);
+  const mesh::Roughness marks = mesh::roughness(in.mesh.points.size(), in.mesh.triangles, in.feature_edges);
   const size_t runs =
       mesh::drop_short_sharp_runs(in.mesh.points, in.feature_edges, pipeline::kShortestSharpRun * base, 30);
   const size_t left = sharp(in.feature_edges);
   const size_t curves_before = fit::build_feature_curves(in, 30).size();
   const size_t smooth =
-      mesh::drop_edges_smooth_at_scale(in.mesh.points, in.mesh.triangles, in.feature_edges, on_sharp, base, 30);
+      mesh::drop_edges_smooth_at_scale(in.mesh.points, in.mesh.triangles, in.feature_edges, marks, base, 30);
   const size_t curves_after = fit::build_feature_curves(in, 30).size();
   std::printf(
       "[rough sphere at 1 %%] sharp edges left by the runs %zu, smooth at the cell scale %zu; curves %zu -> %zu\n",
@@ -242,12 +243,88 @@ TEST(NoiseFeatures, CreasesOfRealPartsAreSharpAtTheCellScale) {
                            "1002_tray_bottom.STL", "busted.STL", "fuze.obj", "thingi_99865.stl"}) {
     prep::PreparedInput in = prep::prepare(io::read_mesh(data_path(name)), prep::PrepareParams{}, nullptr);
     const double base = 0.01 * in.diagonal;
-    const std::vector<uint8_t> on_sharp = mesh::on_sharp_edge(in.mesh.points.size(), in.feature_edges);
+    const mesh::Roughness marks = mesh::roughness(in.mesh.points.size(), in.mesh.triangles, in.feature_edges);
     mesh::drop_short_sharp_runs(in.mesh.points, in.feature_edges, pipeline::kShortestSharpRun * base, 30);
     const size_t left = sharp(in.feature_edges);
     ASSERT_GT(left, 0u) << name;
-    EXPECT_EQ(mesh::drop_edges_smooth_at_scale(in.mesh.points, in.mesh.triangles, in.feature_edges, on_sharp, base, 30),
+    EXPECT_EQ(mesh::drop_edges_smooth_at_scale(in.mesh.points, in.mesh.triangles, in.feature_edges, marks, base, 30),
               0u)
         << name << " (" << left << " sharp edges)";
   }
+}
+
+// A rough closed scan whose noise is as coarse as its faces (82k triangles, each coordinate
+// off by up to 4 %: faces half a base cell at 1 %, folded over every way and crossing the
+// faces around them). Its folds ran every way, many longer than a cell, and its crossings
+// were thousands of short lines too sparse to count as dense: 66k feature curves, 103k nodes
+// inserted, 155 s against alpha wrap's 3.3 s (bench/results/2026-11-27-coarse-noise.md). Such
+// a surface is cut up by noise: its sharp edges go, long or short, and so do the crossings of
+// faces within two rings of each other.
+TEST(NoiseFeatures, NoiseAsCoarseAsTheFacesIsNoCrease) {
+  const Mesh rough = jittered_icosphere(6, 0.04);
+  prep::PreparedInput in = prep::prepare(rough, prep::PrepareParams{}, nullptr);
+  const double base = 0.01 * in.diagonal;
+  const mesh::Roughness marks = mesh::roughness(in.mesh.points.size(), in.mesh.triangles, in.feature_edges);
+  mesh::drop_short_sharp_runs(in.mesh.points, in.feature_edges, pipeline::kShortestSharpRun * base, 30);
+  auto longer_than_a_cell = [&] {
+    size_t n = 0;
+    for (const auto& e : in.feature_edges)
+      n += e.kind == mesh::FeatureKind::Sharp && norm(in.mesh.points[e.b] - in.mesh.points[e.a]) > base;
+    return n;
+  };
+  const size_t left = sharp(in.feature_edges), long_left = longer_than_a_cell();
+  const size_t dropped =
+      mesh::drop_edges_smooth_at_scale(in.mesh.points, in.mesh.triangles, in.feature_edges, marks, base, 30);
+  std::printf("[coarse noise] sharp edges left by the runs %zu (%zu longer than a cell), dropped %zu, long left %zu\n",
+              left, long_left, dropped, longer_than_a_cell());
+  EXPECT_GT(dropped, left * 85 / 100);
+  EXPECT_LT(longer_than_a_cell(), long_left / 10);
+
+  // Its crossings are folds: the faces that cross lie within two rings of each other.
+  std::vector<std::pair<uint32_t, uint32_t>> pairs;
+  for (const auto& s : in.intersections) pairs.emplace_back(s.tri_a, s.tri_b);
+  ASSERT_GT(pairs.size(), 1000u);
+  const std::vector<uint8_t> fold = mesh::fold_crossings(in.mesh.points.size(), in.mesh.triangles, pairs);
+  EXPECT_GT(size_t(std::count(fold.begin(), fold.end(), 1)), pairs.size() * 95 / 100);
+
+  const WrapResult r = valid_wrap(rough, 1);
+  std::printf(
+      "[coarse noise at 1 %%] sharp edges %zu, curves %zu, crossings %zu of which noise %zu; mean %.5f max %.5f\n",
+      r.report.features.sharp_edges, r.report.features.curves, r.report.features.intersection_segments,
+      r.report.features.noise_intersection_segments, r.report.output_to_input.mean, r.report.output_to_input.max);
+  EXPECT_LT(r.report.features.curves, r.report.features.sharp_edges / 10);
+  EXPECT_GT(r.report.features.noise_intersection_segments, r.report.features.intersection_segments * 95 / 100);
+  EXPECT_LT(r.report.output_to_input.max, r.report.base_size);
+}
+
+// Two such spheres overlapping (an unmerged union of two rough scans): the faces of the one
+// crossing the other's are far apart on the surface, and their crossing is no fold.
+TEST(NoiseFeatures, RoughPartsThatCrossAreNoFold) {
+  Mesh m = jittered_icosphere(5, 0.04, 1);
+  const uint32_t first = uint32_t(m.triangles.size());
+  const Mesh other = jittered_icosphere(5, 0.04, 2, {1.2, 0, 0});
+  const uint32_t offset = uint32_t(m.points.size());
+  m.points.insert(m.points.end(), other.points.begin(), other.points.end());
+  for (const Tri& t : other.triangles) m.triangles.push_back({t[0] + offset, t[1] + offset, t[2] + offset});
+  const prep::PreparedInput in = prep::prepare(m, prep::PrepareParams{}, nullptr);
+  // Which sphere each prepared triangle came from.
+  std::vector<uint8_t> second(in.mesh.triangles.size(), 0);
+  for (size_t t = 0; t < in.input_to_mesh.size(); ++t)
+    if (in.input_to_mesh[t] != UINT32_MAX) second[in.input_to_mesh[t]] = t >= first;
+  std::vector<std::pair<uint32_t, uint32_t>> pairs;
+  for (const auto& s : in.intersections) pairs.emplace_back(s.tri_a, s.tri_b);
+  const std::vector<uint8_t> fold = mesh::fold_crossings(in.mesh.points.size(), in.mesh.triangles, pairs);
+  size_t between = 0, within = 0, folds_within = 0;
+  for (size_t i = 0; i < pairs.size(); ++i) {
+    if (second[pairs[i].first] != second[pairs[i].second]) {
+      ++between;
+      EXPECT_FALSE(fold[i]);
+    } else {
+      ++within, folds_within += fold[i];
+    }
+  }
+  std::printf("[two rough spheres] crossings between them %zu, within one %zu (folds %zu)\n", between, within,
+              folds_within);
+  EXPECT_GT(between, 50u);  // the circle where they cross, 5 units round, faces 0.04 across
+  EXPECT_GT(folds_within, within * 9 / 10);
 }

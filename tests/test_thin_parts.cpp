@@ -275,19 +275,14 @@ TEST(ThinParts, SmallPiecesAreWrappedClose) {
   EXPECT_LT(dw.mean, with.report.diagonal / 3000);
 }
 
-// A rough closed scan: an icosphere whose vertices' coordinates are each scaled by 1 +- up to
-// 5 %, a third of a base cell at 1 %. Its bumps are thin parts; cells beside them
-// whose parents had no thin part near were split with no triangles listed, so all their
-// children counted as free and the outside flowed in through them: the wrap lined the scan
-// from both sides (0 enclosed volumes, the output's volume 0.05 of the input's, 78 % of the area two-sided).
+// A rough closed scan: an icosphere of 82k triangles whose vertices' coordinates are each
+// scaled by 1 +- up to 4 %, noise as coarse as its faces (half a base cell at 1 %). Where its
+// folds still face away from each other across a part (most are taken for noise), cells
+// beside them whose parents had no thin part near were split with no triangles listed, so all
+// their children counted as free and the outside flowed in through them: the wrap lined the
+// scan from both sides (0 enclosed volumes, the output's volume 0.05 of the input's).
 TEST(ThinParts, ARoughClosedScanIsWrappedFromOutsideOnly) {
-  Mesh m = icosphere_mesh(1.0, 5);
-  uint64_t state = 1;
-  for (Vec3& p : m.points)
-    for (int k = 0; k < 3; ++k) {
-      state = state * 6364136223846793005ull + 1442695040888963407ull;  // a fixed sequence on every platform
-      p[k] *= 1 + 0.05 * (2 * (double(state >> 11) / double(1ull << 53)) - 1);
-    }
+  const Mesh m = jittered_icosphere(6, 0.04);
   WrapParams params;
   params.base_size = Length{1, true};
   const WrapResult r = wrap(m, params);
@@ -297,5 +292,7 @@ TEST(ThinParts, ARoughClosedScanIsWrappedFromOutsideOnly) {
   EXPECT_TRUE(r.report.volumes.encloses_volume);
   EXPECT_EQ(r.report.output.components, 1u);
   EXPECT_NEAR(r.report.output.volume, r.report.input.volume, 0.05 * r.report.input.volume);
-  EXPECT_LT(r.report.two_sided.area_fraction, 0.2);
+  // Nor does the report say so: nodes of the one sheet under the noise's bumps are no second
+  // sheet (it said 47 % of such a scan's area was wrapped from both sides).
+  EXPECT_LT(r.report.two_sided.area_fraction, 0.05);
 }

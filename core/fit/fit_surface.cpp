@@ -165,6 +165,16 @@ FittedSurface fit_to_input(const extract::LatticeSurface& surf, const grid::Adap
   // Each node's nearest triangle from its last projection: the next query for the node
   // (relaxing moves it a little) and the quads' diagonal choice start from it.
   std::vector<uint32_t> foot(n, UINT32_MAX);
+  // The lattice surface's normal at each node, the way its sheet faces.
+  std::vector<Vec3> facing(n, Vec3{0, 0, 0});
+  for (const auto& q : quads) {
+    const Vec3 a = cross(lattice[q[2]] - lattice[q[0]], lattice[q[3]] - lattice[q[1]]);
+    for (uint32_t v : q) facing[v] = facing[v] + a;
+  }
+  for (const Tri& f : fans) {
+    const Vec3 a = area_vector(lattice[f[0]], lattice[f[1]], lattice[f[2]]);
+    for (uint32_t v : f) facing[v] = facing[v] + a;
+  }
   TwoSidedParams two_sided_params;
   two_sided_params.cell = hf;
   two_sided_params.offset = offset;
@@ -183,7 +193,7 @@ FittedSurface fit_to_input(const extract::LatticeSurface& surf, const grid::Adap
       dir = (lattice[i] - foot.point) * (1.0 / std::sqrt(foot.squared_distance));
     }
     Vec3 t = hit.point + dir * offset;
-    sheets.record(i, hit.point, hit.triangle, hit.normal, dir);
+    sheets.record(i, hit.point, hit.triangle, hit.normal, dir, facing[i]);
     if (norm(t - lattice[i]) > 3.0 * g.base_size()) t = lattice[i], sheets.forget(i);  // a wild move: keep it off
     return t;
   };

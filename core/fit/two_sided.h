@@ -34,8 +34,28 @@ struct TwoSidedStats {
   // Per input triangle: bit 1, a node projects to it from the side its normal points to; bit 2,
   // from the other side. Grown to the largest triangle hit.
   std::vector<uint8_t> triangle_sides;
-  std::unordered_map<GridKey, uint8_t, GridKeyHash> cell_sides;  // the same bits per cell of the foot
+  // Per cell of the feet, the ways off the input of the nodes of each side, summed.
+  struct Ways {
+    Vec3 off[2] = {{0, 0, 0}, {0, 0, 0}};
+  };
+  std::unordered_map<GridKey, Ways, GridKeyHash> cell_ways;
   double inv_cell = 1;
+
+  // Whether the feet within a cell of p (the 27 cells around) come from both sides, their
+  // ways off the input opposed. The side is judged against the normal of the triangle a node
+  // projects to; where noise folds a closed surface's triangles over, nodes all outside
+  // project to faces turned either way, but their ways off stay one way.
+  bool opposed_near(const Vec3& p) const {
+    const GridKey k = grid_key(p, inv_cell);
+    Vec3 a{0, 0, 0}, b{0, 0, 0};
+    for (int dx = -1; dx <= 1; ++dx)
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dz = -1; dz <= 1; ++dz) {
+          auto it = cell_ways.find({k.x + dx, k.y + dy, k.z + dz});
+          if (it != cell_ways.end()) a = a + it->second.off[0], b = b + it->second.off[1];
+        }
+    return dot(a, b) < 0;
+  }
 };
 
 class TwoSidedSheets {
@@ -46,36 +66,51 @@ class TwoSidedSheets {
         away_(nodes),
         triangle_(nodes, UINT32_MAX),
         side_(nodes, 0),
+        facing_(nodes, 0),
         raises_(nodes, 0),
         two_(nodes, 0) {}
 
   // Node i projects to `foot` on input triangle `triangle` (unit normal `normal`), its target
-  // `away` (unit, on the side of its lattice position) times the offset off it. Per node: thread safe.
-  void record(size_t i, const Vec3& foot, uint32_t triangle, const Vec3& normal, const Vec3& away) {
+  // `away` (unit, on the side of its lattice position) times the offset off it; `facing`: the
+  // wrap's normal at the node (its lattice surface's). Per node: thread safe.
+  void record(size_t i, const Vec3& foot, uint32_t triangle, const Vec3& normal, const Vec3& away, const Vec3& facing) {
     foot_[i] = foot;
     away_[i] = away;
     triangle_[i] = triangle;
     // Off a triangle's inside the way off is its normal; from an edge or corner it may lean.
     const double s = dot(away, normal);
     side_[i] = s > p_.clear_side_cos ? 1 : s < -p_.clear_side_cos ? 2 : 0;
+    const double f = dot(away, facing);
+    facing_[i] = f > 0 ? 1 : f < 0 ? 2 : 0;
   }
   // The node keeps no projected target (it stays at its lattice position, or was snapped).
   void forget(size_t i) { triangle_[i] = UINT32_MAX, side_[i] = 0; }
 
-  // Marks the nodes whose foot has a foot of the other side within a cell. Call once, after
-  // every record().
+  // Marks the nodes whose foot has feet of the other side within a cell, their ways off opposed.
+  // Call once, after every record().
   void classify() {
     stats_.inv_cell = 1.0 / p_.cell;
-    auto& cells = stats_.cell_sides;
+    // A sheet of the wrap faces one way relative to its way off the input on every side (into
+    // the chosen volume). A node whose way off is against its sheet's facing lies under the
+    // input (a sheet passing through a rough surface's bumps, its nodes under a bump), where
+    // the triangle's side says nothing of a second sheet.
+    size_t with = 0, against = 0;
+    for (size_t i = 0; i < foot_.size(); ++i)
+      if (side_[i]) with += facing_[i] == 1, against += facing_[i] == 2;
+    const uint8_t under = with >= against ? 2 : 1;
+    for (size_t i = 0; i < foot_.size(); ++i)
+      if (facing_[i] == under) side_[i] = 0;
+    auto& cells = stats_.cell_ways;
     for (size_t i = 0; i < foot_.size(); ++i) {
       if (!side_[i]) continue;
-      cells[grid_key(foot_[i], stats_.inv_cell)] |= side_[i];
+      Vec3& off = cells[grid_key(foot_[i], stats_.inv_cell)].off[side_[i] - 1];
+      off = off + away_[i];
       if (triangle_[i] >= stats_.triangle_sides.size()) stats_.triangle_sides.resize(triangle_[i] + 1, 0);
       stats_.triangle_sides[triangle_[i]] |= side_[i];
     }
     for (size_t i = 0; i < foot_.size(); ++i) {
       if (!side_[i]) continue;
-      two_[i] = (sides_near(foot_[i]) & (3 - side_[i])) != 0;
+      two_[i] = stats_.opposed_near(foot_[i]);
       stats_.nodes += two_[i];
     }
   }
@@ -83,7 +118,7 @@ class TwoSidedSheets {
   // Do feet of both sides lie within a cell of most of these points? (After classify().)
   bool two_sided_along(const std::vector<Vec3>& points) const {
     size_t both = 0;
-    for (const Vec3& q : points) both += sides_near(q) == 3;
+    for (const Vec3& q : points) both += stats_.opposed_near(q);
     return 2 * both > points.size();
   }
 
@@ -99,28 +134,15 @@ class TwoSidedSheets {
   TwoSidedStats take_stats() { return std::move(stats_); }
 
  private:
-  // The sides of the feet in the cells around p.
-  uint8_t sides_near(const Vec3& p) const {
-    const GridKey k = grid_key(p, stats_.inv_cell);
-    uint8_t bits = 0;
-    for (int dx = -1; dx <= 1; ++dx)
-      for (int dy = -1; dy <= 1; ++dy)
-        for (int dz = -1; dz <= 1; ++dz) {
-          auto it = stats_.cell_sides.find({k.x + dx, k.y + dy, k.z + dz});
-          if (it != stats_.cell_sides.end()) bits |= it->second;
-        }
-    return bits;
-  }
-
   TwoSidedParams p_;
   std::vector<Vec3> foot_, away_;
   std::vector<uint32_t> triangle_;
-  std::vector<uint8_t> side_, raises_, two_;
+  std::vector<uint8_t> side_, facing_, raises_, two_;
   TwoSidedStats stats_;
 };
 
 // The share of the input's area wrapped from both sides: triangles that nodes of both sides
-// project to, or whose centroid has feet of both sides within a cell.
+// project to, or whose centroid has feet of both sides within a cell, their ways off opposed.
 inline double two_sided_area_fraction(const TwoSidedStats& s, const std::vector<Vec3>& points,
                                       const std::vector<Tri>& triangles) {
   // The lookups in parallel (seconds on millions of triangles), the sums in order: the same
@@ -129,15 +151,8 @@ inline double two_sided_area_fraction(const TwoSidedStats& s, const std::vector<
   tbb::parallel_for(tbb::blocked_range<size_t>(0, triangles.size(), 4096), [&](const tbb::blocked_range<size_t>& r) {
     for (size_t t = r.begin(); t != r.end(); ++t) {
       const Vec3 &a = points[triangles[t][0]], &b = points[triangles[t][1]], &c = points[triangles[t][2]];
-      uint8_t bits = t < s.triangle_sides.size() ? s.triangle_sides[t] : 0;
-      const GridKey k = grid_key((a + b + c) * (1.0 / 3.0), s.inv_cell);
-      for (int dx = -1; dx <= 1 && bits != 3; ++dx)
-        for (int dy = -1; dy <= 1 && bits != 3; ++dy)
-          for (int dz = -1; dz <= 1 && bits != 3; ++dz) {
-            auto it = s.cell_sides.find({k.x + dx, k.y + dy, k.z + dz});
-            if (it != s.cell_sides.end()) bits |= it->second;
-          }
-      both_sides[t] = bits == 3;
+      both_sides[t] =
+          (t < s.triangle_sides.size() && s.triangle_sides[t] == 3) || s.opposed_near((a + b + c) * (1.0 / 3.0));
     }
   });
   double both = 0, all = 0;

@@ -1,9 +1,22 @@
 #include "grid/thin_parts.h"
 
+#include "mesh/rough_edges.h"
+
 #include <algorithm>
 #include <cmath>
 
 namespace vdbwrap::grid {
+
+namespace {
+// Faces meeting at a corner are a fold (a spike of a rough surface, a fin's ridge), not two
+// sides of a part across its solid: a rod's sides are apart all round.
+bool share_corner(const Tri& a, const Tri& b) {
+  for (uint32_t u : a)
+    for (uint32_t v : b)
+      if (u == v) return true;
+  return false;
+}
+}  // namespace
 
 double thinnest_part(const prep::PreparedInput& in, const std::vector<uint32_t>& cell_tris, const Vec3& centre,
                      double within) {
@@ -14,6 +27,9 @@ double thinnest_part(const prep::PreparedInput& in, const std::vector<uint32_t>&
   for (uint32_t t : cell_tris)
     if (in.closed_piece[t] != mesh::kOpenPiece) best = std::min(best, double(in.closed_piece_size[in.closed_piece[t]]));
   if (cell_tris.size() < 4) return best;
+  // Noise as coarse as the faces folds them every way, faces facing away from each other a
+  // fraction of a cell apart all over: a rough surface, no part.
+  if (!in.sharp_all_round.empty() && mesh::cut_up_by_noise(in.sharp_all_round, cell_tris)) return best;
   constexpr double kOpposite = -0.8;  // cos 143 degrees: a wedge's faces are not a part's two sides
   constexpr double kTurned = 0.7071;  // cos 45 degrees
   constexpr size_t kMostPairs = 64;   // the thinnest pairs weighed against each other
@@ -49,7 +65,8 @@ double thinnest_part(const prep::PreparedInput& in, const std::vector<uint32_t>&
       // Sides of one piece: between faces of two (solids welded along an edge, fanned round
       // it) the offsets measure no solid, only where the centre lies.
       for (; it != back.end() && f.offset + it->offset < within; ++it)
-        if (in.closed_piece[it->t] == in.closed_piece[f.t] && dot(in.normals[f.t], in.normals[it->t]) <= kOpposite) {
+        if (in.closed_piece[it->t] == in.closed_piece[f.t] && dot(in.normals[f.t], in.normals[it->t]) <= kOpposite &&
+            !share_corner(in.mesh.triangles[f.t], in.mesh.triangles[it->t])) {
           pairs.push_back({f.offset + it->offset, in.normals[f.t]});
           break;
         }

@@ -3,9 +3,11 @@
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 
+#include <algorithm>
 #include <cmath>
 
 #include "common/compressed_lists.h"
+#include "common/edge_key.h"
 #include "common/vec.h"
 
 namespace vdbwrap::mesh {
@@ -15,17 +17,42 @@ constexpr double kCoherent = 0.7;    // a side's |sum of area normals| over its 
 constexpr size_t kFewestFaces = 12;  // faces within the radius to see the surface over a cell at all
 constexpr size_t kMostFaces = 256;   // faces a patch grows to: its normal has settled long before
 constexpr double kRough = 0.5;       // share of a patch's faces with a sharp edge at every corner
+constexpr double kFolded = 0.2;      // share of a patch's faces with every edge sharp, cut up by noise
 }  // namespace
 
-std::vector<uint8_t> on_sharp_edge(size_t points, const std::vector<FeatureEdge>& edges) {
-  std::vector<uint8_t> on(points, 0);
+Roughness roughness(size_t points, const std::vector<Tri>& triangles, const std::vector<FeatureEdge>& edges) {
+  Roughness out;
+  out.on_sharp.assign(points, 0);
+  std::vector<uint64_t> sharp;
   for (const FeatureEdge& e : edges)
-    if (e.kind == FeatureKind::Sharp) on[e.a] = on[e.b] = 1;
-  return on;
+    if (e.kind == FeatureKind::Sharp) {
+      out.on_sharp[e.a] = out.on_sharp[e.b] = 1;
+      sharp.push_back(edge_key(e.a, e.b));
+    }
+  std::sort(sharp.begin(), sharp.end());
+  out.sharp_all_round.assign(triangles.size(), 0);
+  if (sharp.empty()) return out;
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, triangles.size(), 4096), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t t = r.begin(); t != r.end(); ++t) {
+      const Tri& f = triangles[t];
+      bool all = true;
+      for (int k = 0; k < 3 && all; ++k)
+        all = std::binary_search(sharp.begin(), sharp.end(), edge_key(f[k], f[(k + 1) % 3]));
+      out.sharp_all_round[t] = all;
+    }
+  });
+  return out;
+}
+
+bool cut_up_by_noise(const std::vector<uint8_t>& sharp_all_round, const std::vector<uint32_t>& faces) {
+  if (faces.size() < kFewestFaces) return false;
+  size_t folded = 0;
+  for (uint32_t t : faces) folded += sharp_all_round[t];
+  return double(folded) >= kFolded * double(faces.size());
 }
 
 size_t drop_edges_smooth_at_scale(const std::vector<Vec3>& points, const std::vector<Tri>& triangles,
-                                  std::vector<FeatureEdge>& edges, const std::vector<uint8_t>& on_sharp, double radius,
+                                  std::vector<FeatureEdge>& edges, const Roughness& roughness, double radius,
                                   double feature_angle_deg) {
   if (!(radius > 0)) return 0;
   size_t sharp = 0;
@@ -54,8 +81,7 @@ size_t drop_edges_smooth_at_scale(const std::vector<Vec3>& points, const std::ve
     std::vector<uint32_t> queue, faces;
     for (size_t i = r.begin(); i != r.end(); ++i) {
       const FeatureEdge& e = edges[i];
-      // An edge longer than the radius is a line the wrap can follow, whatever lies around.
-      if (e.kind != FeatureKind::Sharp || norm2(points[e.b] - points[e.a]) > r2) continue;
+      if (e.kind != FeatureKind::Sharp) continue;
       faces.clear();
       for (uint32_t t : faces_at[e.a])
         for (uint32_t v : triangles[t])
@@ -71,7 +97,7 @@ size_t drop_edges_smooth_at_scale(const std::vector<Vec3>& points, const std::ve
       size_t rough = 0;
       auto all_sharp = [&](uint32_t t) {
         const Tri& f = triangles[t];
-        return on_sharp[f[0]] && on_sharp[f[1]] && on_sharp[f[2]];
+        return roughness.on_sharp[f[0]] && roughness.on_sharp[f[1]] && roughness.on_sharp[f[2]];
       };
       rough += all_sharp(faces[0]) + all_sharp(faces[1]);
       const uint32_t stamp = uint32_t(i + 1);
@@ -92,6 +118,13 @@ size_t drop_edges_smooth_at_scale(const std::vector<Vec3>& points, const std::ve
           }
       if (queue.size() < kFewestFaces) continue;  // faces as big as the radius: a CAD crease
       if (double(rough) < kRough * double(queue.size())) continue;
+      if (cut_up_by_noise(roughness.sharp_all_round, queue)) {
+        drop[i] = 1;
+        continue;
+      }
+      // Amid sides smooth but for the noise, an edge longer than the radius is a line the wrap
+      // can follow.
+      if (norm2(points[e.b] - points[e.a]) > r2) continue;
       const double l0 = norm(side[0]), l1 = norm(side[1]);
       if (l0 < kCoherent * area[0] || l1 < kCoherent * area[1]) continue;
       if (dot(side[0], side[1]) >= cos_limit * l0 * l1) drop[i] = 1;

@@ -16,9 +16,9 @@ namespace {
 constexpr double kDense = 2;  // cell lengths of short runs per cell over which they are noise
 
 // Per segment (a, b) over `points`, whether it lies in a short run in a dense cell (see the
-// header).
+// header); `fold` (optional, per segment): a short run of folds only is noise however sparse.
 std::vector<uint8_t> noise_runs(const std::vector<Vec3>& points, const std::vector<std::pair<uint32_t, uint32_t>>& segs,
-                                double shortest, double corner_angle_deg) {
+                                double shortest, double corner_angle_deg, const std::vector<uint8_t>* fold = nullptr) {
   std::vector<uint8_t> noise_segment(segs.size(), 0);
   if (!(shortest > 0) || segs.empty()) return noise_segment;
   const double cos_corner = std::cos(corner_angle_deg * M_PI / 180.0);
@@ -75,10 +75,14 @@ std::vector<uint8_t> noise_runs(const std::vector<Vec3>& points, const std::vect
   }
   // A short run goes where the cell of its first segment's middle holds more than kDense.
   std::vector<uint8_t> noise(run_length.size(), 0), decided(run_length.size(), 0);
+  std::vector<uint8_t> all_folds(run_length.size(), fold != nullptr);
+  if (fold)
+    for (size_t i = 0; i < segs.size(); ++i) all_folds[run_of[i]] &= (*fold)[i];
   for (size_t i = 0; i < segs.size(); ++i) {
     if (!short_run(i) || decided[run_of[i]]) continue;
     decided[run_of[i]] = 1;
-    noise[run_of[i]] = density[grid_key((points[segs[i].first] + points[segs[i].second]) * 0.5, inv_cell)] > kDense;
+    noise[run_of[i]] = all_folds[run_of[i]] ||
+                       density[grid_key((points[segs[i].first] + points[segs[i].second]) * 0.5, inv_cell)] > kDense;
   }
   for (size_t i = 0; i < segs.size(); ++i) noise_segment[i] = noise[run_of[i]];
   return noise_segment;
@@ -105,7 +109,7 @@ size_t drop_short_sharp_runs(const std::vector<Vec3>& points, std::vector<Featur
 }
 
 std::vector<uint8_t> short_line_runs(const std::vector<Vec3>& ends, double shortest, double corner_angle_deg,
-                                     double weld) {
+                                     double weld, const std::vector<uint8_t>* fold) {
   // The ends as points, merged by position (the two triangles of a pair give a line's pieces
   // the same ends up to rounding).
   std::vector<Vec3> points;
@@ -118,12 +122,13 @@ std::vector<uint8_t> short_line_runs(const std::vector<Vec3>& ends, double short
   };
   std::vector<std::pair<uint32_t, uint32_t>> segs;
   std::vector<uint32_t> seg_of;  // each line's segment, UINT32_MAX for a line shorter than the weld
+  std::vector<uint8_t> seg_fold;
   for (size_t i = 0; i + 1 < ends.size(); i += 2) {
     const uint32_t a = point(ends[i]), b = point(ends[i + 1]);
     seg_of.push_back(a == b ? UINT32_MAX : uint32_t(segs.size()));
-    if (a != b) segs.emplace_back(a, b);
+    if (a != b) segs.emplace_back(a, b), seg_fold.push_back(fold && (*fold)[i / 2]);
   }
-  const std::vector<uint8_t> noise = noise_runs(points, segs, shortest, corner_angle_deg);
+  const std::vector<uint8_t> noise = noise_runs(points, segs, shortest, corner_angle_deg, fold ? &seg_fold : nullptr);
   std::vector<uint8_t> out(seg_of.size(), 0);
   for (size_t i = 0; i < seg_of.size(); ++i) out[i] = seg_of[i] != UINT32_MAX && noise[seg_of[i]];
   return out;

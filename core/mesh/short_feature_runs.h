@@ -23,9 +23,12 @@ size_t drop_short_sharp_runs(const std::vector<Vec3>& points, std::vector<Featur
 // The same test for lines given by their ends, segment i from ends[2i] to ends[2i + 1], ends
 // within `weld` of each other one point: the self-intersection lines of rough sheets that cross
 // (an unmerged scan's overlapping views) meander in short runs as densely as a rough
-// surface's sharp edges, while parts that cross meet along long runs. Per segment, whether it
-// is noise.
+// surface's sharp edges, while parts that cross meet along long runs. `fold` (optional, per
+// segment): whether the segment is where a surface folded over crosses itself next to itself
+// (fold_crossings.h); a short run of such segments only is noise however sparse (a rough
+// surface's folds are scattered; a small part that crosses another meets it between faces far
+// apart on the surface). Per segment, whether it is noise.
 std::vector<uint8_t> short_line_runs(const std::vector<Vec3>& ends, double shortest, double corner_angle_deg,
-                                     double weld);
+                                     double weld, const std::vector<uint8_t>* fold = nullptr);
 
 }  // namespace vdbwrap::mesh

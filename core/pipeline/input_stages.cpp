@@ -1,6 +1,7 @@
 // Stages 0 and 1: the input's diagnosis and its preparation.
 #include "check/diagnostics.h"
 #include "common/stage_timer.h"
+#include "mesh/fold_crossings.h"
 #include "mesh/narrow_strips.h"
 #include "mesh/rough_edges.h"
 #include "mesh/short_feature_runs.h"
@@ -49,21 +50,26 @@ void prepare_input(WrapRun& run) {
                                                 std::to_string(kMostCellsAcross) + " cells across its diagonal)");
   // A rough surface's sharp edges (a scan's noise) form runs shorter than the wrap can follow:
   // they would become thousands of feature curves, each with nodes snapped and inserted.
-  const std::vector<uint8_t> on_sharp =
-      mesh::on_sharp_edge(run.prepared.mesh.points.size(), run.prepared.feature_edges);
+  mesh::Roughness rough =
+      mesh::roughness(run.prepared.mesh.points.size(), run.prepared.mesh.triangles, run.prepared.feature_edges);
   report.features.noise_sharp_edges = mesh::drop_short_sharp_runs(
       run.prepared.mesh.points, run.prepared.feature_edges, kShortestSharpRun * run.base, run.params.corner_angle_deg);
   // The rest of a rough surface's sharp edges line up into longer runs (the straight lines of
   // a regular tessellation); seen over a base cell on either hand, the surface is smooth there.
   report.features.noise_sharp_edges +=
       mesh::drop_edges_smooth_at_scale(run.prepared.mesh.points, run.prepared.mesh.triangles,
-                                       run.prepared.feature_edges, on_sharp, run.base, run.params.feature_angle_deg);
-  // Where rough sheets cross, so do their self-intersection lines, in short runs just as dense.
+                                       run.prepared.feature_edges, rough, run.base, run.params.feature_angle_deg);
+  run.prepared.sharp_all_round = std::move(rough.sharp_all_round);
+  // Where rough sheets cross, so do their self-intersection lines, in short runs just as dense;
+  // where a rough surface folds over, it crosses itself next to itself in short runs.
   {
     std::vector<Vec3> ends;
-    for (const auto& s : run.prepared.intersections) ends.push_back(s.a), ends.push_back(s.b);
+    std::vector<std::pair<uint32_t, uint32_t>> pairs;
+    for (const auto& s : run.prepared.intersections)
+      ends.push_back(s.a), ends.push_back(s.b), pairs.emplace_back(s.tri_a, s.tri_b);
+    const std::vector<uint8_t> fold = mesh::fold_crossings(prepared.mesh.points.size(), prepared.mesh.triangles, pairs);
     const std::vector<uint8_t> noise = mesh::short_line_runs(
-        ends, kShortestSharpRun * run.base, run.params.corner_angle_deg, kLineWeld * prepared.diagonal);
+        ends, kShortestSharpRun * run.base, run.params.corner_angle_deg, kLineWeld * prepared.diagonal, &fold);
     auto& lines = run.prepared.intersections;
     size_t kept = 0;
     for (size_t i = 0; i < lines.size(); ++i)

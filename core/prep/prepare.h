@@ -37,6 +37,10 @@ struct PreparedInput {
   std::vector<uint32_t> closed_piece;
   std::vector<float> closed_piece_size;  // per closed piece, the longest side of its bounding box
   std::vector<FeatureEdge> feature_edges;
+  // Per triangle, whether every edge of it was sharp before noise edges were dropped
+  // (mesh/rough_edges.h): the thin-part refinement takes the folds of a surface cut up by
+  // noise for no parts. Empty when unknown.
+  std::vector<uint8_t> sharp_all_round;
   std::vector<IntersectionSegment> intersections;
   // Pairs of mesh triangles that intersect, sorted: the pipeline's only search for them. The
   // segments above come from these, and so do the report's counts on the input (see

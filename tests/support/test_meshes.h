@@ -170,6 +170,22 @@ inline Mesh icosphere_mesh(double r, int level) {
   return m;
 }
 
+// An icosphere whose vertices' coordinates are each scaled by 1 +- up to `fraction`, from a
+// fixed sequence (the same on every platform), shifted by `centre`: a rough closed scan. At
+// level 6 and 4 %, noise as coarse as the faces: they fold over every way and cross their
+// neighbours.
+inline Mesh jittered_icosphere(int level, double fraction, uint64_t seed = 1, const Vec3& centre = {0, 0, 0}) {
+  Mesh m = icosphere_mesh(1.0, level);
+  uint64_t state = seed;
+  for (Vec3& p : m.points) {
+    for (int k = 0; k < 3; ++k) {
+      state = state * 6364136223846793005ull + 1442695040888963407ull;
+      p[k] = p[k] * (1 + fraction * (2 * (double(state >> 11) / double(1ull << 53)) - 1)) + centre[k];
+    }
+  }
+  return m;
+}
+
 // A unit icosphere (level 3) with one node pushed along the sphere past its neighbours: a
 // local fold, intersecting triangles that the intersection repair fixes.
 inline Mesh folded_icosphere() {
