@@ -12,7 +12,13 @@ Writes (binary STL):
   duplicated vertices apart (two small holes);
 - rough_closed_5.stl, rough_closed_6.stl: an icosphere of 20k or 82k triangles whose vertices'
   coordinates are each scaled by 1 +- up to 5 or 2 % (a watertight reconstruction of a rough
-  scan): the closed surface whose thin bumps let the outside into it before 2026-11-27.
+  scan): the closed surface whose thin bumps let the outside into it before 2026-11-27;
+- coarse_noise_2.stl, coarse_noise_3.stl, coarse_noise_4.stl: an icosphere of 82k triangles
+  (edges 0.02, half a base cell at 1 %) whose vertices each move by up to +-1, 1.5 or 2 % of
+  the radius in each coordinate: noise as coarse as the faces, folded over every way and
+  crossing the faces around them (bench/results/2026-11-27-coarse-noise.md);
+- two_rough_3.stl: two such spheres (+-1.5 %, radii 1 and 0.9, centres 1.2 apart) left
+  overlapping, an unmerged union of two rough scans.
 Pure Python, deterministic.
 """
 import math
@@ -52,6 +58,14 @@ def bumpy_sphere(cols, rows, amp, weld_poles=True):
     return pts, tris
 
 
+def jittered(level, centre, radius, seed, share):
+    """An icosphere, every coordinate moved by up to +-share/2 of the radius."""
+    rng = random.Random(seed)
+    pts, tris = icosphere(level)
+    pts = [tuple(centre[i] + radius * p[i] + share * radius * (rng.random() - 0.5) for i in range(3)) for p in pts]
+    return pts, tris
+
+
 def main():
     out = sys.argv[1]
     os.makedirs(out, exist_ok=True)
@@ -69,6 +83,15 @@ def main():
         pts = [tuple(c * (1 + rng.uniform(-amp, amp)) for c in p) for p in pts]
         write_stl(f"{out}/rough_closed_{level}.stl", pts, tris)
         print(f"rough_closed_{level}.stl: {len(tris)} triangles")
+    for share in (2, 3, 4):
+        pts, tris = jittered(6, (0, 0, 0), 1, 1, share / 100)
+        write_stl(f"{out}/coarse_noise_{share}.stl", pts, tris)
+        print(f"coarse_noise_{share}.stl: {len(tris)} triangles")
+    pts, tris = jittered(6, (0, 0, 0), 1, 1, 0.03)
+    more, more_tris = jittered(6, (1.2, 0.3, 0.1), 0.9, 2, 0.03)
+    tris = tris + [tuple(v + len(pts) for v in t) for t in more_tris]
+    write_stl(f"{out}/two_rough_3.stl", pts + more, tris)
+    print(f"two_rough_3.stl: {len(tris)} triangles")
 
 
 if __name__ == "__main__":
