@@ -29,7 +29,8 @@ double thinnest_part(const prep::PreparedInput& in, const std::vector<uint32_t>&
   if (cell_tris.size() < 4) return best;
   // Noise as coarse as the faces folds them every way, faces facing away from each other a
   // fraction of a cell apart all over: a rough surface, no part.
-  if (!in.sharp_all_round.empty() && mesh::cut_up_by_noise(in.sharp_all_round, cell_tris)) return best;
+  if (in.sharp_all_round.size() == in.mesh.triangles.size() && mesh::cut_up_by_noise(in.sharp_all_round, cell_tris))
+    return best;
   constexpr double kOpposite = -0.8;  // cos 143 degrees: a wedge's faces are not a part's two sides
   constexpr double kTurned = 0.7071;  // cos 45 degrees
   constexpr size_t kMostPairs = 64;   // the thinnest pairs weighed against each other
