@@ -328,3 +328,37 @@ TEST(NoiseFeatures, RoughPartsThatCrossAreNoFold) {
   EXPECT_GT(between, 50u);  // the circle where they cross, 5 units round, faces 0.04 across
   EXPECT_GT(folds_within, within * 9 / 10);
 }
+
+// A crease amid noise as coarse as the faces (a rough scan of a machined part) has a smooth
+// side on each hand at the cell scale: it stays. A unit cube with every face a 20 x 20 grid,
+// its faces all taken for noise (every corner on a sharp edge, every face sharp all round):
+// the cube's edges, 90 degrees between flat sides, are kept; with the sides' smoothness not
+// asked, all 240 went.
+TEST(NoiseFeatures, ACreaseWithSmoothSidesStaysAmidNoise) {
+  Mesh cube;
+  const int n = 20;
+  auto add_face = [&](const Vec3& o, const Vec3& u, const Vec3& v) {
+    const uint32_t first = uint32_t(cube.points.size());
+    for (int j = 0; j <= n; ++j)
+      for (int i = 0; i <= n; ++i) cube.points.push_back(o + u * (double(i) / n) + v * (double(j) / n));
+    for (int j = 0; j < n; ++j)
+      for (int i = 0; i < n; ++i) {
+        const uint32_t a = first + j * (n + 1) + i, b = a + 1, c = a + n + 1, d = c + 1;
+        cube.triangles.push_back({a, b, d});
+        cube.triangles.push_back({a, d, c});
+      }
+  };
+  add_face({0, 0, 0}, {0, 1, 0}, {1, 0, 0});  // z = 0, facing down
+  add_face({0, 0, 1}, {1, 0, 0}, {0, 1, 0});  // z = 1, facing up
+  add_face({0, 0, 0}, {1, 0, 0}, {0, 0, 1});  // y = 0
+  add_face({0, 1, 0}, {0, 0, 1}, {1, 0, 0});  // y = 1
+  add_face({0, 0, 0}, {0, 0, 1}, {0, 1, 0});  // x = 0
+  add_face({1, 0, 0}, {0, 1, 0}, {0, 0, 1});  // x = 1
+  prep::PreparedInput in = prep::prepare(cube, prep::PrepareParams{}, nullptr);
+  ASSERT_EQ(sharp(in.feature_edges), size_t(12 * n));
+  mesh::Roughness noise = mesh::roughness(in.mesh.points.size(), in.mesh.triangles, in.feature_edges);
+  std::fill(noise.on_sharp.begin(), noise.on_sharp.end(), 1);
+  std::fill(noise.sharp_all_round.begin(), noise.sharp_all_round.end(), 1);
+  EXPECT_EQ(mesh::drop_edges_smooth_at_scale(in.mesh.points, in.mesh.triangles, in.feature_edges, noise, 0.12, 30), 0u);
+  EXPECT_EQ(sharp(in.feature_edges), size_t(12 * n));
+}

@@ -118,15 +118,17 @@ size_t drop_edges_smooth_at_scale(const std::vector<Vec3>& points, const std::ve
           }
       if (queue.size() < kFewestFaces) continue;  // faces as big as the radius: a CAD crease
       if (double(rough) < kRough * double(queue.size())) continue;
-      if (cut_up_by_noise(roughness.sharp_all_round, queue)) {
+      const double l0 = norm(side[0]), l1 = norm(side[1]);
+      const bool smooth_sides = l0 >= kCoherent * area[0] && l1 >= kCoherent * area[1];
+      // Cut up by noise, the sides' normals scatter; a knurl's facets, sharp all round where
+      // its creases cross a fine grid, keep both sides smooth.
+      if (!smooth_sides && cut_up_by_noise(roughness.sharp_all_round, queue)) {
         drop[i] = 1;
         continue;
       }
       // Amid sides smooth but for the noise, an edge longer than the radius is a line the wrap
       // can follow.
-      if (norm2(points[e.b] - points[e.a]) > r2) continue;
-      const double l0 = norm(side[0]), l1 = norm(side[1]);
-      if (l0 < kCoherent * area[0] || l1 < kCoherent * area[1]) continue;
+      if (norm2(points[e.b] - points[e.a]) > r2 || !smooth_sides) continue;
       if (dot(side[0], side[1]) >= cos_limit * l0 * l1) drop[i] = 1;
     }
   });

@@ -29,8 +29,8 @@ Roughness roughness(size_t points, const std::vector<Tri>& triangles, const std:
 bool cut_up_by_noise(const std::vector<uint8_t>& sharp_all_round, const std::vector<uint32_t>& faces);
 
 // Drops each sharp edge (FeatureKind::Sharp with two faces) in rough surroundings that are
-// cut up by noise, and each one shorter than `radius` whose two sides are smooth and continue
-// each other over `radius`. The surroundings are the faces within `radius` of the edge's
+// cut up by noise where a side is not smooth, and each one shorter than `radius` whose two
+// sides are smooth and continue each other over `radius`. The surroundings are the faces within `radius` of the edge's
 // middle (grown from the edge's faces through shared corners); they are rough when over half
 // of them have every corner on a sharp edge (a scan's noise makes sharp edges at almost every
 // vertex; a finely tessellated part's creases, however close, leave most faces around them a
