@@ -17,7 +17,7 @@ constexpr double kCoherent = 0.7;    // a side's |sum of area normals| over its 
 constexpr size_t kFewestFaces = 12;  // faces within the radius to see the surface over a cell at all
 constexpr size_t kMostFaces = 256;   // faces a patch grows to: its normal has settled long before
 constexpr double kRough = 0.5;       // share of a patch's faces with a sharp edge at every corner
-constexpr double kFolded = 0.2;      // share of a patch's faces with every edge sharp, cut up by noise
+constexpr double kFolded = 0.1;      // share of a patch's faces with every edge sharp, cut up by noise
 }  // namespace
 
 Roughness roughness(size_t points, const std::vector<Tri>& triangles, const std::vector<FeatureEdge>& edges) {

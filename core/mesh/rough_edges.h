@@ -16,14 +16,14 @@ namespace vdbwrap::mesh {
 struct Roughness {
   std::vector<uint8_t> on_sharp;  // per point: a sharp edge ends there
   // Per triangle: every edge of it is sharp. Noise as coarse as a scan's faces folds them every
-  // way, a fifth of them or more at all three edges; a part's faces, however small, are flat
+  // way, a tenth of them or more at all three edges; a part's faces, however small, are flat
   // or curved faces cut into triangles (a box's quads, a cylinder's strips) with a smooth edge
   // inside each.
   std::vector<uint8_t> sharp_all_round;
 };
 Roughness roughness(size_t points, const std::vector<Tri>& triangles, const std::vector<FeatureEdge>& edges);
 
-// Whether the faces `faces` (at least a dozen) are a surface cut up by noise: a fifth or more
+// Whether the faces `faces` (at least a dozen) are a surface cut up by noise: a tenth or more
 // of them sharp all round (per triangle, as Roughness::sharp_all_round). No crease or part
 // there is one the wrap could follow.
 bool cut_up_by_noise(const std::vector<uint8_t>& sharp_all_round, const std::vector<uint32_t>& faces);
