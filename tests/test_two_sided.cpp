@@ -5,6 +5,7 @@
 
 #include <cmath>
 
+#include "check/distance_stats.h"
 #include "common/vec.h"
 #include "test_meshes.h"
 #include "vdbwrap/io.h"
@@ -145,4 +146,42 @@ TEST(TwoSided, TerrainSheetIsWrappedOnBothFaces) {
   EXPECT_GT(r.report.two_sided.area_fraction, 0.95);
   EXPECT_LT(r.report.nodes_held_back, r.report.nodes_projected / 50);
   EXPECT_LT(r.report.output_to_input.mean, 2e-4 * r.report.diagonal);
+}
+
+// Hair cards: open strips wrapped from both sides. The wrap passes around their rims, which the
+// tracing leaves to the projection; so does the node insertion (on a clump of 1,500 cards it
+// spent most of its time refused there, here 4,026 points refused and 47 nodes inserted).
+TEST(TwoSided, TheRimsOfTwoSidedSheetsAreLeftToTheProjection) {
+  Mesh cards;
+  for (int k = 0; k < 12; ++k) {
+    const double a = 2 * M_PI * k / 12;
+    const Vec3 out{std::cos(a), std::sin(a), 0}, side{-std::sin(a), std::cos(a), 0};
+    const uint32_t first = uint32_t(cards.points.size());
+    for (int i = 0; i <= 16; ++i) {  // a strip 0.1 wide bending down and out
+      const double s = i / 16.0;
+      const Vec3 c = out * (0.3 + 0.7 * s) + Vec3{0, 0, -0.8 * s * s};
+      cards.points.push_back(c - side * 0.05);
+      cards.points.push_back(c + side * 0.05);
+    }
+    for (uint32_t i = 0; i < 16; ++i) {
+      const uint32_t p = first + 2 * i;
+      cards.triangles.push_back({p, p + 2, p + 3});
+      cards.triangles.push_back({p, p + 3, p + 1});
+    }
+  }
+  const WrapResult r = wrap(cards, two_sided(true));
+  auto v = valid_closed_surface(r.surface);
+  ASSERT_TRUE(v.ok) << v.why;
+  EXPECT_GT(r.report.two_sided.area_fraction, 0.9);
+  EXPECT_GT(r.report.features.boundary_edges, 12u * 32);
+  EXPECT_EQ(r.report.features.points_missed, 0u);
+  EXPECT_EQ(r.report.features.nodes_inserted, 0u);
+  std::vector<Vec3> rims;
+  for (const Vec3& p : cards.points) rims.push_back(p);  // every point of a strip is on its rim
+  const DistanceStats d = check::distances_to(rims, r.surface, r.report.diagonal);
+  std::printf("[hair cards] rim to wrap: mean %.3f, max %.3f base cells\n", d.mean / r.report.base_size,
+              d.max / r.report.base_size);
+  // Nodes that all project onto a rim are held back, so the wrap passes around it a little off
+  // (0.39 base cells on average); the nodes inserted before left that the same to 0.1 %.
+  EXPECT_LT(d.mean, 0.5 * r.report.base_size);
 }

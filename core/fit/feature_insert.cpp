@@ -374,8 +374,16 @@ class Inserter {
     // The wrap passes half a base cell or more from the point and no edge within max_move took
     // it: where the wrap bridges a crease (a narrow groove oblique to the lattice takes no cell
     // near it), the edges beyond, out to far_reach, are tried too.
-    look_around(q, prm_.far_reach, scratch, false);
+    // The six nearest beyond r, looked for in widening boxes as above: the far box holds
+    // several times the wrap of the nearer ones, and most buried intersection lines (a dense
+    // clump of crossing leaves) came here.
     pl.read.add(box_around(q, prm_.far_reach));
+    for (const double wide : {1.25 * r, 1.5 * r, prm_.far_reach}) {
+      look_around(q, std::min(wide, prm_.far_reach), scratch, false);
+      if (wide >= prm_.far_reach ||
+          std::count_if(edges.begin(), edges.end(), [&](const Candidate& c) { return c.distance > r; }) >= 6)
+        break;
+    }
     try_nearest_edges(q, r, pl, scratch);
     return pl;
   }

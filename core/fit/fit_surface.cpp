@@ -200,6 +200,7 @@ FittedSurface fit_to_input(const extract::LatticeSurface& surf, const grid::Adap
   // A lattice node within the offset of the input stays where it is. (Asked as "is the input
   // that near?", which is cheap for so small a radius: the nearest point itself is needed only
   // for the others, from their smoothed positions.)
+  FittedSurface out;
   std::vector<Vec3> target(n);
   std::vector<uint8_t> on_input(n);
   tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 256), [&](const tbb::blocked_range<size_t>& r) {
@@ -213,7 +214,6 @@ FittedSurface fit_to_input(const extract::LatticeSurface& surf, const grid::Adap
   // Feature snapping: chains of wrap edges traced along the feature curves and moved onto
   // them; then the nodes around them relax onto the faces on either side (smoothing with
   // re-projection), the snapped nodes held fixed.
-  FittedSurface out;
   std::vector<uint8_t> snapped(n, 0);
   std::set<std::pair<uint32_t, uint32_t>> traced;
   sheets.classify();
@@ -221,9 +221,15 @@ FittedSurface fit_to_input(const extract::LatticeSurface& surf, const grid::Adap
   // traced there on either sheet hold the other sheet's nodes back. Those rims are left to the
   // projection.
   std::vector<FeatureCurve> one_sided_curves;
+  out.rim_of_two_sided_sheet.assign(curves.size(), 0);
   if (params.two_sided_sheets)
-    for (const FeatureCurve& c : curves)
-      if (!c.boundary || !sheets.two_sided_along(c.points)) one_sided_curves.push_back(c);
+    for (size_t ci = 0; ci < curves.size(); ++ci) {
+      const FeatureCurve& c = curves[ci];
+      if (c.boundary && sheets.two_sided_along(c.points))
+        out.rim_of_two_sided_sheet[ci] = 1;
+      else
+        one_sided_curves.push_back(c);
+    }
   const std::vector<FeatureCurve>& traced_curves = params.two_sided_sheets ? one_sided_curves : curves;
   if (!traced_curves.empty()) {
     if (progress)

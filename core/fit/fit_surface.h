@@ -28,6 +28,9 @@ struct FittedSurface {
   // left for the post-processing (remeshing, then intersection repair) to fix.
   bool valid = true;
   SnapStats snap;
+  // Per feature curve: the rim of a sheet wrapped from both sides, which the wrap passes
+  // around and which is left to the projection (neither traced nor given nodes).
+  std::vector<uint8_t> rim_of_two_sided_sheet;
 };
 
 // Offending triangles: those whose doubled area is below min_area2 when there are any (the

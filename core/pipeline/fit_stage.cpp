@@ -27,7 +27,14 @@ void insert_feature_nodes(WrapRun& run, const std::vector<fit::FeatureCurve>& cu
   StageTimer timer("insert feature nodes", run.report.stages);
   if (run.progress) run.progress->progress("project", 0.97, "inserting nodes where the wrap misses a feature curve");
   const fit::FeatureInsertParams fp = feature_insert_params(run.params, run.base, run.report.finest_size);
-  const auto fs = fit::insert_feature_nodes(run.fitted, curves, run.index(), run.prepared.origin, fp);
+  // The rims of sheets wrapped from both sides were left to the projection (the wrap passes
+  // around them): nodes inserted there were mostly refused, at most of the stage's time on a
+  // clump of hair cards or leaves.
+  const std::vector<uint8_t>& rim = run.fitted.rim_of_two_sided_sheet;
+  std::vector<fit::FeatureCurve> followed;
+  for (size_t i = 0; i < curves.size(); ++i)
+    if (i >= rim.size() || !rim[i]) followed.push_back(curves[i]);
+  const auto fs = fit::insert_feature_nodes(run.fitted, followed, run.index(), run.prepared.origin, fp);
   FeatureStats& features = run.report.features;
   features.points_missed = fs.samples_missed;
   features.nodes_inserted = fs.nodes_inserted;

@@ -3,6 +3,7 @@
 #include "common/stage_timer.h"
 #include "mesh/fold_crossings.h"
 #include "mesh/narrow_strips.h"
+#include "mesh/orient.h"
 #include "mesh/rough_edges.h"
 #include "mesh/short_feature_runs.h"
 #include "mesh/small_rims.h"
@@ -61,15 +62,26 @@ void prepare_input(WrapRun& run) {
                                        run.prepared.feature_edges, rough, run.base, run.params.feature_angle_deg);
   run.prepared.sharp_all_round = std::move(rough.sharp_all_round);
   // Where rough sheets cross, so do their self-intersection lines, in short runs just as dense;
-  // where a rough surface folds over, it crosses itself next to itself in short runs.
+  // where a rough surface folds over, it crosses itself next to itself in short runs; where
+  // open sheets cross in a clump, in runs as short as the sheets are wide.
   {
-    std::vector<Vec3> ends;
+    std::vector<Vec3> ends, sheet_ends;
+    std::vector<size_t> sheet_lines;
     std::vector<std::pair<uint32_t, uint32_t>> pairs;
-    for (const auto& s : run.prepared.intersections)
+    const std::vector<uint32_t>& piece = prepared.closed_piece;
+    auto open = [&](uint32_t t) { return t < piece.size() && piece[t] == mesh::kOpenPiece; };
+    for (size_t i = 0; i < run.prepared.intersections.size(); ++i) {
+      const auto& s = run.prepared.intersections[i];
       ends.push_back(s.a), ends.push_back(s.b), pairs.emplace_back(s.tri_a, s.tri_b);
+      if (open(s.tri_a) && open(s.tri_b))
+        sheet_ends.push_back(s.a), sheet_ends.push_back(s.b), sheet_lines.push_back(i);
+    }
     const std::vector<uint8_t> fold = mesh::fold_crossings(prepared.mesh.points.size(), prepared.mesh.triangles, pairs);
-    const std::vector<uint8_t> noise = mesh::short_line_runs(
-        ends, kShortestSharpRun * run.base, run.params.corner_angle_deg, kLineWeld * prepared.diagonal, &fold);
+    std::vector<uint8_t> noise = mesh::short_line_runs(ends, kShortestSharpRun * run.base, run.params.corner_angle_deg,
+                                                       kLineWeld * prepared.diagonal, &fold);
+    const std::vector<uint8_t> sheet_noise = mesh::short_line_runs(
+        sheet_ends, kShortestSheetCrossing * run.base, run.params.corner_angle_deg, kLineWeld * prepared.diagonal);
+    for (size_t k = 0; k < sheet_lines.size(); ++k) noise[sheet_lines[k]] |= sheet_noise[k];
     auto& lines = run.prepared.intersections;
     size_t kept = 0;
     for (size_t i = 0; i < lines.size(); ++i)

@@ -23,6 +23,11 @@ inline constexpr double kShortestSharpRun = 1.0;
 // Rims of open pieces and holes smaller than this many base cells across are no feature curves
 // (mesh/small_rims.h).
 inline constexpr double kSmallestRim = 3.0;
+// Where open sheets a few base cells across cross in a clump (leaves, hair cards, a scan's
+// overlapping views), their crossing lines are about as short as the sheets are wide: runs of
+// such lines shorter than this many base cells, many to a cell, are noise
+// (mesh/short_feature_runs.h), as short runs under kShortestSharpRun are everywhere.
+inline constexpr double kShortestSheetCrossing = 3.0;
 // Self-intersection line ends closer than this fraction of the diagonal are one point, as the
 // feature curves join them (fit/features.cpp).
 inline constexpr double kLineWeld = 1e-9;
