@@ -374,9 +374,9 @@ class Inserter {
     // The wrap passes half a base cell or more from the point and no edge within max_move took
     // it: where the wrap bridges a crease (a narrow groove oblique to the lattice takes no cell
     // near it), the edges beyond, out to far_reach, are tried too.
-    // The six nearest beyond r, looked for in widening boxes as above: the far box holds
-    // several times the wrap of the nearer ones, and most buried intersection lines (a dense
-    // clump of crossing leaves) came here.
+    // They are looked for in widening boxes, as above: the far box holds several times the
+    // wrap of the nearer ones, and a clump of crossing leaves sent its buried crossings here by
+    // the hundred thousand.
     pl.read.add(box_around(q, prm_.far_reach));
     for (const double wide : {1.25 * r, 1.5 * r, prm_.far_reach}) {
       look_around(q, std::min(wide, prm_.far_reach), scratch, false);

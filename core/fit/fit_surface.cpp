@@ -200,7 +200,6 @@ FittedSurface fit_to_input(const extract::LatticeSurface& surf, const grid::Adap
   // A lattice node within the offset of the input stays where it is. (Asked as "is the input
   // that near?", which is cheap for so small a radius: the nearest point itself is needed only
   // for the others, from their smoothed positions.)
-  FittedSurface out;
   std::vector<Vec3> target(n);
   std::vector<uint8_t> on_input(n);
   tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 256), [&](const tbb::blocked_range<size_t>& r) {
@@ -214,6 +213,7 @@ FittedSurface fit_to_input(const extract::LatticeSurface& surf, const grid::Adap
   // Feature snapping: chains of wrap edges traced along the feature curves and moved onto
   // them; then the nodes around them relax onto the faces on either side (smoothing with
   // re-projection), the snapped nodes held fixed.
+  FittedSurface out;
   std::vector<uint8_t> snapped(n, 0);
   std::set<std::pair<uint32_t, uint32_t>> traced;
   sheets.classify();
