@@ -386,6 +386,29 @@ TEST_F(FieldInputs, OpenScanWrapsWithEveryGapClosure) {
   }
 }
 
+// The inside of an open scan: the outside flows in through its base, and what is left are
+// pockets of the finest cells sealed along the scan's bumps (or pinched off by a gap closure),
+// none a base cell's volume. The report counted no enclosed volume, yet the wrap made one of
+// those pockets, a speck of 12 triangles, "the inside", with exit 0. Now a clear refusal.
+TEST_F(FieldInputs, TheInsideOfAnOpenScanIsRefusedNotASpeck) {
+  const Mesh scan = open_scan();
+  for (const char* gap : {"", "0.5%", "3%"}) {
+    SCOPED_TRACE(std::string("gap closure ") + gap);
+    WrapParams p;
+    p.base_size = Length::parse("1%");
+    p.volume = VolumeChoice::Inside;
+    if (*gap) p.gap_closure = Length::parse(gap);
+    try {
+      const WrapResult r = wrap(scan, p);
+      ADD_FAILURE() << "wrapped " << r.report.output.triangles << " triangles, volume " << r.report.output.volume
+                    << ", while the report counts " << r.report.volumes.enclosed_volumes << " enclosed volumes";
+    } catch (const Error& e) {
+      EXPECT_EQ(e.kind(), ErrorKind::WrapFailed);
+      EXPECT_NE(std::string(e.what()).find("encloses no volume"), std::string::npos) << e.what();
+    }
+  }
+}
+
 // Triangles overlapping one another many times over in one tilted plane (coplanar up to the
 // rounding of the tilt), as where two CAD parts share a slanted face: every crossing pair gave
 // an intersection line of rounding noise, thousands of feature curves, and the wrap did not
