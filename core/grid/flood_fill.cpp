@@ -121,12 +121,12 @@ Components label_components(AdaptiveGrid& g, const std::function<bool(int32_t)>&
   return comps;
 }
 
-int32_t largest_enclosed_label(const Components& comps, double whole_cell) {
+int32_t largest_enclosed_label(const Components& comps, double min_volume) {
   int32_t best = -1;
   double best_volume = 0;
   for (size_t i = 0; i < comps.count(); ++i)
     if (!comps.touches_outside[i] && comps.volume[i] > best_volume &&
-        (comps.holds_level0[i] || comps.volume[i] >= whole_cell)) {
+        (comps.holds_level0[i] || comps.volume[i] >= min_volume)) {
       best_volume = comps.volume[i];
       best = comps.first_label + int32_t(i);
     }

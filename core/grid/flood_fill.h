@@ -24,11 +24,9 @@ struct Components {
 Components label_components(AdaptiveGrid& grid, const std::function<bool(int32_t)>& member, int32_t first_label,
                             ProgressSink* progress = nullptr);
 
-// The label of the largest component that does not reach the box boundary, or -1. With
-// `whole_cell` (fine cells in a base cell), only components holding a base cell's volume (or
-// a base cell itself) count: free cells sealed along the input's edges, or a pocket a gap
-// closure pinched off, enclose nothing the user would call a volume.
-int32_t largest_enclosed_label(const Components& components, double whole_cell = 0);
+// The label of the largest component that does not reach the box boundary and holds a base
+// cell or at least `min_volume` fine cells, or -1.
+int32_t largest_enclosed_label(const Components& components, double min_volume = 0);
 
 // Labels the free cells and returns the label of the chosen volume: the outside (1), or the
 // largest component that does not reach the boundary. Throws Error(WrapFailed) when the

@@ -288,13 +288,11 @@ VolumeSelection select_volume(AdaptiveGrid& g, const VolumeRequest& req, const D
   const double hf = g.fine_size();
   const double fine_volume = hf * hf * hf;
   sel.report.free_volumes = comps.count();
-  // An enclosed volume counts when it holds a base cell's volume (or a base cell): faces lying
+  // An enclosed volume counts when it holds at least one whole base cell: faces lying
   // exactly on cell faces touch the cells on both sides and can seal slivers of finer free
-  // cells along edges, and a gap closure pinches small pockets off a scan's hollows, which
-  // enclose nothing the user would call a volume. The inside volume is chosen among these.
-  const double whole_cell = std::pow(double(g.fine_units(0)), 3);
+  // cells along edges, which enclose nothing the user would call a volume.
   for (size_t i = 0; i < comps.count(); ++i)
-    if (!comps.touches_outside[i] && (comps.holds_level0[i] || comps.volume[i] >= whole_cell)) {
+    if (!comps.touches_outside[i] && comps.holds_level0[i]) {
       ++sel.report.enclosed_volumes;
       sel.report.largest_enclosed = std::max(sel.report.largest_enclosed, comps.volume[i] * fine_volume);
     }
@@ -309,7 +307,9 @@ VolumeSelection select_volume(AdaptiveGrid& g, const VolumeRequest& req, const D
   if (req.choice == VolumeChoice::Outside) {
     chosen.push_back(1);
   } else if (req.choice == VolumeChoice::Inside) {
-    const int32_t best = largest_enclosed_label(comps, whole_cell);
+    // Not a pocket under a base cell's volume, sealed along an open scan's bumps or pinched
+    // off by a gap closure; a thin wall's material, all finer cells, is a volume.
+    const int32_t best = largest_enclosed_label(comps, std::pow(double(g.fine_units(0)), 3));
     if (best < 0)
       throw Error(ErrorKind::WrapFailed,
                   "the input encloses no volume at this base size" + gap_note +

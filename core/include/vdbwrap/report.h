@@ -65,7 +65,7 @@ struct FeatureStats {
 // What the flood fill found: does the input enclose anything at this cell size?
 struct VolumeReport {
   size_t free_volumes = 0;       // connected volumes of cells the input does not touch
-  size_t enclosed_volumes = 0;   // of those, the ones that do not reach the outside and hold a base cell's volume
+  size_t enclosed_volumes = 0;   // of those, the ones that do not reach the outside and hold a whole base cell
   double largest_enclosed = 0;   // model units cubed (cells, so approximate)
   bool encloses_volume = false;  // the input, as given, is closed at this cell size
   double chosen_volume = 0;      // model units cubed, before the surface is fitted
