@@ -29,4 +29,12 @@ inline GridKey grid_key(const Vec3& p, double inv_cell) {
           int64_t(std::floor(p[2] * inv_cell))};
 }
 
+// fn(cell) for the 27 cells around k (k among them).
+template <typename F>
+void for_each_cell_around(const GridKey& k, F&& fn) {
+  for (int64_t dx = -1; dx <= 1; ++dx)
+    for (int64_t dy = -1; dy <= 1; ++dy)
+      for (int64_t dz = -1; dz <= 1; ++dz) fn(GridKey{k.x + dx, k.y + dy, k.z + dz});
+}
+
 }  // namespace vdbwrap

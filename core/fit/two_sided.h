@@ -46,14 +46,11 @@ struct TwoSidedStats {
   // projects to; where noise folds a closed surface's triangles over, nodes all outside
   // project to faces turned either way, but their ways off stay one way.
   bool opposed_near(const Vec3& p) const {
-    const GridKey k = grid_key(p, inv_cell);
     Vec3 a{0, 0, 0}, b{0, 0, 0};
-    for (int dx = -1; dx <= 1; ++dx)
-      for (int dy = -1; dy <= 1; ++dy)
-        for (int dz = -1; dz <= 1; ++dz) {
-          auto it = cell_ways.find({k.x + dx, k.y + dy, k.z + dz});
-          if (it != cell_ways.end()) a = a + it->second.off[0], b = b + it->second.off[1];
-        }
+    for_each_cell_around(grid_key(p, inv_cell), [&](const GridKey& c) {
+      auto it = cell_ways.find(c);
+      if (it != cell_ways.end()) a = a + it->second.off[0], b = b + it->second.off[1];
+    });
     return dot(a, b) < 0;
   }
 };
@@ -140,14 +137,11 @@ class TwoSidedSheets {
  private:
   // The sides of the feet in the cells around p.
   uint8_t sides_near(const Vec3& p) const {
-    const GridKey k = grid_key(p, stats_.inv_cell);
     uint8_t bits = 0;
-    for (int dx = -1; dx <= 1; ++dx)
-      for (int dy = -1; dy <= 1; ++dy)
-        for (int dz = -1; dz <= 1; ++dz) {
-          auto it = sides_.find({k.x + dx, k.y + dy, k.z + dz});
-          if (it != sides_.end()) bits |= it->second;
-        }
+    for_each_cell_around(grid_key(p, stats_.inv_cell), [&](const GridKey& c) {
+      auto it = sides_.find(c);
+      if (it != sides_.end()) bits |= it->second;
+    });
     return bits;
   }
 
