@@ -14,7 +14,10 @@ Writes (binary STL):
   triangles; at 1 % a rod is a sixth of a base cell across);
 - name_tag.stl: a tag 100 x 30 x 2 with twelve letters of 3-5 strokes each (boxes 0.6 wide,
   about half a base cell, and 1 high, sunk 0.1 into the tag, crossing each other at random
-  angles), every stroke its own closed box, nothing merged.
+  angles), every stroke its own closed box, nothing merged;
+- lip_plate.stl, lip_plate_low.stl: a plate 10 x 10 x 1 whose far half steps up by 0.004 /
+  0.002 (a lip on a print, the step's face a strip between two sharp edges 0.056 of the finest
+  cell apart at 1 % / at 0.5 %).
 Pure Python, deterministic. Strut lattices: bench/make_lattice.py.
 """
 import math
@@ -109,11 +112,36 @@ def name_tag(letters=12):
     return points, triangles
 
 
+def lip_plate(step):
+    """The profile (y, z) extruded along x from 0 to 10; the T-joints of the profile kept."""
+    profile = [(0, 0), (5, 0), (10, 0), (10, 1), (10, 1 + step), (5, 1 + step), (5, 1), (0, 1)]
+    points, triangles, index = [], [], {}
+
+    def at(x, yz):
+        q = (x, yz[0], yz[1])
+        if q not in index:
+            index[q] = len(points)
+            points.append(q)
+        return index[q]
+
+    def quad(a, b, c, d):
+        triangles.extend([(a, b, c), (a, c, d)])
+
+    for i, u in enumerate(profile):
+        v = profile[(i + 1) % len(profile)]
+        quad(at(0, u), at(0, v), at(10, v), at(10, u))
+    for cell in ((0, 1, 6, 7), (1, 2, 3, 6), (6, 3, 4, 5)):
+        quad(*(at(10, profile[k]) for k in cell))
+        quad(*(at(0, profile[k]) for k in reversed(cell)))
+    return points, triangles
+
+
 def main():
     if len(sys.argv) != 2:
         sys.exit(__doc__)
     write_named(sys.argv[1], [("knurl_coarse", lambda: knurl(0.8)), ("knurl_fine", lambda: knurl(0.25)),
-                              ("gyroid", gyroid), ("pixel_line", pixel_line), ("name_tag", name_tag)])
+                              ("gyroid", gyroid), ("pixel_line", pixel_line), ("name_tag", name_tag),
+                              ("lip_plate", lambda: lip_plate(0.004)), ("lip_plate_low", lambda: lip_plate(0.002))])
 
 if __name__ == "__main__":
     main()

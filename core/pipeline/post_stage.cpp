@@ -79,7 +79,8 @@ void post_process(WrapRun& run) {
   if (run.params.remove_slivers) {  // flips, collapses and tangential moves, held to the rebuilds' tolerance
     StageTimer timer("slivers", run.report.stages);
     const post::RemeshParams rp = remesh_params(run.params, run.base, run.report.finest_size);
-    const post::SliverRemovalParams sp = post::sliver_removal_params(rp.max_deviation, rp.offset, rp.float_coordinates);
+    const post::SliverRemovalParams sp =
+        post::sliver_removal_params(rp.max_deviation, rp.offset, run.report.finest_size, rp.float_coordinates);
     const post::SliverRemovalStats st = post::remove_slivers(run.surface, run.quality_ref, sp);
     SliverRemovalReport& out = run.report.quality.sliver_removal;
     out.ran = true, out.target_angle_deg = sp.target_angle_deg;

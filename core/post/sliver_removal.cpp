@@ -203,16 +203,21 @@ class SliverRemover : LocalEdits {
       made.push_back(t), made_at.push_back(at);
     }
     // The smallest angle grows; or, with a sliver next to it that stays as it is, it does not
-    // shrink and fewer triangles are left under the target.
-    if (new_min < old_min + prm_.min_gain_deg && !(new_min >= old_min && new_bad < old_bad)) return refuse("no gain");
+    // shrink and fewer triangles are left under the target. In a strip too narrow for any
+    // triangle across it, fewer slivers is the gain: each collapse of a rung leaves the rest of
+    // the strip thinner, until its two rails are one.
+    if (new_min < old_min + prm_.min_gain_deg && !(new_min >= old_min && new_bad < old_bad) &&
+        !(narrow_strip_ && new_bad < old_bad))
+      return refuse("no gain");
     // Distances last of the local checks: they ask the input's index, the rest reads the wrap.
     for (uint32_t f : c.slots)
       if (f != Change::kNoSlot) old_d.add(spread_of(f));
     for (size_t i = 0; i < made.size(); ++i) sample(made_at[i][0], made_at[i][1], made_at[i][2], new_d);
-    if (new_d.worst > std::max(prm_.max_deviation, old_d.worst)) return refuse("far");
+    const double bound = narrow_strip_ ? std::max(prm_.max_deviation, prm_.strip_width) : prm_.max_deviation;
+    if (new_d.worst > std::max(bound, old_d.worst)) return refuse("far");
     // On average no farther from the input than before (a tenth of the bound for rounding).
     if (new_d.mean() > old_d.mean() + 0.1 * prm_.max_deviation) return refuse("farther on average");
-    if (!keeps_sharp_edges(c, made_at, between_curves_ ? prm_.max_deviation : -1)) return refuse("sharp edge farther");
+    if (!keeps_sharp_edges(c, made_at, between_curves_ ? bound : -1)) return refuse("sharp edge farther");
     // No new triangle meets another: among themselves, then the rest of the surface.
     if (const char* why = breaks_surface(c, made, made_at)) return refuse(why);
     return true;
@@ -231,16 +236,19 @@ class SliverRemover : LocalEdits {
     auto collapse_at = [&](int k) { return try_collapse(t[edges[k].second], t[(edges[k].second + 1) % 3]); };
     // A sliver with every corner on a feature curve lies in a strip between two curves closer
     // than the nodes along them (a lip a sixtieth of a base cell high on a print): the input's
-    // sharp edges may move as far as the surface may, so the two curves become one there. (At
-    // the feature tolerance 1514499.stl kept 2.4 % of its triangles under 10 degrees;
-    // everywhere, the looser bound moved p95 and the sharp edges elsewhere.)
+    // sharp edges may move as far as the strip is wide, up to the width no triangle across it
+    // can span at the target angle, so the two curves become one there. (At the feature
+    // tolerance 1514499.stl kept 2.4 % of its triangles under 10 degrees; everywhere, the
+    // looser bound moved p95 and the sharp edges elsewhere.)
     between_curves_ = fixed(t[0]) && fixed(t[1]) && fixed(t[2]);
-    if (cap) {
-      (void)(flip_at(2) || collapse_at(0) || collapse_at(1));
-    } else {
-      (void)(collapse_at(0) || flip_at(2) || flip_at(1) || collapse_at(1) || split_rail_and_flip(f));
-    }
-    between_curves_ = false;
+    const bool done = cap ? flip_at(2) || collapse_at(0) || collapse_at(1)
+                          : collapse_at(0) || flip_at(2) || flip_at(1) || collapse_at(1) || split_rail_and_flip(f);
+    // Lower than a triangle across the strip can be: its rungs collapse while the slivers get
+    // fewer (the last resort: where the rails can be split, that keeps both curves).
+    narrow_strip_ = between_curves_ && norm(area_vector(s_.points[t[0]], s_.points[t[1]], s_.points[t[2]])) <
+                                           prm_.strip_width * std::sqrt(edges[2].first);
+    if (!done && narrow_strip_) (void)(collapse_at(0) || collapse_at(1));
+    between_curves_ = narrow_strip_ = false;
   }
 
   // A needle in a strip of them: two rows of nodes (a thin tube, or two close feature curves)
@@ -460,6 +468,7 @@ class SliverRemover : LocalEdits {
   std::vector<uint8_t> spread_known_;
   double cos_flat_ = 1, cos_turn_ = 1;
   bool between_curves_ = false;  // fixing a sliver whose corners are all on feature curves
+  bool narrow_strip_ = false;    // and lower than strip_width: no triangle spans its strip well
   SliverRemovalStats stats_;
 };
 
@@ -470,6 +479,14 @@ SliverRemovalStats remove_slivers(PostSurface& surface, const QualityReference& 
   if (surface.triangles.empty() || !ref.input) return {};
   SliverRemover r(surface, ref, params);
   return r.run();
+}
+
+SliverRemovalParams sliver_removal_params(double max_deviation, double offset, double finest, bool float_coordinates) {
+  SliverRemovalParams p;
+  p.max_deviation = max_deviation, p.offset = offset, p.float_coordinates = float_coordinates;
+  p.feature_tolerance = 0.5 * max_deviation;
+  p.strip_width = 0.5 * std::tan(p.target_angle_deg * kDeg) * finest;
+  return p;
 }
 
 }  // namespace vdbwrap::post
