@@ -74,4 +74,28 @@ TEST(FarTriangles, AHeldBackCornerIsItsTrianglesFarthestPoint) {
   for (const mesh::FarTriangle& f : far) EXPECT_GT(f.distance, 1.0);
 }
 
+// A face across a channel: its corners, edge midpoints and centroid lie on tiny input triangles,
+// and the input is nowhere else, so far_triangles' samples see it near; a point between them
+// (a barycentric grid of step 1/6) is over 0.9 off.
+TEST(FarTriangles, AnyFartherLooksBetweenTheSamples) {
+  const Vec3 a{0, 0, 0}, b{6, 0, 0}, c{0, 6, 0};
+  std::vector<Vec3> input_points;
+  std::vector<Tri> input_triangles;
+  for (const Vec3& q : {a, b, c, (a + b) * 0.5, (b + c) * 0.5, (c + a) * 0.5, (a + b + c) * (1.0 / 3)}) {
+    const uint32_t n = uint32_t(input_points.size());
+    input_points.insert(input_points.end(), {q, q + Vec3{0.01, 0, 0}, q + Vec3{0, 0.01, 0}});
+    input_triangles.push_back({n, n + 1, n + 2});
+  }
+  const mesh::SurfaceIndex index(input_points, input_triangles);
+  const std::vector<Vec3> points = in_surface_frame({a, b, c});
+  const std::vector<Tri> triangles = {{0, 1, 2}};
+  std::vector<double> node_distance;
+  EXPECT_TRUE(mesh::far_triangles(points, triangles, {}, index, kOrigin, 0.5, node_distance).empty());
+  const std::vector<mesh::FarTriangle> far = {{0, 0.5, points[0]}};
+  EXPECT_TRUE(mesh::any_farther(points, triangles, far, index, kOrigin, 6, 0.9));  // (1, 1, 0): 1.4 off
+  EXPECT_FALSE(mesh::any_farther(points, triangles, far, index, kOrigin, 6, 1.5));
+  EXPECT_FALSE(mesh::any_farther(points, triangles, far, index, kOrigin, 2, 0.9)) << "the samples themselves";
+  EXPECT_FALSE(mesh::any_farther(points, triangles, {}, index, kOrigin, 6, 0.0));
+}
+
 }  // namespace

@@ -4,6 +4,8 @@
 #include <array>
 #include <cmath>
 
+#include <atomic>
+
 #include <tbb/parallel_for.h>
 
 namespace vdbwrap::mesh {
@@ -63,6 +65,28 @@ std::vector<FarTriangle> far_triangles(const std::vector<Vec3>& points, const st
     return x.distance != y.distance ? x.distance > y.distance : x.triangle < y.triangle;
   });
   return out;
+}
+
+bool any_farther(const std::vector<Vec3>& points, const std::vector<Tri>& triangles,
+                 const std::vector<FarTriangle>& far, const SurfaceIndex& input, const Vec3& origin, int steps,
+                 double bound) {
+  std::atomic<bool> found{false};
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, far.size(), 16), [&](const tbb::blocked_range<size_t>& r) {
+    SurfaceIndex::Hit hit;
+    for (size_t k = r.begin(); k != r.end() && !found.load(std::memory_order_relaxed); ++k) {
+      const Tri& t = triangles[far[k].triangle];
+      const Vec3 &a = points[t[0]], &b = points[t[1]], &c = points[t[2]];
+      for (int i = 0; i <= steps; ++i)
+        for (int j = 0; i + j <= steps; ++j) {
+          const Vec3 q = a + (b - a) * (double(i) / steps) + (c - a) * (double(j) / steps);
+          if (!input.closest_within(q - origin, bound, hit)) {
+            found = true;
+            return;
+          }
+        }
+    }
+  });
+  return found;
 }
 
 }  // namespace vdbwrap::mesh

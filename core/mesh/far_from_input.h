@@ -27,4 +27,11 @@ std::vector<FarTriangle> far_triangles(const std::vector<Vec3>& points, const st
                                        const std::vector<uint8_t>& alive, const SurfaceIndex& input, const Vec3& origin,
                                        double far, std::vector<double>& node_distance);
 
+// Has one of the triangles `far` (indices into `triangles`) a point farther than `bound` from the
+// input, among the nodes of a barycentric grid of `steps` intervals per edge? far_triangles'
+// corners, midpoints and centroid miss the middle of a face across a narrow channel or gap.
+bool any_farther(const std::vector<Vec3>& points, const std::vector<Tri>& triangles,
+                 const std::vector<FarTriangle>& far, const SurfaceIndex& input, const Vec3& origin, int steps,
+                 double bound);
+
 }  // namespace vdbwrap::mesh

@@ -87,7 +87,13 @@ bool find_far_parts(WrapRun& run) {
   const std::vector<mesh::FarTriangle> far = mesh::far_triangles(
       run.fitted.points, run.fitted.triangles, {}, index, run.prepared.origin, kRefitFar * run.base, node_distance);
   run.report.triangles_far_first_fit = far.size();
-  if (near.empty() && (far.empty() || far.front().distance <= kRefitTrigger * run.base)) return false;
+  // far_triangles stops at a triangle's first sample over kRefitFar, and its samples miss the
+  // middle of a face across a narrow channel (a hole two or three cells wide in a plate).
+  if (near.empty() &&
+      (far.empty() || (far.front().distance <= kRefitTrigger * run.base &&
+                       !mesh::any_farther(run.fitted.points, run.fitted.triangles, far, index, run.prepared.origin,
+                                          kRefitSampleSteps, kRefitTrigger * run.base))))
+    return false;
   for (const mesh::FarTriangle& f : far) near.push_back(f.at - run.prepared.origin);
   run.refine_near = std::move(near);
   return true;

@@ -44,6 +44,8 @@ inline constexpr double kRefitFar = 0.75;
 inline constexpr double kRefitTrigger = 0.9;
 inline constexpr double kRefitNearReach = 2;
 inline constexpr double kRefitFarCellsReach = 6;
+// The trigger looks at the far triangles' points on a barycentric grid this fine.
+inline constexpr int kRefitSampleSteps = 6;
 // Stage 4 samples the input's sharp edges every this fraction of the diagonal.
 inline constexpr double kFeatureSampleSpacing = 1e-3;
 
