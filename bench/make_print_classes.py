@@ -137,7 +137,7 @@ def lip_plate(step):
 
 
 def main():
-    if len(sys.argv) != 2:
+    if len(sys.argv) != 2 or sys.argv[1].startswith("-"):
         sys.exit(__doc__)
     write_named(sys.argv[1], [("knurl_coarse", lambda: knurl(0.8)), ("knurl_fine", lambda: knurl(0.25)),
                               ("gyroid", gyroid), ("pixel_line", pixel_line), ("name_tag", name_tag),

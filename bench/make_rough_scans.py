@@ -67,6 +67,8 @@ def jittered(level, centre, radius, seed, share):
 
 
 def main():
+    if len(sys.argv) != 2 or sys.argv[1].startswith("-"):
+        sys.exit(__doc__)
     out = sys.argv[1]
     os.makedirs(out, exist_ok=True)
     edge = 2 * math.pi / 400

@@ -52,7 +52,7 @@ def open_thread(columns=120, rows_per_pitch=8):
 
 
 def main():
-    if len(sys.argv) != 2:
+    if len(sys.argv) != 2 or sys.argv[1].startswith("-"):
         sys.exit(__doc__)
     write_named(sys.argv[1], [("screw", screw), ("thread_open", open_thread)])
 
