@@ -2,9 +2,8 @@
 
 #include <algorithm>
 #include <array>
-#include <cmath>
-
 #include <atomic>
+#include <cmath>
 
 #include <tbb/parallel_for.h>
 
