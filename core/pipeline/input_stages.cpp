@@ -1,6 +1,9 @@
 // Stages 0 and 1: the input's diagnosis and its preparation.
+#include <cmath>
+
 #include "check/diagnostics.h"
 #include "common/stage_timer.h"
+#include "mesh/bundled_lines.h"
 #include "mesh/fold_crossings.h"
 #include "mesh/narrow_strips.h"
 #include "mesh/orient.h"
@@ -21,6 +24,42 @@ void diagnose_input(WrapRun& run) {
   run.report.input = check::diagnose_welded(run.input, run.input_weld, false);
   run.check_cancel();
 }
+
+namespace {
+
+// A part placed more than once a hair apart brings each sharp edge as a bundle of parallel lines
+// (mesh/bundled_lines.h); the wrap follows the outermost. Bundled lines closer than a sliver's
+// width at the finest cell: curves on both would make nothing but slivers between them.
+void drop_duplicate_lines(WrapRun& run) {
+  prep::PreparedInput& prepared = run.prepared;
+  auto& edges = prepared.feature_edges;
+  auto& crossings = prepared.intersections;
+  const std::vector<Vec3> edge_out =
+      mesh::sharp_edges_outward(prepared.mesh.triangles, prepared.normals, prepared.closed_piece, edges);
+  std::vector<mesh::OrientedLine> lines;
+  lines.reserve(edges.size() + crossings.size());
+  for (size_t i = 0; i < edges.size(); ++i)
+    lines.push_back({prepared.mesh.points[edges[i].a], prepared.mesh.points[edges[i].b], edge_out[i]});
+  for (const auto& s : crossings)
+    lines.push_back({s.a, s.b, mesh::crossing_outward(s.tri_a, s.tri_b, prepared.normals, prepared.closed_piece)});
+  const int levels = std::min(run.params.levels, 30);
+  const double finest = run.base / double(int64_t(1) << levels);
+  const double angle_rad = kBundleAngle * 3.14159265358979323846 / 180;
+  const std::vector<uint8_t> inner =
+      mesh::inner_lines_of_bundles(lines, std::tan(angle_rad) / 2 * finest, run.base, kBundleAngle);
+  size_t kept = 0;
+  for (size_t i = 0; i < edges.size(); ++i)
+    if (!inner[i]) edges[kept++] = edges[i];
+  run.report.features.duplicate_sharp_edges = edges.size() - kept;
+  edges.resize(kept);
+  kept = 0;
+  for (size_t i = 0; i < crossings.size(); ++i)
+    if (!inner[edge_out.size() + i]) crossings[kept++] = crossings[i];
+  run.report.features.duplicate_intersection_segments = crossings.size() - kept;
+  crossings.resize(kept);
+}
+
+}  // namespace
 
 void prepare_input(WrapRun& run) {
   WrapReport& report = run.report;
@@ -113,6 +152,7 @@ void prepare_input(WrapRun& run) {
     report.features.narrow_strip_intersection_segments = lines.size() - kept;
     lines.resize(kept);
   }
+  drop_duplicate_lines(run);
 }
 
 }  // namespace vdbwrap::pipeline

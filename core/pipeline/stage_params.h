@@ -31,6 +31,10 @@ inline constexpr double kShortestSheetCrossing = 3.0;
 // Self-intersection line ends closer than this fraction of the diagonal are one point, as the
 // feature curves join them (fit/features.cpp).
 inline constexpr double kLineWeld = 1e-9;
+// Feature lines of a part placed more than once a hair apart run parallel within this angle,
+// and closer than a triangle with this smallest angle is wide at the finest cell
+// (mesh/bundled_lines.h): the outermost of such a bundle is kept.
+inline constexpr double kBundleAngle = 10;
 // Unresolved contacts listed in the report, one per base cell.
 inline constexpr size_t kMostContactLocations = 100;
 // The refit where the first fit is far from the input (refine_where_far): it looks at triangles

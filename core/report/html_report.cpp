@@ -227,6 +227,8 @@ std::string numbers_html(const json& r, bool has_wrap) {
           {"Boundary edges of small rims left out", "features.small_rim_edges"},
           {"Edges of narrow strips left out", "features.narrow_strip_edges"},
           {"Intersection segments of narrow strips left out", "features.narrow_strip_intersection_segments"},
+          {"Sharp edges beside a copy's left out", "features.duplicate_sharp_edges"},
+          {"Intersection segments beside a copy's left out", "features.duplicate_intersection_segments"},
           {"Faces where solids touch left out", "features.inside_faces"},
           {"Curves", "features.curves"},
           {"Corners", "features.corners"},

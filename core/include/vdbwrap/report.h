@@ -55,6 +55,9 @@ struct FeatureStats {
   // Of the intersection segments, those where two such narrow faces cross (a lattice's thin
   // struts): not used.
   size_t narrow_strip_intersection_segments = 0;
+  // Of the sharp edges and the intersection segments, those beside a parallel line farther out
+  // closer than a sliver is wide (a part placed twice a hair apart): not used.
+  size_t duplicate_sharp_edges = 0, duplicate_intersection_segments = 0;
   size_t curves = 0, corners = 0, curves_captured = 0, corners_captured = 0, nodes_snapped = 0;
   // Curve points the traced chains missed (sampled every half finest cell), and what was done
   // about them: nodes inserted on the curve by edge splits, nodes moved onto it, points left
