@@ -113,7 +113,8 @@ TEST(BundledLines, LongLinesAcrossManyCellsAreFound) {
   const Vec3 dir = normalized(Vec3{1, 2, 3});
   const Vec3 out = normalized(cross(dir, Vec3{0, 0, 1}));
   const Vec3 a{-40, 7, 3};
-  const std::vector<mesh::OrientedLine> lines = {{a, a + dir * 100, out}, {a + out * 0.01, a + out * 0.01 + dir * 100, out}};
+  const std::vector<mesh::OrientedLine> lines = {{a, a + dir * 100, out},
+                                                 {a + out * 0.01, a + out * 0.01 + dir * 100, out}};
   const std::vector<uint8_t> inner = mesh::inner_lines_of_bundles(lines, 0.05, 1.0, 10);
   EXPECT_TRUE(inner[0]);
   EXPECT_FALSE(inner[1]);

@@ -95,7 +95,8 @@ std::vector<uint8_t> inner_lines_of_bundles(const std::vector<OrientedLine>& lin
 }
 
 std::vector<Vec3> sharp_edges_outward(const std::vector<Tri>& triangles, const std::vector<Vec3>& normals,
-                                      const std::vector<uint32_t>& closed_piece, const std::vector<FeatureEdge>& edges) {
+                                      const std::vector<uint32_t>& closed_piece,
+                                      const std::vector<FeatureEdge>& edges) {
   std::vector<Vec3> out(edges.size(), Vec3{0, 0, 0});
   if (closed_piece.size() != triangles.size() || normals.size() != triangles.size()) return out;
   std::vector<std::pair<uint64_t, uint32_t>> sharp;  // (edge key, index into edges), sorted
