@@ -116,3 +116,32 @@ INSTANTIATE_TEST_SUITE_P(
             true}));
 
 }  // namespace
+
+namespace {
+
+// An assembly of ten interpenetrating bodies (box.STL at 1 %): after the feature insertion, a
+// face 1.2-2 base cells across bridges a groove beside a sharp edge, one corner on the edge,
+// the other two held back 0.37 and 0.71 cells off (under the far distance, so not pulled);
+// its middle is 1.14 cells off and no split of it is nearer. Its farthest corner goes onto the
+// input instead.
+TEST(ProximityRefinementConcaveCorner, AFaceAcrossAGrooveHasItsFarthestCornerPulled) {
+  const Mesh input = io::read_mesh(data_path("box.STL"));
+  WrapParams on;
+  on.base_size = Length{1, true};
+  WrapParams off = on;
+  off.proximity_refinement = false;
+  const WrapResult a = wrap(input, off), b = wrap(input, on);
+  const double base = b.report.base_size;
+  std::printf("[box.STL 1%%] max %.3f -> %.3f base cells; mean %.3g -> %.3g; %zu pulls\n",
+              a.report.output_to_input.max / base, b.report.output_to_input.max / base, a.report.output_to_input.mean,
+              b.report.output_to_input.mean, b.report.quality.proximity_refinement.pulls);
+  auto v = valid_closed_surface(b.surface);
+  EXPECT_TRUE(v.ok) << v.why;
+  EXPECT_GT(a.report.output_to_input.max, base);
+  EXPECT_LE(b.report.output_to_input.max, base);
+  const double eps = 1e-6 * b.report.diagonal;
+  EXPECT_LE(b.report.output_to_input.mean, 1.02 * a.report.output_to_input.mean + eps);
+  EXPECT_LE(b.report.sharp_edges_to_output.mean, 1.02 * a.report.sharp_edges_to_output.mean + eps);
+}
+
+}  // namespace

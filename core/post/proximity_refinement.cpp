@@ -70,6 +70,14 @@ class ProximityRefiner : LocalEdits {
     std::sort(edges.begin(), edges.end());
     for (const auto& [d, i] : edges)
       if (-d > prm_.far_distance && split(t[i], t[(i + 1) % 3])) return;
+    // A face across a concave corner, its far point between corners held back under the far
+    // distance, where no split helps: its farthest corner onto the input.
+    uint32_t near_corner = kNone;
+    for (uint32_t v : t)
+      if (v != corner && node_distance(v) > 0.5 * prm_.far_distance &&
+          (near_corner == kNone || node_distance(v) > node_distance(near_corner)))
+        near_corner = v;
+    if (near_corner != kNone) pull(near_corner);
   }
 
   // Node v onto the input, or as far toward it as the checks allow.

@@ -4,7 +4,9 @@
 //   cells they can be over a base cell off): each is moved onto the input, or part of the way,
 //   or, in a pleat where no move helps, merged into its neighbour nearest the input;
 // - faces bridging a concave corner or a narrow gap, their corners on the input and their
-//   interior off it: the far edges are split and the new node goes onto the input.
+//   interior off it: the far edges are split and the new node goes onto the input; where no
+//   split comes nearer (a face across a groove, its corners held back under the far distance),
+//   the face's farthest corner goes onto the input.
 // Every edit keeps the surface valid (no fold, no intersection, exact predicates), makes no
 // triangle under the target angle that was not there, keeps the input's sharp edges as near,
 // and brings the patch nearer the input (its farthest point no farther, the integral of the
