@@ -1,6 +1,7 @@
 // Feature lines of a part placed more than once a hair apart (mesh/bundled_lines.h): each
 // bundle of parallel lines keeps its outermost, and the wrap of a real part placed three times
-// is as clean as the part's own.
+// is as clean as the part's own; so is the wrap of a part tessellated twice, whose faces lie on
+// one another (mesh/feature_edges.h).
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -206,5 +207,49 @@ INSTANTIATE_TEST_SUITE_P(RealMeshes, PartPlacedThreeTimes,
                          [](const ::testing::TestParamInfo<PlacedThrice>& info) {
                            return test_name_of(info.param.file) + (info.param.turn != 0 ? "_turned" : "_moved");
                          });
+
+}  // namespace
+
+namespace {
+
+// The part again with every triangle split in three at its centre, both kept (one CAD body
+// tessellated twice): every edge of the part has four triangles. Taken for non-manifold edges,
+// every edge of the part was a feature curve, the wrap three to five times the part's triangles
+// and its p95 distance eight to twelve times the part's.
+class PartTessellatedTwice : public ::testing::TestWithParam<const char*> {};
+
+TEST_P(PartTessellatedTwice, WrapsAsCleanlyAsThePartAlone) {
+  const Mesh one = io::read_mesh(data_path(GetParam()));
+  Mesh twice = one;
+  for (const Tri& t : one.triangles) {
+    const uint32_t m = uint32_t(twice.points.size());
+    twice.points.push_back((one.points[t[0]] + one.points[t[1]] + one.points[t[2]]) * (1.0 / 3));
+    twice.triangles.push_back({t[0], t[1], m});
+    twice.triangles.push_back({t[1], t[2], m});
+    twice.triangles.push_back({t[2], t[0], m});
+  }
+  if (!one.triangle_part.empty())
+    for (size_t t = 0; t < one.triangles.size(); ++t)
+      for (int k = 0; k < 3; ++k) twice.triangle_part.push_back(one.triangle_part[t]);
+  WrapParams params;
+  params.base_size = Length{1, true};
+  const WrapResult single = wrap(one, params), r = wrap(twice, params);
+  const double d = 0.01 * single.report.diagonal;
+  std::printf(
+      "[%s twice] %zu non-manifold edges; %zu triangles (alone %zu); mean %.4f, p95 %.4f (alone %.4f, %.4f) %%\n",
+      GetParam(), r.report.features.nonmanifold_edges, r.surface.triangles.size(), single.surface.triangles.size(),
+      r.report.output_to_input.mean / d, r.report.output_to_input.p95 / d, single.report.output_to_input.mean / d,
+      single.report.output_to_input.p95 / d);
+  const auto v = valid_closed_surface(r.surface);
+  EXPECT_TRUE(v.ok) << v.why;
+  EXPECT_EQ(r.report.features.nonmanifold_edges, 0u);
+  EXPECT_LE(r.surface.triangles.size(), 1.5 * double(single.surface.triangles.size()));
+  EXPECT_LE(small_angle_share(r), 0.01);
+  EXPECT_LE(r.report.output_to_input.mean, 1.5 * single.report.output_to_input.mean);
+  EXPECT_LE(r.report.output_to_input.p95, 1.5 * single.report.output_to_input.p95);
+}
+
+INSTANTIATE_TEST_SUITE_P(RealMeshes, PartTessellatedTwice, ::testing::Values("fandisk.obj", "angle_block.STL"),
+                         [](const ::testing::TestParamInfo<const char*>& info) { return test_name_of(info.param); });
 
 }  // namespace

@@ -189,6 +189,44 @@ TEST(Features, BoxHasTwelveSharpEdgesAndAnOpenSquareFourBoundaryEdges) {
   EXPECT_EQ(boundary, 4u);
 }
 
+// Every face of a box given twice, the second time each triangle split in three at its centre
+// (one body tessellated twice): each edge of the box has four triangles, two sheets on each
+// side. Counted once each, the sheets make the box's twelve sharp edges and no non-manifold one.
+// Where the sheets go three ways (a fin on the box's edge), the edge stays non-manifold.
+TEST(Features, AFaceGivenTwiceMakesNoNonManifoldEdges) {
+  Mesh box = box_mesh({0, 0, 0}, {1, 1, 1});
+  const size_t n = box.triangles.size();
+  for (size_t t = 0; t < n; ++t) {
+    const Tri tri = box.triangles[t];
+    const uint32_t m = uint32_t(box.points.size());
+    box.points.push_back((box.points[tri[0]] + box.points[tri[1]] + box.points[tri[2]]) * (1.0 / 3));
+    box.triangles.push_back({tri[0], tri[1], m});
+    box.triangles.push_back({tri[1], tri[2], m});
+    box.triangles.push_back({tri[2], tri[0], m});
+  }
+  auto count = [](const prep::PreparedInput& in, prep::FeatureKind kind) {
+    return size_t(std::count_if(in.feature_edges.begin(), in.feature_edges.end(),
+                                [&](const prep::FeatureEdge& f) { return f.kind == kind; }));
+  };
+  const prep::PreparedInput twice = prep::prepare(box, prep::PrepareParams{}, nullptr);
+  EXPECT_EQ(count(twice, prep::FeatureKind::NonManifold), 0u);
+  EXPECT_EQ(count(twice, prep::FeatureKind::Sharp), 12u);
+  // A fin on the edge from (1, 0, 0) to (1, 1, 0), pointing out diagonally: three ways there.
+  Mesh fin = box;
+  const uint32_t f = uint32_t(fin.points.size());
+  fin.points.push_back({2, 0, -1});
+  fin.points.push_back({2, 1, -1});
+  uint32_t a = 0, b = 0;
+  for (uint32_t v = 0; v < 8; ++v) {
+    if (fin.points[v] == Vec3{1, 0, 0}) a = v;
+    if (fin.points[v] == Vec3{1, 1, 0}) b = v;
+  }
+  fin.triangles.push_back({a, b, f});
+  fin.triangles.push_back({b, f + 1, f});
+  const prep::PreparedInput finned = prep::prepare(fin, prep::PrepareParams{}, nullptr);
+  EXPECT_EQ(count(finned, prep::FeatureKind::NonManifold), 1u);
+}
+
 TEST(Prepare, DropsDegenerateAndDuplicateTrianglesAndWeldsCracks) {
   Mesh m = box_mesh({0, 0, 0}, {1, 1, 1});
   m.triangles.push_back({0, 0, 1});       // repeated vertex

@@ -17,6 +17,8 @@ struct FeatureEdge {
 };
 
 // Sharp (dihedral angle over feature_angle_deg), boundary and non-manifold edges, sorted by (a, b).
+// Triangles lying on one another at an edge (a face given twice, triangulated differently) count
+// once: an edge whose triangles form two such sheets is sharp or no feature, as between two faces.
 // `contact` (optional, per edge of `edges`): what faces where solids touch make of the edges with
 // more than two faces (see contact_faces.h).
 std::vector<FeatureEdge> find_feature_edges(const std::vector<Vec3>& points, const std::vector<Tri>& triangles,
