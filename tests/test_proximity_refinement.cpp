@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <cstdio>
+#include <utility>
 
 #include "test_meshes.h"
 #include "vdbwrap/io.h"
@@ -66,6 +67,15 @@ namespace {
 //   any other, and the input's sharp edges stay as near;
 // - on thingi_99865, a node in a pleat (its fan folded over itself): every move of it turns the
 //   folded triangles over, and it is merged into its neighbour nearest the input instead.
+// `input` wrapped at 1 % without the pass and with it.
+std::pair<WrapResult, WrapResult> without_and_with_the_pass(const Mesh& input) {
+  WrapParams on;
+  on.base_size = Length{1, true};
+  WrapParams off = on;
+  off.proximity_refinement = false;
+  return {wrap(input, off), wrap(input, on)};
+}
+
 struct TurnedPrint {
   const char* file;
   double rotation[3][3];
@@ -83,11 +93,7 @@ TEST_P(ProximityRefinementTurned, FarthestPointWithinABaseCell) {
       for (int j = 0; j < 3; ++j) q[i] += c.rotation[i][j] * p[j];
     for (int i = 0; i < 3; ++i) p[i] = double(float(q[i]));
   }
-  WrapParams params;
-  params.base_size = Length{1, true};
-  WrapParams off = params;
-  off.proximity_refinement = false;
-  const WrapResult a = wrap(input, off), b = wrap(input, params);
+  const auto [a, b] = without_and_with_the_pass(input);
   const double base = b.report.base_size;
   const ProximityRefinementReport& r = b.report.quality.proximity_refinement;
   std::printf("[turned %s 1%%] max %.3f -> %.3f base cells; sharp edges mean %.3g -> %.3g; %zu pulls, %zu merges\n",
@@ -125,12 +131,7 @@ namespace {
 // its middle is 1.14 cells off and no split of it is nearer. Its farthest corner goes onto the
 // input instead.
 TEST(ProximityRefinementConcaveCorner, AFaceAcrossAGrooveHasItsFarthestCornerPulled) {
-  const Mesh input = io::read_mesh(data_path("box.STL"));
-  WrapParams on;
-  on.base_size = Length{1, true};
-  WrapParams off = on;
-  off.proximity_refinement = false;
-  const WrapResult a = wrap(input, off), b = wrap(input, on);
+  const auto [a, b] = without_and_with_the_pass(io::read_mesh(data_path("box.STL")));
   const double base = b.report.base_size;
   std::printf("[box.STL 1%%] max %.3f -> %.3f base cells; mean %.3g -> %.3g; %zu pulls\n",
               a.report.output_to_input.max / base, b.report.output_to_input.max / base, a.report.output_to_input.mean,
