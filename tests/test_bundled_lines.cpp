@@ -119,6 +119,11 @@ TEST(BundledLines, LongLinesAcrossManyCellsAreFound) {
   const std::vector<uint8_t> inner = mesh::inner_lines_of_bundles(lines, 0.05, 1.0, 10);
   EXPECT_TRUE(inner[0]);
   EXPECT_FALSE(inner[1]);
+  // Lines a hundred thousand widths long, asked for cells a millionth wide: the grid widens
+  // its cells (a bounded number of steps along the lines) and finds the same.
+  const std::vector<mesh::OrientedLine> long_lines = {{a, a + dir * 1e5, out},
+                                                      {a + out * 0.01, a + out * 0.01 + dir * 1e5, out}};
+  EXPECT_EQ(mesh::inner_lines_of_bundles(long_lines, 0.05, 1e-6, 10), inner);
 }
 
 namespace {

@@ -21,6 +21,8 @@ constexpr double kShortestOutward = 0.2;
 // Along `out`, lines nearer than this fraction of the width are level: copies of one body
 // tessellated twice coincide up to the float rounding of a file.
 constexpr double kLevel = 1e-3;
+// Steps of a quarter cell along the lines, in all, that the lookup grid is sized for.
+constexpr size_t kMostSteps = size_t(1) << 20;
 
 Vec3 outward(const Vec3& sum) {
   const double n = norm(sum);
@@ -51,7 +53,14 @@ std::vector<uint8_t> inner_lines_of_bundles(const std::vector<OrientedLine>& lin
                                             double angle_deg) {
   std::vector<uint8_t> inner(lines.size(), 0);
   if (!(width > 0) || !(cell > 0) || lines.size() < 2) return inner;
-  cell = std::max(cell, 4 * width);
+  // Long lines listed in many cells cost memory and time: the cells widen until the lines
+  // take at most kMostSteps steps (each step at most eight cells, mostly one or two).
+  double total = 0;
+  size_t oriented_lines = 0;
+  for (const OrientedLine& l : lines)
+    if (oriented(l)) total += norm(l.b - l.a), ++oriented_lines;
+  const double most_steps = double(std::max<size_t>(kMostSteps, 8 * oriented_lines));
+  cell = std::max({cell, 4 * width, 4 * total / most_steps});
   CellLists<uint32_t> grid(cell);
   for (size_t i = 0; i < lines.size(); ++i)
     if (oriented(lines[i])) list_line(grid, lines[i], uint32_t(i), cell);

@@ -26,7 +26,8 @@ struct OrientedLine {
 // parallel to it and facing the same way (both within `angle_deg`), and farther out along
 // `out` (on a tie, the lower index is the farther),
 // so each bundle keeps its outermost line. `cell` is the side of the grid the lines are
-// looked up in (a few `width`s or more; a base cell suits).
+// looked up in (a few `width`s or more; a base cell suits); it widens where the lines are long
+// enough to pass through millions of cells.
 std::vector<uint8_t> inner_lines_of_bundles(const std::vector<OrientedLine>& lines, double width, double cell,
                                             double angle_deg);
 
