@@ -225,17 +225,7 @@ class PartTessellatedTwice : public ::testing::TestWithParam<const char*> {};
 
 TEST_P(PartTessellatedTwice, WrapsAsCleanlyAsThePartAlone) {
   const Mesh one = io::read_mesh(data_path(GetParam()));
-  Mesh twice = one;
-  for (const Tri& t : one.triangles) {
-    const uint32_t m = uint32_t(twice.points.size());
-    twice.points.push_back((one.points[t[0]] + one.points[t[1]] + one.points[t[2]]) * (1.0 / 3));
-    twice.triangles.push_back({t[0], t[1], m});
-    twice.triangles.push_back({t[1], t[2], m});
-    twice.triangles.push_back({t[2], t[0], m});
-  }
-  if (!one.triangle_part.empty())
-    for (size_t t = 0; t < one.triangles.size(); ++t)
-      for (int k = 0; k < 3; ++k) twice.triangle_part.push_back(one.triangle_part[t]);
+  const Mesh twice = tessellated_twice(one);
   WrapParams params;
   params.base_size = Length{1, true};
   const WrapResult single = wrap(one, params), r = wrap(twice, params);

@@ -194,16 +194,7 @@ TEST(Features, BoxHasTwelveSharpEdgesAndAnOpenSquareFourBoundaryEdges) {
 // side. Counted once each, the sheets make the box's twelve sharp edges and no non-manifold one.
 // Where the sheets go three ways (a fin on the box's edge), the edge stays non-manifold.
 TEST(Features, AFaceGivenTwiceMakesNoNonManifoldEdges) {
-  Mesh box = box_mesh({0, 0, 0}, {1, 1, 1});
-  const size_t n = box.triangles.size();
-  for (size_t t = 0; t < n; ++t) {
-    const Tri tri = box.triangles[t];
-    const uint32_t m = uint32_t(box.points.size());
-    box.points.push_back((box.points[tri[0]] + box.points[tri[1]] + box.points[tri[2]]) * (1.0 / 3));
-    box.triangles.push_back({tri[0], tri[1], m});
-    box.triangles.push_back({tri[1], tri[2], m});
-    box.triangles.push_back({tri[2], tri[0], m});
-  }
+  const Mesh box = tessellated_twice(box_mesh({0, 0, 0}, {1, 1, 1}));
   auto count = [](const prep::PreparedInput& in, prep::FeatureKind kind) {
     return size_t(std::count_if(in.feature_edges.begin(), in.feature_edges.end(),
                                 [&](const prep::FeatureEdge& f) { return f.kind == kind; }));

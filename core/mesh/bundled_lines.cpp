@@ -14,7 +14,6 @@
 namespace vdbwrap::mesh {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 // Lines whose faces are closer to opposite than this (the sum of their unit normals shorter)
 // have no outward side to compare along: a knife edge, faces that touch back to back.
 constexpr double kShortestOutward = 0.2;
@@ -64,7 +63,7 @@ std::vector<uint8_t> inner_lines_of_bundles(const std::vector<OrientedLine>& lin
   CellLists<uint32_t> grid(cell);
   for (size_t i = 0; i < lines.size(); ++i)
     if (oriented(lines[i])) list_line(grid, lines[i], uint32_t(i), cell);
-  const double parallel = std::cos(angle_deg * kPi / 180), level = kLevel * width;
+  const double parallel = std::cos(angle_deg * M_PI / 180), level = kLevel * width;
   // Whether a line farther out than line i, parallel to it and facing its way, passes within
   // `width` of p.
   auto beside_farther = [&](uint32_t i, const Vec3& dir, const Vec3& p) {

@@ -1,5 +1,7 @@
 // Stages 0 and 1: the input's diagnosis and its preparation.
+#include <algorithm>
 #include <cmath>
+#include <vector>
 
 #include "check/diagnostics.h"
 #include "common/stage_timer.h"
@@ -27,6 +29,21 @@ void diagnose_input(WrapRun& run) {
 
 namespace {
 
+// The finest cell of the wrap (the thin-part levels aside), in model units.
+double finest_cell(const WrapRun& run) { return run.base / double(int64_t(1) << std::min(run.params.levels, 30)); }
+
+// Drops the items i for which dropped(i) holds (read before any item moves), the others keeping
+// their order. Returns how many went.
+template <typename T, typename Dropped>
+size_t drop_where(std::vector<T>& items, Dropped&& dropped) {
+  size_t kept = 0;
+  for (size_t i = 0; i < items.size(); ++i)
+    if (!dropped(i)) items[kept++] = items[i];
+  const size_t gone = items.size() - kept;
+  items.resize(kept);
+  return gone;
+}
+
 // A part placed more than once a hair apart brings each sharp edge as a bundle of parallel lines
 // (mesh/bundled_lines.h); the wrap follows the outermost. Bundled lines closer than a sliver's
 // width at the finest cell: curves on both would make nothing but slivers between them.
@@ -42,21 +59,12 @@ void drop_duplicate_lines(WrapRun& run) {
     lines.push_back({prepared.mesh.points[edges[i].a], prepared.mesh.points[edges[i].b], edge_out[i]});
   for (const auto& s : crossings)
     lines.push_back({s.a, s.b, mesh::crossing_outward(s.tri_a, s.tri_b, prepared.normals, prepared.closed_piece)});
-  const int levels = std::min(run.params.levels, 30);
-  const double finest = run.base / double(int64_t(1) << levels);
-  const double angle_rad = kBundleAngle * 3.14159265358979323846 / 180;
-  const std::vector<uint8_t> inner =
-      mesh::inner_lines_of_bundles(lines, std::tan(angle_rad) / 2 * finest, run.base, kBundleAngle);
-  size_t kept = 0;
-  for (size_t i = 0; i < edges.size(); ++i)
-    if (!inner[i]) edges[kept++] = edges[i];
-  run.report.features.duplicate_sharp_edges = edges.size() - kept;
-  edges.resize(kept);
-  kept = 0;
-  for (size_t i = 0; i < crossings.size(); ++i)
-    if (!inner[edge_out.size() + i]) crossings[kept++] = crossings[i];
-  run.report.features.duplicate_intersection_segments = crossings.size() - kept;
-  crossings.resize(kept);
+  const double width = std::tan(kBundleAngle * M_PI / 180) / 2 * finest_cell(run);
+  const std::vector<uint8_t> inner = mesh::inner_lines_of_bundles(lines, width, run.base, kBundleAngle);
+  const size_t first_crossing = edges.size();
+  run.report.features.duplicate_sharp_edges = drop_where(edges, [&](size_t i) { return inner[i]; });
+  run.report.features.duplicate_intersection_segments =
+      drop_where(crossings, [&](size_t i) { return inner[first_crossing + i]; });
 }
 
 }  // namespace
@@ -121,12 +129,8 @@ void prepare_input(WrapRun& run) {
     const std::vector<uint8_t> sheet_noise = mesh::short_line_runs(
         sheet_ends, kShortestSheetCrossing * run.base, run.params.corner_angle_deg, kLineWeld * prepared.diagonal);
     for (size_t k = 0; k < sheet_lines.size(); ++k) noise[sheet_lines[k]] |= sheet_noise[k];
-    auto& lines = run.prepared.intersections;
-    size_t kept = 0;
-    for (size_t i = 0; i < lines.size(); ++i)
-      if (!noise[i]) lines[kept++] = lines[i];
-    report.features.noise_intersection_segments = lines.size() - kept;
-    lines.resize(kept);
+    report.features.noise_intersection_segments =
+        drop_where(run.prepared.intersections, [&](size_t i) { return noise[i]; });
   }
   // A raw scan's floating fragments, a cell or two across, are wrapped as blobs: their rims
   // would be thousands more curves, folding the blobs into slivers.
@@ -136,9 +140,8 @@ void prepare_input(WrapRun& run) {
   // sides, narrower than the finest cell, would be parallel curves a fraction of a cell apart;
   // so would the lines where such tubes cross (a lattice's struts).
   {
-    const int levels = std::min(run.params.levels, 30);
     const int thin = std::clamp(refine_criteria(run.params).thin_levels, 0, 30);
-    const double finest = run.base / double(int64_t(1) << levels);
+    const double finest = finest_cell(run);
     auto& lines = run.prepared.intersections;
     std::vector<uint32_t> crossing;
     for (const auto& s : lines) crossing.push_back(s.tri_a), crossing.push_back(s.tri_b);
@@ -146,11 +149,8 @@ void prepare_input(WrapRun& run) {
         mesh::narrow_faces(run.prepared.mesh.points, run.prepared.mesh.triangles, run.prepared.feature_edges, finest,
                            &run.prepared.closed_piece, finest / double(int64_t(1) << thin), crossing);
     report.features.narrow_strip_edges = mesh::drop_narrow_strip_edges(run.prepared.feature_edges, narrow);
-    size_t kept = 0;
-    for (size_t i = 0; i < lines.size(); ++i)
-      if (!(narrow.triangles[lines[i].tri_a] && narrow.triangles[lines[i].tri_b])) lines[kept++] = lines[i];
-    report.features.narrow_strip_intersection_segments = lines.size() - kept;
-    lines.resize(kept);
+    report.features.narrow_strip_intersection_segments = drop_where(
+        lines, [&](size_t i) { return narrow.triangles[lines[i].tri_a] && narrow.triangles[lines[i].tri_b]; });
   }
   drop_duplicate_lines(run);
 }

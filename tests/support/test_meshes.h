@@ -206,6 +206,25 @@ inline Mesh folded_icosphere() {
 // Two open square sheets (two triangles each, parts 0 and 1) crossing at right angles through
 // each other's middle, edge to edge: the crossing runs into both sheets' borders, so the
 // intersection repair has nothing to cap and leaves it (exit 4).
+// `m` with every triangle also split in three at its centre, both kept: one body tessellated
+// twice, its faces lying on one another and every edge with four triangles.
+inline Mesh tessellated_twice(const Mesh& m) {
+  Mesh out = m;
+  for (const Tri& t : m.triangles) {
+    const uint32_t c = uint32_t(out.points.size());
+    Vec3 centre{0, 0, 0};
+    for (int k = 0; k < 3; ++k) centre[k] = (m.points[t[0]][k] + m.points[t[1]][k] + m.points[t[2]][k]) / 3;
+    out.points.push_back(centre);
+    out.triangles.push_back({t[0], t[1], c});
+    out.triangles.push_back({t[1], t[2], c});
+    out.triangles.push_back({t[2], t[0], c});
+  }
+  if (!m.triangle_part.empty())
+    for (size_t t = 0; t < m.triangles.size(); ++t)
+      for (int k = 0; k < 3; ++k) out.triangle_part.push_back(m.triangle_part[t]);
+  return out;
+}
+
 inline Mesh crossing_sheets() {
   Mesh m;
   m.points = {{-1, -1, 0}, {1, -1, 0}, {1, 1, 0}, {-1, 1, 0}, {-1, 0, -1}, {1, 0, -1}, {1, 0, 1}, {-1, 0, 1}};
