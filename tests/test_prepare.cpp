@@ -397,6 +397,20 @@ TEST(Intersections, FansMeetOnlyAtTheirCentreUnlessTheyOverlapOrFold) {
   EXPECT_FALSE(check::triangle_pair_intersects(p, {0, 1, 2}, {0, 3, 4}));
 }
 
+// A triangle with a corner twice (a float weld can make one) is a segment: it meets what it
+// touches, and the shared-corner logic, which counts matches of distinct corners, must not
+// read past the three. Before, {0, 0, 1} against {0, 2, 3} read a fourth corner of a triangle,
+// a wild index: a SIGBUS in the proximity refinement.
+TEST(Intersections, TriangleWithACornerTwiceMeetsItsNeighbours) {
+  const std::vector<Vec3> p = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}, {1, 1, 1}};
+  const std::vector<std::pair<Tri, Tri>> pairs = {
+      {{0, 0, 1}, {0, 2, 3}}, {{0, 1, 1}, {1, 1, 2}}, {{0, 2, 3}, {3, 4, 3}}, {{2, 2, 2}, {0, 1, 2}}};
+  for (const auto& [a, b] : pairs) {
+    EXPECT_TRUE(check::triangle_pair_intersects(p, a, b));
+    EXPECT_TRUE(check::triangle_pair_intersects(p, b, a));
+  }
+}
+
 // The pair search buckets triangles on a grid sized by the typical triangle; the ones spanning
 // many cells are tested against all boxes directly when they are few, else they go to CGAL's
 // box intersection. Against every pair tested directly, on a soup of small triangles, long

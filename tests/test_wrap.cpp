@@ -1,5 +1,7 @@
 // The whole pipeline through the public API: validity by CGAL, fidelity, errors, cancellation.
 #include <gtest/gtest.h>
+#include <algorithm>
+#include <cmath>
 #include <cstdio>
 
 #include "vdbwrap/io.h"
@@ -162,6 +164,58 @@ TEST(Wrap, SinglePrecisionOutputStaysValidWhenWrittenAsBinaryStl) {
     io::write_mesh(r.surface, path);
     auto v = valid_closed_surface(io::read_mesh(path));
     EXPECT_TRUE(v.ok) << name << ": " << v.why;
+  }
+}
+
+// Single precision far from the origin (a part placed in a large assembly, a survey's
+// coordinates): where a float's step is a fifth of the finest cell the wrap is still valid as
+// written, and the user is told it follows the input less closely; from half a cell on it is
+// refused before the grid is built (a bunny 3e6 from the origin went through 60 s of repairs
+// whose float weld made triangles with a corner twice, and ended in a SIGBUS).
+TEST(Wrap, SinglePrecisionFarFromTheOriginIsWarnedThenRefused) {
+  struct Messages : ProgressSink {
+    std::string all;
+    void progress(const std::string&, double, const std::string& m) override { all += m + "\n"; }
+  };
+  const Mesh fandisk = io::read_mesh(data_path("fandisk.obj"));
+  WrapParams p = at("1%");
+  p.float_coordinates = true;
+  // The finest cell at 1 % and one level: half a percent of the diagonal; a float's step at
+  // [2^k, 2^(k+1)) is 2^(k-23).
+  Vec3 lo = fandisk.points[0], hi = lo;
+  for (const Vec3& q : fandisk.points)
+    for (int k = 0; k < 3; ++k) lo[k] = std::min(lo[k], q[k]), hi[k] = std::max(hi[k], q[k]);
+  const double finest = 0.005 * std::sqrt((hi[0] - lo[0]) * (hi[0] - lo[0]) + (hi[1] - lo[1]) * (hi[1] - lo[1]) +
+                                          (hi[2] - lo[2]) * (hi[2] - lo[2]));
+  for (double share : {0.2, 0.8}) {
+    const double shift = std::ldexp(1.5, int(std::floor(std::log2(share * finest))) + 23);
+    Mesh moved = fandisk;
+    for (auto& q : moved.points) q = {q[0] + shift, q[1] - shift, q[2]};
+    Messages sink;
+    SCOPED_TRACE("float step " + std::to_string(share) + " of the finest cell, shift " + std::to_string(shift));
+    if (share < 0.5) {
+      WrapResult r = wrap(moved, p, &sink);
+      const std::string path = ::testing::TempDir() + "/far_single_precision.stl";
+      io::write_mesh(r.surface, path);
+      auto v = valid_closed_surface(io::read_mesh(path));
+      EXPECT_TRUE(v.ok) << v.why;
+      EXPECT_NE(sink.all.find("single precision"), std::string::npos) << sink.all;
+      EXPECT_LT(r.report.output_to_input.mean, 0.001 * r.report.diagonal);
+      continue;
+    }
+    try {
+      wrap(moved, p, &sink);
+      FAIL() << "expected a refusal";
+    } catch (const Error& e) {
+      EXPECT_EQ(e.kind(), ErrorKind::InvalidArgument);
+      EXPECT_NE(std::string(e.what()).find("single precision"), std::string::npos) << e.what();
+      EXPECT_EQ(sink.all.find("project"), std::string::npos) << "refused before the fit";
+    }
+    // With doubles kept (OBJ, PLY, VTP) the same model wraps as close as at the origin.
+    WrapParams doubles = at("1%");
+    WrapResult r = wrap(moved, doubles);
+    EXPECT_TRUE(valid_closed_surface(r.surface).ok);
+    EXPECT_LT(r.report.output_to_input.mean, 0.0005 * r.report.diagonal);
   }
 }
 

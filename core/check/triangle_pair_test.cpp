@@ -12,6 +12,10 @@ namespace vdbwrap::check::pair_search {
 
 template <typename Points>
 bool triangles_intersect(const Points& p, const Tri& x, const Tri& y, bool use_proofs_2d) {
+  // A triangle with a corner twice is a segment: degenerate, a defect of its own wherever it
+  // lies, and it meets anything (the shared-corner cases below need three distinct corners).
+  auto repeats = [](const Tri& t) { return t[0] == t[1] || t[1] == t[2] || t[0] == t[2]; };
+  if (repeats(x) || repeats(y)) return true;
   int shared = 0;
   int xi[3], yi[3];  // positions of shared vertices
   for (int i = 0; i < 3; ++i)

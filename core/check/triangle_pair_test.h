@@ -9,7 +9,8 @@
 
 namespace vdbwrap::check::pair_search {
 
-// Triangles intersect when they share points other than their common vertices/edge.
+// Triangles intersect when they share points other than their common vertices/edge; a
+// triangle with a corner twice (degenerate) meets anything.
 // `p`: any container of points indexed by the triangles' vertices.
 template <typename Points>
 bool triangles_intersect(const Points& p, const Tri& x, const Tri& y, bool use_proofs_2d = true);

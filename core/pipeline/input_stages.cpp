@@ -32,6 +32,36 @@ namespace {
 // The finest cell of the wrap (the thin-part levels aside), in model units.
 double finest_cell(const WrapRun& run) { return run.base / double(int64_t(1) << std::min(run.params.levels, 30)); }
 
+// Output written in single precision keeps the wrap valid as written: far from the origin a
+// float's steps grow as coarse as the cells (a survey's coordinates, a part placed in a large
+// assembly), nodes round onto one another and the wrap comes out as steps or not at all.
+void check_float_steps(const WrapRun& run) {
+  if (!run.params.float_coordinates) return;
+  double far = 0;  // the largest coordinate the wrap may reach: the input's, a base cell out
+  for (const Vec3& p : run.input.points)
+    for (double c : p) far = std::max(far, std::fabs(c));
+  far += run.base;
+  int exponent = 0;
+  std::frexp(far, &exponent);                          // 2^(exponent-1) <= far < 2^exponent
+  const double step = std::ldexp(1.0, exponent - 24);  // floats' spacing there (24-bit significand)
+  const double share = step / finest_cell(run);
+  if (share < kFloatStepWarned) return;
+  char text[400];
+  std::snprintf(text, sizeof text,
+                "the output is stored in single precision (STL): at coordinates up to %.3g a float's step is "
+                "%.3g, %.2g of the finest cell (%.3g)",
+                far, step, share, finest_cell(run));
+  const std::string remedy =
+      ": write .obj, .ply or .vtp, which keep doubles, move the model nearer the origin, or take a larger "
+      "--base-size";
+  if (share >= kCoarsestFloatStep)
+    throw Error(ErrorKind::InvalidArgument,
+                std::string(text) + ", too coarse for a valid wrap that follows the input" + remedy);
+  if (run.progress)
+    run.progress->progress("prepare", 1.0,
+                           std::string("warning: ") + text + ", so the wrap follows the input less closely" + remedy);
+}
+
 // Drops the items i for which dropped(i) holds (read before any item moves), the others keeping
 // their order. Returns how many went.
 template <typename T, typename Dropped>
@@ -96,6 +126,7 @@ void prepare_input(WrapRun& run) {
     throw Error(ErrorKind::InvalidArgument, "base size " + run.params.base_size.to_string() +
                                                 " is too small for this model (over " +
                                                 std::to_string(kMostCellsAcross) + " cells across its diagonal)");
+  check_float_steps(run);
   // A rough surface's sharp edges (a scan's noise) form runs shorter than the wrap can follow:
   // they would become thousands of feature curves, each with nodes snapped and inserted.
   mesh::Roughness rough =

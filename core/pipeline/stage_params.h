@@ -17,6 +17,11 @@ namespace vdbwrap::pipeline {
 
 // A base size giving more cells than this across the diagonal is refused (memory and time).
 inline constexpr double kMostCellsAcross = 20000;
+// Output in single precision (binary STL): a wrap is refused where a float's step at its
+// coordinates is this share of the finest cell or more (nodes merge, the wrap cannot both
+// hug the input and stay valid), and the user is warned above the second share.
+inline constexpr double kCoarsestFloatStep = 0.5;
+inline constexpr double kFloatStepWarned = 1.0 / 16;
 // Runs of sharp edges shorter than this many base cells, many to a cell, are dropped as noise
 // (mesh/short_feature_runs.h).
 inline constexpr double kShortestSharpRun = 1.0;
