@@ -255,6 +255,8 @@ std::string to_json(const WrapReport& r, int indent) {
            {"narrow_strip_intersection_segments", r.features.narrow_strip_intersection_segments},
            {"duplicate_sharp_edges", r.features.duplicate_sharp_edges},
            {"duplicate_intersection_segments", r.features.duplicate_intersection_segments},
+           {"crack_edges", r.features.crack_edges},
+           {"crack_intersection_segments", r.features.crack_intersection_segments},
            {"inside_faces", r.features.inside_faces},
            {"intersection_segments", r.features.intersection_segments},
            {"curves", r.features.curves},

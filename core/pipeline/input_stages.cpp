@@ -6,6 +6,7 @@
 #include "check/diagnostics.h"
 #include "common/stage_timer.h"
 #include "mesh/bundled_lines.h"
+#include "mesh/cracks.h"
 #include "mesh/fold_crossings.h"
 #include "mesh/narrow_strips.h"
 #include "mesh/orient.h"
@@ -31,6 +32,9 @@ namespace {
 
 // The finest cell of the wrap (the thin-part levels aside), in model units.
 double finest_cell(const WrapRun& run) { return run.base / double(int64_t(1) << std::min(run.params.levels, 30)); }
+
+// Lines closer than this lie within a sliver's width of the finest cell (kBundleAngle).
+double sliver_width(const WrapRun& run) { return std::tan(kBundleAngle * M_PI / 180) / 2 * finest_cell(run); }
 
 // Output written in single precision keeps the wrap valid as written: far from the origin a
 // float's steps grow as coarse as the cells (a survey's coordinates, a part placed in a large
@@ -89,12 +93,35 @@ void drop_duplicate_lines(WrapRun& run) {
     lines.push_back({prepared.mesh.points[edges[i].a], prepared.mesh.points[edges[i].b], edge_out[i]});
   for (const auto& s : crossings)
     lines.push_back({s.a, s.b, mesh::crossing_outward(s.tri_a, s.tri_b, prepared.normals, prepared.closed_piece)});
-  const double width = std::tan(kBundleAngle * M_PI / 180) / 2 * finest_cell(run);
+  const double width = sliver_width(run);
   const std::vector<uint8_t> inner = mesh::inner_lines_of_bundles(lines, width, run.base, kBundleAngle);
   const size_t first_crossing = edges.size();
   run.report.features.duplicate_sharp_edges = drop_where(edges, [&](size_t i) { return inner[i]; });
   run.report.features.duplicate_intersection_segments =
       drop_where(crossings, [&](size_t i) { return inner[first_crossing + i]; });
+}
+
+// The two sides of a crack are no rims: the surface goes on across it, or turns at a crease,
+// which one side keeps as a sharp edge; the lines where the faces across it cross go too
+// (mesh/cracks.h).
+void drop_crack_sides(WrapRun& run) {
+  prep::PreparedInput& prepared = run.prepared;
+  std::vector<mesh::FeatureEdge>& edges = prepared.feature_edges;
+  const std::vector<mesh::CrackSide> crack =
+      mesh::crack_sides(prepared.mesh.points, prepared.mesh.triangles, prepared.normals, edges, sliver_width(run),
+                        run.base, kBundleAngle, run.params.feature_angle_deg);
+  for (size_t i = 0; i < edges.size(); ++i)
+    if (crack[i] == mesh::CrackSide::Crease) edges[i].kind = mesh::FeatureKind::Sharp;
+  std::vector<std::array<Vec3, 2>> lines;
+  for (const auto& s : prepared.intersections) lines.push_back({s.a, s.b});
+  const std::vector<uint8_t> along = mesh::crossings_along_cracks(prepared.mesh.points, edges, crack, lines,
+                                                                  sliver_width(run), run.base, kBundleAngle);
+  run.report.features.crack_intersection_segments =
+      drop_where(prepared.intersections, [&](size_t i) { return along[i]; });
+  mesh::join_crease_ends(prepared.mesh.points, crack, sliver_width(run), edges);
+  // (a crease's edge shorter than the width has its two ends joined: it goes too)
+  run.report.features.crack_edges =
+      drop_where(edges, [&](size_t i) { return crack[i] == mesh::CrackSide::Goes || edges[i].a == edges[i].b; });
 }
 
 }  // namespace
@@ -127,6 +154,8 @@ void prepare_input(WrapRun& run) {
                                                 " is too small for this model (over " +
                                                 std::to_string(kMostCellsAcross) + " cells across its diagonal)");
   check_float_steps(run);
+  // Faces that do not share their corners meet along cracks, each side a rim.
+  drop_crack_sides(run);
   // A rough surface's sharp edges (a scan's noise) form runs shorter than the wrap can follow:
   // they would become thousands of feature curves, each with nodes snapped and inserted.
   mesh::Roughness rough =

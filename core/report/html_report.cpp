@@ -229,6 +229,8 @@ std::string numbers_html(const json& r, bool has_wrap) {
           {"Intersection segments of narrow strips left out", "features.narrow_strip_intersection_segments"},
           {"Sharp edges beside a copy's left out", "features.duplicate_sharp_edges"},
           {"Intersection segments beside a copy's left out", "features.duplicate_intersection_segments"},
+          {"Boundary edges of cracks left out", "features.crack_edges"},
+          {"Intersection segments along cracks left out", "features.crack_intersection_segments"},
           {"Faces where solids touch left out", "features.inside_faces"},
           {"Curves", "features.curves"},
           {"Corners", "features.corners"},

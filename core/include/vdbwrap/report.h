@@ -58,6 +58,12 @@ struct FeatureStats {
   // Of the sharp edges and the intersection segments, those beside a parallel line farther out
   // closer than a sliver is wide (a part placed twice a hair apart): not used.
   size_t duplicate_sharp_edges = 0, duplicate_intersection_segments = 0;
+  // Of the boundary edges, those with another beside them a hair apart, parallel (the two sides
+  // of a crack between faces that do not share their corners): not used.
+  size_t crack_edges = 0;
+  // Of the intersection segments, those along a crack (neighbours across it, their corners
+  // rounded apart, cross there): not used.
+  size_t crack_intersection_segments = 0;
   size_t curves = 0, corners = 0, curves_captured = 0, corners_captured = 0, nodes_snapped = 0;
   // Curve points the traced chains missed (sampled every half finest cell), and what was done
   // about them: nodes inserted on the curve by edge splits, nodes moved onto it, points left

@@ -1,0 +1,144 @@
+#include "mesh/cracks.h"
+
+#include <algorithm>
+#include <cmath>
+#include <utility>
+
+#include <tbb/parallel_for.h>
+
+#include "common/cell_lists.h"
+#include "common/edge_key.h"
+#include "common/vec.h"
+#include "mesh/segment_grid.h"
+
+namespace vdbwrap::mesh {
+namespace {
+
+// Whether `beside(p)` holds at the middle of a-b, a quarter from each end and two widths from
+// each end: a side overlapped but for its end (a panel's edge beside a window's, shorter) is
+// the rim of an opening there.
+template <typename Beside>
+bool covered_along(const Vec3& a, const Vec3& b, double width, Beside&& beside) {
+  const double inset = std::min(0.25, 2 * width / norm(b - a));
+  for (double f : {0.5, 0.25, 0.75, inset, 1 - inset})
+    if (!beside(lerp(a, b, f))) return false;
+  return true;
+}
+
+}  // namespace
+
+std::vector<CrackSide> crack_sides(const std::vector<Vec3>& points, const std::vector<Tri>& triangles,
+                                   const std::vector<Vec3>& normals, const std::vector<FeatureEdge>& edges,
+                                   double width, double cell, double angle_deg, double feature_angle_deg) {
+  std::vector<CrackSide> crack(edges.size(), CrackSide::None);
+  if (!(width > 0) || !(cell > 0) || normals.size() != triangles.size()) return crack;
+  // The one face of each boundary edge.
+  std::vector<std::pair<uint64_t, uint32_t>> rim;  // (edge key, index into edges), sorted
+  double total = 0;
+  for (size_t i = 0; i < edges.size(); ++i)
+    if (edges[i].kind == FeatureKind::Boundary) {
+      rim.emplace_back(edge_key(edges[i].a, edges[i].b), uint32_t(i));
+      total += norm(points[edges[i].b] - points[edges[i].a]);
+    }
+  if (rim.size() < 2) return crack;
+  std::sort(rim.begin(), rim.end());
+  std::vector<uint32_t> face(edges.size(), UINT32_MAX);
+  for (size_t t = 0; t < triangles.size(); ++t)
+    for (int e = 0; e < 3; ++e) {
+      const uint64_t key = edge_key(triangles[t][e], triangles[t][(e + 1) % 3]);
+      const auto it = std::lower_bound(rim.begin(), rim.end(), std::make_pair(key, uint32_t(0)));
+      if (it != rim.end() && it->first == key) face[it->second] = uint32_t(t);
+    }
+  // Cells about as long as the edges: a soup's are many to a base cell.
+  SegmentGrid grid(std::min(cell, 2 * total / double(rim.size())), width, total, rim.size());
+  for (const auto& [key, i] : rim)
+    if (face[i] != UINT32_MAX) grid.add(i, points[edges[i].a], points[edges[i].b]);
+  const double parallel = std::cos(angle_deg * M_PI / 180), crease = std::cos(feature_angle_deg * M_PI / 180);
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, rim.size(), 256), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t k = r.begin(); k != r.end(); ++k) {
+      const uint32_t i = rim[k].second;
+      const Vec3 &a = points[edges[i].a], &b = points[edges[i].b];
+      if (face[i] == UINT32_MAX || !(norm2(b - a) > 0)) continue;
+      const Vec3 dir = normalized(b - a);
+      uint32_t other = UINT32_MAX;  // the other side, at the middle
+      const bool covered = covered_along(a, b, width, [&](const Vec3& p) {
+        // In a soup one edge of the other side covers all of this one: asked first.
+        if (other != UINT32_MAX && grid.passes_beside(other, p)) return true;
+        return grid.beside(p, i, [&](uint32_t j, const Vec3&) {
+          const auto& s = grid.segment(j);
+          if (std::abs(dot(dir, normalized(s[1] - s[0]))) < parallel) return false;
+          if (other == UINT32_MAX) other = j;
+          return true;
+        });
+      });
+      if (!covered) continue;
+      if (dot(normals[face[i]], normals[face[other]]) >= crease) {
+        crack[i] = CrackSide::Goes;
+        continue;
+      }
+      // A crease: the side whose normal leads in the largest component of the two normals'
+      // difference stays; all along the crack the same side, however its edges pair up.
+      const Vec3 d = normals[face[i]] - normals[face[other]];
+      int lead = 0;
+      for (int c = 1; c < 3; ++c)
+        if (std::abs(d[c]) > std::abs(d[lead])) lead = c;
+      crack[i] = d[lead] < 0 ? CrackSide::Goes : CrackSide::Crease;
+    }
+  });
+  return crack;
+}
+
+std::vector<uint8_t> crossings_along_cracks(const std::vector<Vec3>& points, const std::vector<FeatureEdge>& edges,
+                                            const std::vector<CrackSide>& side,
+                                            const std::vector<std::array<Vec3, 2>>& lines, double width, double cell,
+                                            double angle_deg) {
+  std::vector<uint8_t> along(lines.size(), 0);
+  if (!(width > 0) || !(cell > 0) || lines.empty()) return along;
+  double total = 0;
+  size_t count = 0;
+  for (size_t i = 0; i < edges.size(); ++i)
+    if (side[i] != CrackSide::None) total += norm(points[edges[i].b] - points[edges[i].a]), ++count;
+  if (count == 0) return along;
+  SegmentGrid grid(std::min(cell, 2 * total / double(count)), width, total, count);
+  for (size_t i = 0; i < edges.size(); ++i)
+    if (side[i] != CrackSide::None) grid.add(uint32_t(i), points[edges[i].a], points[edges[i].b]);
+  const double parallel = std::cos(angle_deg * M_PI / 180);
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, lines.size(), 256), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t k = r.begin(); k != r.end(); ++k) {
+      const Vec3 &a = lines[k][0], &b = lines[k][1];
+      if (!(norm2(b - a) > 0)) continue;
+      const Vec3 dir = normalized(b - a);
+      along[k] = covered_along(a, b, width, [&](const Vec3& p) {
+        return grid.beside(p, UINT32_MAX, [&](uint32_t j, const Vec3&) {
+          const auto& s = grid.segment(j);
+          return std::abs(dot(dir, normalized(s[1] - s[0]))) >= parallel;
+        });
+      });
+    }
+  });
+  return along;
+}
+
+void join_crease_ends(const std::vector<Vec3>& points, const std::vector<CrackSide>& side, double width,
+                      std::vector<FeatureEdge>& edges) {
+  if (!(width > 0)) return;
+  CellLists<uint32_t> ends(width);  // the vertices kept as ends
+  auto joined = [&](uint32_t v) {
+    const Vec3& p = points[v];
+    const Vec3 r{width, width, width};
+    uint32_t found = v;
+    CellLists<uint32_t>::for_cells(ends.cell_of(p - r), ends.cell_of(p + r), [&](const GridKey& k) {
+      const std::vector<uint32_t>* list = ends.find(k);
+      if (!list) return false;
+      for (uint32_t w : *list)
+        if (norm2(points[w] - p) <= width * width) return found = w, true;
+      return false;
+    });
+    if (found == v) ends.add(p, v);
+    return found;
+  };
+  for (size_t i = 0; i < edges.size(); ++i)
+    if (side[i] == CrackSide::Crease) edges[i].a = joined(edges[i].a), edges[i].b = joined(edges[i].b);
+}
+
+}  // namespace vdbwrap::mesh

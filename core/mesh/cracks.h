@@ -1,0 +1,50 @@
+// Cracks: a surface whose faces do not share their corners (a triangle soup written with
+// rounded coordinates, CAD faces tessellated each on its own) is cut along every crack into
+// rims that run side by side a hair apart. Each rim would be a feature curve, and the wrap,
+// pinned to thousands of them, would fold into slivers along every edge of the input; the
+// surface goes on across a crack, so a crack is no rim. Where the faces on its two sides meet
+// at an angle (a crease tessellated face by face), one of the two rims stays as the crease.
+#pragma once
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include "mesh/feature_edges.h"
+#include "vdbwrap/mesh.h"
+
+namespace vdbwrap::mesh {
+
+enum class CrackSide : uint8_t {
+  None = 0,    // no side of a crack
+  Goes = 1,    // a side of a crack across a smooth surface, or the other side of a crease
+  Crease = 2,  // the side of a crease that stays: a sharp edge, no rim
+};
+
+// Per edge of `edges`, whether it is a side of a crack: a boundary edge (FeatureKind::Boundary)
+// with, at its middle, a quarter from each end and two widths from each end, another boundary
+// edge beside it (the point's foot on that edge within its ends) within `width`, parallel to it
+// within `angle_deg`. The faces of the two sides (`normals`, per triangle) turning more than
+// `feature_angle_deg` from each other make a crease, and the side whose normal leads in the
+// largest component of the normals' difference stays. `cell` sizes the lookup grid, as for
+// SegmentGrid (narrowed to twice the edges' mean length).
+std::vector<CrackSide> crack_sides(const std::vector<Vec3>& points, const std::vector<Tri>& triangles,
+                                   const std::vector<Vec3>& normals, const std::vector<FeatureEdge>& edges,
+                                   double width, double cell, double angle_deg, double feature_angle_deg);
+
+// Per line (`lines`: where faces cross), whether it runs along a crack: at the same points, a side of a crack (`side`,
+// per edge of `edges`, not None) lies beside it within `width`, parallel within `angle_deg`. Neighbours across a crack
+// whose corners were rounded apart cross each other along it: no crease of the surface (a crease's stays as the side
+// kept). `cell` sizes the lookup grid.
+std::vector<uint8_t> crossings_along_cracks(const std::vector<Vec3>& points, const std::vector<FeatureEdge>& edges,
+                                            const std::vector<CrackSide>& side,
+                                            const std::vector<std::array<Vec3, 2>>& lines, double width, double cell,
+                                            double angle_deg);
+
+// The creases kept from one side (edges marked CrackSide::Crease) run on from triangle to
+// triangle of a soup, whose corners do not meet: ends within `width` of each other are made one
+// vertex (the first of them in edge order), so that the edges join into curves and do not end
+// in a corner at every triangle.
+void join_crease_ends(const std::vector<Vec3>& points, const std::vector<CrackSide>& side, double width,
+                      std::vector<FeatureEdge>& edges);
+
+}  // namespace vdbwrap::mesh

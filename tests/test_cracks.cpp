@@ -1,0 +1,148 @@
+// Cracks (mesh/cracks.h): the two sides of a crack between faces that do not share their
+// corners are no rims, but for one side of a crease; and the wrap of a real part written as a
+// triangle soup with rounded coordinates is as clean as that of the part itself.
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <random>
+
+#include "check/diagnostics.h"
+#include "common/vec.h"
+#include "mesh/cracks.h"
+#include "post/quality.h"
+#include "test_meshes.h"
+#include "vdbwrap/check.h"
+#include "vdbwrap/io.h"
+#include "vdbwrap/wrap.h"
+
+using namespace vdbwrap;
+using namespace vdbwrap::testing;
+
+namespace {
+
+// Every triangle with its own three corners, each moved by up to `jitter` per coordinate.
+Mesh soup_of(const Mesh& m, double jitter, uint32_t seed = 5) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> u(-jitter, jitter);
+  Mesh out;
+  for (const Tri& t : m.triangles) {
+    const uint32_t first = uint32_t(out.points.size());
+    for (uint32_t v : t)
+      out.points.push_back({m.points[v][0] + u(rng), m.points[v][1] + u(rng), m.points[v][2] + u(rng)});
+    out.triangles.push_back({first, first + 1, first + 2});
+  }
+  return out;
+}
+
+std::vector<mesh::FeatureEdge> rims_of(const Mesh& m) {
+  std::vector<mesh::FeatureEdge> rims;
+  for (const Tri& t : m.triangles)
+    for (int k = 0; k < 3; ++k) rims.push_back({t[k], t[(k + 1) % 3], mesh::FeatureKind::Boundary});
+  return rims;
+}
+
+std::vector<Vec3> normals_of(const Mesh& m) {
+  std::vector<Vec3> n;
+  for (const Tri& t : m.triangles) n.push_back(normalized(area_vector(m.points[t[0]], m.points[t[1]], m.points[t[2]])));
+  return n;
+}
+
+double small_angle_share(const Mesh& s) {
+  size_t bad = 0;
+  for (const Tri& t : s.triangles) bad += post::min_angle_deg(s.points[t[0]], s.points[t[1]], s.points[t[2]]) < 10;
+  return double(bad) / double(std::max<size_t>(1, s.triangles.size()));
+}
+
+}  // namespace
+
+// A flat square of two triangles that do not share the diagonal's ends (1e-6 apart): the two
+// sides of the diagonal go, the square's outer rim stays.
+TEST(Cracks, TheTwoSidesOfACrackAcrossAFlatFaceGo) {
+  Mesh m;
+  m.points = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {1e-6, 0, 0}, {1, 1, 1e-6}, {0, 1, 0}};
+  m.triangles = {{0, 1, 2}, {3, 4, 5}};
+  m.points[3] = {0, 1e-6, 0};
+  const auto rims = rims_of(m);
+  const auto crack = mesh::crack_sides(m.points, m.triangles, normals_of(m), rims, 1e-3, 0.1, 10, 30);
+  for (size_t i = 0; i < rims.size(); ++i) {
+    const bool diagonal = (rims[i].a == 0 && rims[i].b == 2) || (rims[i].a == 2 && rims[i].b == 0) ||
+                          (rims[i].a == 3 && rims[i].b == 4) || (rims[i].a == 4 && rims[i].b == 3);
+    EXPECT_EQ(crack[i] == mesh::CrackSide::Goes, diagonal) << "rim " << rims[i].a << "-" << rims[i].b;
+  }
+  // Farther apart than the width: a slit, both sides rims.
+  m.points[3] = {0, 0.01, 0}, m.points[4] = {0.99, 1, 0};
+  const auto slit = mesh::crack_sides(m.points, m.triangles, normals_of(m), rims, 1e-3, 0.1, 10, 30);
+  for (mesh::CrackSide c : slit) EXPECT_EQ(c, mesh::CrackSide::None);
+}
+
+// Two faces at a right angle whose common edge is two edges a hair apart, one of them split
+// in two (a crease tessellated face by face, a T-junction on it): one side stays as the crease.
+// The wall's two triangles meet across a flat crack too.
+TEST(Cracks, OneSideOfACreaseStays) {
+  Mesh m;
+  // Face z = 0 below y = 0 ... the crease along x at y = 0, z = 0.
+  m.points = {{0, 0, 0},       {2, 0, 0},       {1, -1, 0},     // the floor's triangle, its edge 0-1
+              {0, 1e-7, 0},    {1, 1e-7, 1e-7}, {1, 1e-7, 1},   // the wall's two triangles on the edge,
+              {1, 1e-7, 1e-7}, {2, 1e-7, 0},    {1, 1e-7, 1}};  // split at x = 1
+  m.triangles = {{0, 1, 2}, {3, 5, 4}, {6, 8, 7}};
+  const auto rims = rims_of(m);
+  const auto crack = mesh::crack_sides(m.points, m.triangles, normals_of(m), rims, 1e-3, 0.5, 10, 30);
+  size_t floor_kept = 0, wall_kept = 0, floor_on = 0, wall_on = 0;
+  for (size_t i = 0; i < rims.size(); ++i) {
+    const Vec3 &a = m.points[rims[i].a], &b = m.points[rims[i].b];
+    const bool on_crease =
+        std::abs(a[2]) < 1e-6 && std::abs(b[2]) < 1e-6 && std::abs(a[1]) < 1e-6 && std::abs(b[1]) < 1e-6;
+    const bool wall_crack = std::abs(a[0] - 1) < 1e-9 && std::abs(b[0] - 1) < 1e-9;
+    if (!on_crease) {
+      EXPECT_EQ(crack[i], wall_crack ? mesh::CrackSide::Goes : mesh::CrackSide::None) << "rim " << i;
+      continue;
+    }
+    (i < 3 ? floor_on : wall_on) += 1;
+    EXPECT_NE(crack[i], mesh::CrackSide::None);
+    (i < 3 ? floor_kept : wall_kept) += crack[i] == mesh::CrackSide::Crease;
+  }
+  ASSERT_EQ(floor_on, 1u);
+  ASSERT_EQ(wall_on, 2u);
+  // All of one side, none of the other.
+  EXPECT_TRUE((floor_kept == 1 && wall_kept == 0) || (floor_kept == 0 && wall_kept == 2))
+      << "floor " << floor_kept << ", wall " << wall_kept;
+}
+
+class SoupOfARealPart : public ::testing::TestWithParam<const char*> {};
+
+// A real part written as a triangle soup, each corner off by up to a millionth of the diagonal
+// (ten times the weld): every edge of the input is a crack. Without the cracks, each side was
+// a feature curve; each crease is kept from one side as a sharp edge (as a rim, each
+// triangle's would be a small rim, left out: fandisk's sharp edges 28x farther).
+TEST_P(SoupOfARealPart, WrapsAsCleanlyAsThePart) {
+  const Mesh part = io::read_mesh(data_path(GetParam()));
+  WrapParams params;
+  params.base_size = Length{1, true};
+  const WrapResult whole = wrap(part, params);
+  const double d = whole.report.diagonal;
+  const Mesh soup = soup_of(part, 1e-6 * d);
+  const WrapResult cracked = wrap(soup, params);
+  ASSERT_GT(cracked.report.input.border_edges, part.triangles.size()) << "the soup is not welded";
+  const DistanceStats edges_whole = sharp_edge_distance(part, whole.surface);
+  const DistanceStats edges_cracked = sharp_edge_distance(part, cracked.surface);
+  std::printf(
+      "[%s soup] crack edges %zu of %zu rims; %zu triangles (part %zu); small angles %.2f %% (part %.2f %%); "
+      "mean %.4f, p95 %.4f (part %.4f, %.4f); sharp edges' mean %.4f (part %.4f) %% of the diagonal\n",
+      GetParam(), cracked.report.features.crack_edges, cracked.report.features.boundary_edges,
+      cracked.surface.triangles.size(), whole.surface.triangles.size(), 100 * small_angle_share(cracked.surface),
+      100 * small_angle_share(whole.surface), 100 * cracked.report.output_to_input.mean / d,
+      100 * cracked.report.output_to_input.p95 / d, 100 * whole.report.output_to_input.mean / d,
+      100 * whole.report.output_to_input.p95 / d, 100 * edges_cracked.mean / d, 100 * edges_whole.mean / d);
+  const auto v = valid_closed_surface(cracked.surface);
+  EXPECT_TRUE(v.ok) << v.why;
+  EXPECT_GT(cracked.report.features.crack_edges, cracked.report.features.boundary_edges / 2);
+  EXPECT_LE(cracked.surface.triangles.size(), 1.25 * double(whole.surface.triangles.size()));
+  EXPECT_LE(small_angle_share(cracked.surface), 0.01);
+  EXPECT_LE(cracked.report.output_to_input.mean, 1.25 * whole.report.output_to_input.mean);
+  EXPECT_LE(cracked.report.output_to_input.p95, 1.25 * whole.report.output_to_input.p95);
+  // The creases kept from one side of each crack.
+  EXPECT_LE(edges_cracked.mean, 2 * edges_whole.mean + 1e-5 * d);
+}
+
+INSTANTIATE_TEST_SUITE_P(RealMeshes, SoupOfARealPart, ::testing::Values("fandisk.obj", "thingi_65004.stl"),
+                         [](const ::testing::TestParamInfo<const char*>& info) { return test_name_of(info.param); });
