@@ -31,10 +31,11 @@ std::vector<CrackSide> crack_sides(const std::vector<Vec3>& points, const std::v
                                    const std::vector<Vec3>& normals, const std::vector<FeatureEdge>& edges,
                                    double width, double cell, double angle_deg, double feature_angle_deg);
 
-// Per line (`lines`: where faces cross), whether it runs along a crack: at the same points, a side of a crack (`side`,
-// per edge of `edges`, not None) lies beside it within `width`, parallel within `angle_deg`. Neighbours across a crack
-// whose corners were rounded apart cross each other along it: no crease of the surface (a crease's stays as the side
-// kept). `cell` sizes the lookup grid.
+// Per line (`lines`: where faces cross), whether it runs along a crack: at the same points, a
+// side of a crack (`side`, per edge of `edges`, not None) lies beside it within `width`,
+// parallel within `angle_deg`. Neighbours across a crack whose corners were rounded apart
+// cross each other along it: no crease of the surface (a crease's stays as the side kept).
+// `cell` sizes the lookup grid.
 std::vector<uint8_t> crossings_along_cracks(const std::vector<Vec3>& points, const std::vector<FeatureEdge>& edges,
                                             const std::vector<CrackSide>& side,
                                             const std::vector<std::array<Vec3, 2>>& lines, double width, double cell,

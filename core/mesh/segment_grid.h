@@ -19,7 +19,6 @@ class SegmentGrid {
   // of long rods' edges at a base cell), and is at least four `width`s.
   SegmentGrid(double cell, double width, double total_length, size_t count);
 
-  double width() const { return width_; }
   // Lists segment i (each index once, in any order).
   void add(uint32_t i, const Vec3& a, const Vec3& b);
   const std::array<Vec3, 2>& segment(uint32_t i) const { return segments_[i]; }
@@ -30,8 +29,9 @@ class SegmentGrid {
     return norm2(d) <= width_ * width_;
   }
 
-  // Calls near(j, d) for each listed segment j but `self` whose point nearest p lies within its
-  // ends and within the width of p (d: from p to that point), until one returns true; whether one did.
+  // Calls near(j, d) for each listed segment j but `self` whose point nearest p lies within
+  // its ends and within the width of p (d: from p to that point), until one returns true;
+  // whether one did.
   template <typename Near>
   bool beside(const Vec3& p, uint32_t self, Near&& near) const {
     const Vec3 r{width_, width_, width_};
