@@ -6,10 +6,10 @@
 
 #include <tbb/parallel_for.h>
 
-#include "common/cell_lists.h"
 #include "common/edge_key.h"
 #include "common/vec.h"
 #include "mesh/segment_grid.h"
+#include "mesh/weld.h"
 
 namespace vdbwrap::mesh {
 namespace {
@@ -122,23 +122,19 @@ std::vector<uint8_t> crossings_along_cracks(const std::vector<Vec3>& points, con
 void join_crease_ends(const std::vector<Vec3>& points, const std::vector<CrackSide>& side, double width,
                       std::vector<FeatureEdge>& edges) {
   if (!(width > 0)) return;
-  CellLists<uint32_t> ends(width);  // the vertices kept as ends
-  auto joined = [&](uint32_t v) {
-    const Vec3& p = points[v];
-    const Vec3 r{width, width, width};
-    uint32_t found = v;
-    CellLists<uint32_t>::for_cells(ends.cell_of(p - r), ends.cell_of(p + r), [&](const GridKey& k) {
-      const std::vector<uint32_t>* list = ends.find(k);
-      if (!list) return false;
-      for (uint32_t w : *list)
-        if (norm2(points[w] - p) <= width * width) return found = w, true;
-      return false;
-    });
-    if (found == v) ends.add(p, v);
-    return found;
-  };
+  // The kept edges' ends in edge order, welded; each weld's first end stands for it.
+  std::vector<uint32_t> ends;
   for (size_t i = 0; i < edges.size(); ++i)
-    if (side[i] == CrackSide::Crease) edges[i].a = joined(edges[i].a), edges[i].b = joined(edges[i].b);
+    if (side[i] == CrackSide::Crease) ends.push_back(edges[i].a), ends.push_back(edges[i].b);
+  std::vector<Vec3> at(ends.size()), welded;
+  for (size_t k = 0; k < ends.size(); ++k) at[k] = points[ends[k]];
+  const std::vector<uint32_t> weld = weld_points(at, width, welded);
+  std::vector<uint32_t> first(welded.size(), UINT32_MAX);
+  for (size_t k = 0; k < ends.size(); ++k)
+    if (first[weld[k]] == UINT32_MAX) first[weld[k]] = ends[k];
+  size_t k = 0;
+  for (size_t i = 0; i < edges.size(); ++i)
+    if (side[i] == CrackSide::Crease) edges[i].a = first[weld[k++]], edges[i].b = first[weld[k++]];
 }
 
 }  // namespace vdbwrap::mesh

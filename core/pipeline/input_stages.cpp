@@ -4,6 +4,7 @@
 #include <vector>
 
 #include "check/diagnostics.h"
+#include "common/float_round.h"
 #include "common/stage_timer.h"
 #include "mesh/bundled_lines.h"
 #include "mesh/cracks.h"
@@ -42,12 +43,10 @@ double sliver_width(const WrapRun& run) { return std::tan(kBundleAngle * M_PI / 
 void check_float_steps(const WrapRun& run) {
   if (!run.params.float_coordinates) return;
   double far = 0;  // the largest coordinate the wrap may reach: the input's, a base cell out
-  for (const Vec3& p : run.input.points)
-    for (double c : p) far = std::max(far, std::fabs(c));
+  for (int k = 0; k < 3; ++k)
+    far = std::max({far, std::fabs(run.report.input.bbox_min[k]), std::fabs(run.report.input.bbox_max[k])});
   far += run.base;
-  int exponent = 0;
-  std::frexp(far, &exponent);                          // 2^(exponent-1) <= far < 2^exponent
-  const double step = std::ldexp(1.0, exponent - 24);  // floats' spacing there (24-bit significand)
+  const double step = float_step(far);
   const double share = step / finest_cell(run);
   if (share < kFloatStepWarned) return;
   char text[400];

@@ -10,6 +10,7 @@
 #include "check/distance_stats.h"
 #include "check/intersections.h"
 #include "common/debug_switch.h"
+#include "common/float_round.h"
 #include "common/stage_timer.h"
 #include "vdbwrap/io.h"
 #include "pipeline/stages.h"
@@ -32,13 +33,13 @@ std::string why_invalid(const WrapRun& run, const check::CgalVerdict& verdict) {
     for (const Vec3& p : run.result.surface.points)
       far = std::max({far, std::fabs(p[0]), std::fabs(p[1]), std::fabs(p[2])});
     for (double c : run.surface.cell_size) cell = std::min(cell, c);
-    const double float_step = far * 6e-8;  // a float's spacing at that magnitude, about
-    if (float_step > 1e-3 * cell) {
+    const double step = float_step(far);
+    if (step > 1e-3 * cell) {
       char text[160];
       std::snprintf(text, sizeof text,
                     "; the output is rounded to single precision for STL, whose steps (about %.3g at "
                     "these coordinates) are too coarse for cells of %.3g",
-                    float_step, cell);
+                    step, cell);
       why += std::string(text) + ": write .ply, .obj or .vtp, which keep doubles, or move the model nearer the origin";
     }
   }
