@@ -9,7 +9,10 @@ Writes, per MESH named NAME (binary STL):
 - NAME_holes.stl: the triangles whose centroid lies within 2 % of the diagonal of one of 30
   random triangles' centroids removed (a scan's holes);
 - NAME_flip.stl: 30 % of the triangles turned over (an export that lost the orientation);
-- NAME_all.stl: the holes, then the flips and the soup's cracks together.
+- NAME_all.stl: the holes, then the flips and the soup's cracks together;
+- NAME_gaps.stl: the soup with each coordinate moved by up to a thousandth of the diagonal
+  (an exporter's tolerance: gaps up to a fifth of a base cell at --base-size 1%, the faces
+  tilted by as much).
 Pure Python, deterministic (seed 7).
 """
 import math
@@ -42,8 +45,8 @@ def main():
         diag = math.dist(lo, hi)
         rng = random.Random(7)
 
-        def cracked(ts):
-            return [tuple(c + rng.uniform(-1, 1) * 1e-6 * diag for c in t) for t in ts]
+        def cracked(ts, amount=1e-6):
+            return [tuple(c + rng.uniform(-1, 1) * amount * diag for c in t) for t in ts]
 
         def flipped(ts):
             return [t[0:3] + t[6:9] + t[3:6] if rng.random() < 0.3 else t for t in ts]
@@ -54,6 +57,7 @@ def main():
         write_soup(os.path.join(out, f"{name}_holes.stl"), holes)
         write_soup(os.path.join(out, f"{name}_flip.stl"), flipped(tris))
         write_soup(os.path.join(out, f"{name}_all.stl"), cracked(flipped(holes)))
+        write_soup(os.path.join(out, f"{name}_gaps.stl"), cracked(tris, 1e-3))
         print(f"{name}: {len(tris)} triangles, {len(holes)} with holes")
 
 

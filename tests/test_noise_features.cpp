@@ -414,7 +414,9 @@ TEST(NoiseFeatures, OpenSheetsCrossingInAClumpAreNoCreases) {
               f.noise_intersection_segments);
   ASSERT_GT(f.intersection_segments, 5000u);
   EXPECT_GT(f.noise_intersection_segments, f.intersection_segments * 4 / 5);
-  EXPECT_EQ(run.prepared.intersections.size(), f.intersection_segments - f.noise_intersection_segments);
+  // (the cards' rims lie within a finest cell of one another's: some crossings go along those gaps)
+  EXPECT_EQ(run.prepared.intersections.size(),
+            f.intersection_segments - f.noise_intersection_segments - f.crack_intersection_segments);
 
   Mesh two;
   add_card(two, {0, 0, 0}, {2, 0, 0}, {0, 2, 0}, 40, 40);

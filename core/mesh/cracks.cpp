@@ -7,12 +7,20 @@
 #include <tbb/parallel_for.h>
 
 #include "common/edge_key.h"
+#include "common/union_find.h"
 #include "common/vec.h"
 #include "mesh/segment_grid.h"
 #include "mesh/weld.h"
 
 namespace vdbwrap::mesh {
 namespace {
+
+// Faces across a crack at a crease cross within about their gap of its sides (more where they
+// meet at a shallow angle): a line farther off is a crossing of the part's own (a rib through
+// a wall), even in a soup, where every edge is a side of a crack.
+constexpr double kLineAcross = 4;
+// Partners of a crack's side within this many times the nearest's distance are as near.
+constexpr double kAsNear = 4;
 
 // Whether `beside(p)` holds at the middle of a-b, a quarter from each end and two widths from
 // each end: a side overlapped but for its end (a panel's edge beside a window's, shorter) is
@@ -29,8 +37,10 @@ bool covered_along(const Vec3& a, const Vec3& b, double width, Beside&& beside) 
 
 std::vector<CrackSide> crack_sides(const std::vector<Vec3>& points, const std::vector<Tri>& triangles,
                                    const std::vector<Vec3>& normals, const std::vector<FeatureEdge>& edges,
-                                   double width, double cell, double angle_deg, double feature_angle_deg) {
+                                   double width, double cell, double angle_deg, double feature_angle_deg,
+                                   std::vector<double>* gap, bool nearest_partner) {
   std::vector<CrackSide> crack(edges.size(), CrackSide::None);
+  if (gap) gap->assign(edges.size(), 0.0);
   if (!(width > 0) || !(cell > 0) || normals.size() != triangles.size()) return crack;
   // The one face of each boundary edge.
   std::vector<std::pair<uint64_t, uint32_t>> rim;  // (edge key, index into edges), sorted
@@ -53,6 +63,15 @@ std::vector<CrackSide> crack_sides(const std::vector<Vec3>& points, const std::v
   SegmentGrid grid(std::min(cell, 2 * total / double(rim.size())), width, total, rim.size());
   for (const auto& [key, i] : rim)
     if (face[i] != UINT32_MAX) grid.add(i, points[edges[i].a], points[edges[i].b]);
+  // The surface's connected pieces: across a gap wider than a hairline, the other side is
+  // another piece (a soup's triangle, a CAD face tessellated on its own); within a piece, edges
+  // side by side are a jagged rim's zigzag.
+  std::vector<uint32_t> piece(triangles.size(), 0);
+  if (nearest_partner) {
+    UnionFind joined(points.size());
+    for (const Tri& t : triangles) joined.unite(t[0], t[1]), joined.unite(t[1], t[2]);
+    for (size_t t = 0; t < triangles.size(); ++t) piece[t] = joined.find(triangles[t][0]);
+  }
   const double parallel = std::cos(angle_deg * M_PI / 180), crease = std::cos(feature_angle_deg * M_PI / 180);
   tbb::parallel_for(tbb::blocked_range<size_t>(0, rim.size(), 256), [&](const tbb::blocked_range<size_t>& r) {
     for (size_t k = r.begin(); k != r.end(); ++k) {
@@ -60,18 +79,38 @@ std::vector<CrackSide> crack_sides(const std::vector<Vec3>& points, const std::v
       const Vec3 &a = points[edges[i].a], &b = points[edges[i].b];
       if (face[i] == UINT32_MAX || !(norm2(b - a) > 0)) continue;
       const Vec3 dir = normalized(b - a);
-      uint32_t other = UINT32_MAX;  // the other side, at the middle
+      auto parallel_side = [&](uint32_t j) {
+        const auto& s = grid.segment(j);
+        return (!nearest_partner || piece[face[j]] != piece[face[i]]) &&
+               std::abs(dot(dir, normalized(s[1] - s[0]))) >= parallel;
+      };
+      // The other side: the nearest parallel edge at the middle (a soup's neighbours of either
+      // side lie within a gap's width too: a row of a fine tessellation beside a crease)...
+      const Vec3 middle = lerp(a, b, 0.5);
+      uint32_t other = UINT32_MAX;
+      double nearest = INFINITY;
+      grid.beside(middle, i, [&](uint32_t j, const Vec3& d) {
+        if (parallel_side(j) && norm2(d) < nearest) nearest = norm2(d), other = j;
+        return !nearest_partner && other != UINT32_MAX;
+      });
+      if (other == UINT32_MAX) continue;
+      // ... or, as near, the face across a crease: a face written twice lies as near as that.
+      const double near = std::max(kAsNear * std::sqrt(nearest), width / 16);
+      double across = INFINITY;
+      if (nearest_partner)
+        grid.beside(middle, i, [&](uint32_t j, const Vec3& d) {
+          if (parallel_side(j) && norm2(d) <= near * near && norm2(d) < across &&
+              dot(normals[face[i]], normals[face[j]]) < crease)
+            across = norm2(d), other = j;
+          return false;
+        });
       const bool covered = covered_along(a, b, width, [&](const Vec3& p) {
         // In a soup one edge of the other side covers all of this one: asked first.
-        if (other != UINT32_MAX && grid.passes_beside(other, p)) return true;
-        return grid.beside(p, i, [&](uint32_t j, const Vec3&) {
-          const auto& s = grid.segment(j);
-          if (std::abs(dot(dir, normalized(s[1] - s[0]))) < parallel) return false;
-          if (other == UINT32_MAX) other = j;
-          return true;
-        });
+        return grid.passes_beside(other, p) ||
+               grid.beside(p, i, [&](uint32_t j, const Vec3&) { return parallel_side(j); });
       });
       if (!covered) continue;
+      if (gap) (*gap)[i] = std::sqrt(std::isinf(across) ? nearest : across);
       if (dot(normals[face[i]], normals[face[other]]) >= crease) {
         crack[i] = CrackSide::Goes;
         continue;
@@ -89,9 +128,9 @@ std::vector<CrackSide> crack_sides(const std::vector<Vec3>& points, const std::v
 }
 
 std::vector<uint8_t> crossings_along_cracks(const std::vector<Vec3>& points, const std::vector<FeatureEdge>& edges,
-                                            const std::vector<CrackSide>& side,
-                                            const std::vector<std::array<Vec3, 2>>& lines, double width, double cell,
-                                            double angle_deg) {
+                                            const std::vector<CrackSide>& side, const std::vector<double>& gap,
+                                            const std::vector<std::array<Vec3, 2>>& lines, double min_width,
+                                            double width, double cell, double angle_deg) {
   std::vector<uint8_t> along(lines.size(), 0);
   if (!(width > 0) || !(cell > 0) || lines.empty()) return along;
   double total = 0;
@@ -109,9 +148,10 @@ std::vector<uint8_t> crossings_along_cracks(const std::vector<Vec3>& points, con
       if (!(norm2(b - a) > 0)) continue;
       const Vec3 dir = normalized(b - a);
       along[k] = covered_along(a, b, width, [&](const Vec3& p) {
-        return grid.beside(p, UINT32_MAX, [&](uint32_t j, const Vec3&) {
+        return grid.beside(p, UINT32_MAX, [&](uint32_t j, const Vec3& d) {
           const auto& s = grid.segment(j);
-          return std::abs(dot(dir, normalized(s[1] - s[0]))) >= parallel;
+          const double across = std::max(min_width, kLineAcross * gap[j]);
+          return norm2(d) <= across * across && std::abs(dot(dir, normalized(s[1] - s[0]))) >= parallel;
         });
       });
     }

@@ -37,6 +37,10 @@ double finest_cell(const WrapRun& run) { return run.base / double(int64_t(1) << 
 // Lines closer than this lie within a sliver's width of the finest cell (kBundleAngle).
 double sliver_width(const WrapRun& run) { return std::tan(kBundleAngle * M_PI / 180) / 2 * finest_cell(run); }
 
+// The widest crack: a gap the wrap cannot enter (stage_params.h); never narrower than the
+// bundles' sliver width.
+double crack_width(const WrapRun& run) { return std::max(sliver_width(run), kCrackWidth * finest_cell(run)); }
+
 // Output written in single precision keeps the wrap valid as written: far from the origin a
 // float's steps grow as coarse as the cells (a survey's coordinates, a part placed in a large
 // assembly), nodes round onto one another and the wrap comes out as steps or not at all.
@@ -106,15 +110,23 @@ void drop_duplicate_lines(WrapRun& run) {
 void drop_crack_sides(WrapRun& run) {
   prep::PreparedInput& prepared = run.prepared;
   std::vector<mesh::FeatureEdge>& edges = prepared.feature_edges;
-  const std::vector<mesh::CrackSide> crack =
+  // A hairline crack's sides first, then the sides of wider gaps among the edges left (a
+  // wider search alone finds other partners beside a hairline crack's: a face written twice).
+  std::vector<double> gap, wide_gap;
+  std::vector<mesh::CrackSide> crack =
       mesh::crack_sides(prepared.mesh.points, prepared.mesh.triangles, prepared.normals, edges, sliver_width(run),
-                        run.base, kBundleAngle, run.params.feature_angle_deg);
+                        run.base, kBundleAngle, run.params.feature_angle_deg, &gap);
+  const std::vector<mesh::CrackSide> wide =
+      mesh::crack_sides(prepared.mesh.points, prepared.mesh.triangles, prepared.normals, edges, crack_width(run),
+                        run.base, kCrackAngle, run.params.feature_angle_deg, &wide_gap, true);
+  for (size_t i = 0; i < edges.size(); ++i)
+    if (crack[i] == mesh::CrackSide::None) crack[i] = wide[i], gap[i] = wide_gap[i];
   for (size_t i = 0; i < edges.size(); ++i)
     if (crack[i] == mesh::CrackSide::Crease) edges[i].kind = mesh::FeatureKind::Sharp;
   std::vector<std::array<Vec3, 2>> lines;
   for (const auto& s : prepared.intersections) lines.push_back({s.a, s.b});
-  const std::vector<uint8_t> along = mesh::crossings_along_cracks(prepared.mesh.points, edges, crack, lines,
-                                                                  sliver_width(run), run.base, kBundleAngle);
+  const std::vector<uint8_t> along = mesh::crossings_along_cracks(
+      prepared.mesh.points, edges, crack, gap, lines, sliver_width(run), crack_width(run), run.base, kCrackAngle);
   run.report.features.crack_intersection_segments =
       drop_where(prepared.intersections, [&](size_t i) { return along[i]; });
   mesh::join_crease_ends(prepared.mesh.points, crack, sliver_width(run), edges);

@@ -40,6 +40,15 @@ inline constexpr double kLineWeld = 1e-9;
 // and closer than a triangle with this smallest angle is wide at the finest cell
 // (mesh/bundled_lines.h): the outermost of such a bundle is kept.
 inline constexpr double kBundleAngle = 10;
+// A crack, the gap between faces that do not share their corners, is up to this many finest
+// cells wide: an exporter's tolerance, coordinates rounded coarsely, faces tessellated each on
+// its own. No narrower gap lets the volume through, so the wrap passes over it either way;
+// as rims its sides would fold the wrap along every edge. The sides of so wide a gap are
+// parallel only within kCrackAngle (each end off by up to the width, on edges a cell or two
+// long). The creases kept from one side still join within the sliver width: within a cell,
+// both ends of a finely tessellated crease's short edges would join, and the edges go.
+inline constexpr double kCrackWidth = 1.0;
+inline constexpr double kCrackAngle = 30;
 // Unresolved contacts listed in the report, one per base cell.
 inline constexpr size_t kMostContactLocations = 100;
 // The refit where the first fit is far from the input (refine_where_far): it looks at triangles
