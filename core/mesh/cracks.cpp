@@ -15,10 +15,6 @@
 namespace vdbwrap::mesh {
 namespace {
 
-// Faces across a crack at a crease cross within about their gap of its sides (more where they
-// meet at a shallow angle): a line farther off is a crossing of the part's own (a rib through
-// a wall), even in a soup, where every edge is a side of a crack.
-constexpr double kLineAcross = 4;
 // Partners of a crack's side within this many times the nearest's distance are as near.
 constexpr double kAsNear = 4;
 
@@ -38,9 +34,9 @@ bool covered_along(const Vec3& a, const Vec3& b, double width, Beside&& beside) 
 std::vector<CrackSide> crack_sides(const std::vector<Vec3>& points, const std::vector<Tri>& triangles,
                                    const std::vector<Vec3>& normals, const std::vector<FeatureEdge>& edges,
                                    double width, double cell, double angle_deg, double feature_angle_deg,
-                                   std::vector<double>* gap, bool nearest_partner) {
+                                   bool nearest_partner, std::vector<std::array<uint32_t, 2>>* faces_across) {
   std::vector<CrackSide> crack(edges.size(), CrackSide::None);
-  if (gap) gap->assign(edges.size(), 0.0);
+  if (faces_across) faces_across->assign(edges.size(), {UINT32_MAX, UINT32_MAX});
   if (!(width > 0) || !(cell > 0) || normals.size() != triangles.size()) return crack;
   // The one face of each boundary edge.
   std::vector<std::pair<uint64_t, uint32_t>> rim;  // (edge key, index into edges), sorted
@@ -51,6 +47,10 @@ std::vector<CrackSide> crack_sides(const std::vector<Vec3>& points, const std::v
       total += norm(points[edges[i].b] - points[edges[i].a]);
     }
   if (rim.size() < 2) return crack;
+  // A gap wider than a quarter of the faces' edges tilts the faces across it as much as a
+  // crease (a soup of confetti: its rims go as small ones, its tilts as noise), and the search
+  // would look at many edges per point.
+  if (nearest_partner) width = std::min(width, total / double(rim.size()) / 4);
   std::sort(rim.begin(), rim.end());
   std::vector<uint32_t> face(edges.size(), UINT32_MAX);
   for (size_t t = 0; t < triangles.size(); ++t)
@@ -89,28 +89,27 @@ std::vector<CrackSide> crack_sides(const std::vector<Vec3>& points, const std::v
       const Vec3 middle = lerp(a, b, 0.5);
       uint32_t other = UINT32_MAX;
       double nearest = INFINITY;
+      std::vector<std::pair<double, uint32_t>> beside;  // (squared distance, edge) at the middle
       grid.beside(middle, i, [&](uint32_t j, const Vec3& d) {
-        if (parallel_side(j) && norm2(d) < nearest) nearest = norm2(d), other = j;
-        return !nearest_partner && other != UINT32_MAX;
+        if (!parallel_side(j)) return false;
+        if (norm2(d) < nearest) nearest = norm2(d), other = j;
+        if (nearest_partner) beside.emplace_back(norm2(d), j);
+        return !nearest_partner;
       });
       if (other == UINT32_MAX) continue;
       // ... or, as near, the face across a crease: a face written twice lies as near as that.
       const double near = std::max(kAsNear * std::sqrt(nearest), width / 16);
       double across = INFINITY;
-      if (nearest_partner)
-        grid.beside(middle, i, [&](uint32_t j, const Vec3& d) {
-          if (parallel_side(j) && norm2(d) <= near * near && norm2(d) < across &&
-              dot(normals[face[i]], normals[face[j]]) < crease)
-            across = norm2(d), other = j;
-          return false;
-        });
+      for (const auto& [d2, j] : beside)
+        if (d2 <= near * near && d2 < across && dot(normals[face[i]], normals[face[j]]) < crease)
+          across = d2, other = j;
       const bool covered = covered_along(a, b, width, [&](const Vec3& p) {
         // In a soup one edge of the other side covers all of this one: asked first.
         return grid.passes_beside(other, p) ||
                grid.beside(p, i, [&](uint32_t j, const Vec3&) { return parallel_side(j); });
       });
       if (!covered) continue;
-      if (gap) (*gap)[i] = std::sqrt(std::isinf(across) ? nearest : across);
+      if (faces_across) (*faces_across)[i] = {face[i], face[other]};
       if (dot(normals[face[i]], normals[face[other]]) >= crease) {
         crack[i] = CrackSide::Goes;
         continue;
@@ -128,9 +127,9 @@ std::vector<CrackSide> crack_sides(const std::vector<Vec3>& points, const std::v
 }
 
 std::vector<uint8_t> crossings_along_cracks(const std::vector<Vec3>& points, const std::vector<FeatureEdge>& edges,
-                                            const std::vector<CrackSide>& side, const std::vector<double>& gap,
-                                            const std::vector<std::array<Vec3, 2>>& lines, double min_width,
-                                            double width, double cell, double angle_deg) {
+                                            const std::vector<CrackSide>& side,
+                                            const std::vector<std::array<Vec3, 2>>& lines, double width, double cell,
+                                            double angle_deg) {
   std::vector<uint8_t> along(lines.size(), 0);
   if (!(width > 0) || !(cell > 0) || lines.empty()) return along;
   double total = 0;
@@ -148,10 +147,9 @@ std::vector<uint8_t> crossings_along_cracks(const std::vector<Vec3>& points, con
       if (!(norm2(b - a) > 0)) continue;
       const Vec3 dir = normalized(b - a);
       along[k] = covered_along(a, b, width, [&](const Vec3& p) {
-        return grid.beside(p, UINT32_MAX, [&](uint32_t j, const Vec3& d) {
+        return grid.beside(p, UINT32_MAX, [&](uint32_t j, const Vec3&) {
           const auto& s = grid.segment(j);
-          const double across = std::max(min_width, kLineAcross * gap[j]);
-          return norm2(d) <= across * across && std::abs(dot(dir, normalized(s[1] - s[0]))) >= parallel;
+          return std::abs(dot(dir, normalized(s[1] - s[0]))) >= parallel;
         });
       });
     }

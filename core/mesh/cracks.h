@@ -26,28 +26,29 @@ enum class CrackSide : uint8_t {
 // within `angle_deg`. The other side is the first such edge found at the middle (a hairline
 // crack's is plain). With `nearest_partner` (gaps up to a cell wide), the other side must lie in
 // another connected piece of the surface (within a piece, edges side by side are a jagged rim's
-// zigzag), and it is the nearest such edge at the middle or, as near, one across a crease (a
-// soup's neighbours of either side lie within the width too; a face written twice as near as
-// the other side). The faces of the two sides (`normals`, per triangle) turning more than
-// `feature_angle_deg` from each other make a crease, and the side whose normal leads in the
-// largest component of the normals' difference stays. `gap`, when given: per edge, the
-// distance to the other side at the middle (0 where none). `cell` sizes the lookup grid, as for
-// SegmentGrid (narrowed to twice the edges' mean length).
+// zigzag), `width` is at most a quarter of the boundary edges' mean length, and the other side is the
+// nearest such edge at the middle or, as near, one across a crease (a soup's neighbours of
+// either side lie within the width too; a face written twice as near as the other side). The
+// faces of the two sides (`normals`, per triangle) turning more than `feature_angle_deg` from
+// each other make a crease, and the side whose normal leads in the largest component of the
+// normals' difference stays. `faces_across`, when given: per edge of a crack, its face and the
+// other side's (UINT32_MAX for others). `cell` sizes the lookup grid, as for SegmentGrid
+// (narrowed to twice the edges' mean length).
 std::vector<CrackSide> crack_sides(const std::vector<Vec3>& points, const std::vector<Tri>& triangles,
                                    const std::vector<Vec3>& normals, const std::vector<FeatureEdge>& edges,
                                    double width, double cell, double angle_deg, double feature_angle_deg,
-                                   std::vector<double>* gap = nullptr, bool nearest_partner = false);
+                                   bool nearest_partner = false,
+                                   std::vector<std::array<uint32_t, 2>>* faces_across = nullptr);
 
 // Per line (`lines`: where faces cross), whether it runs along a crack: at the same points, a
-// side of a crack (`side`, per edge of `edges`, not None) lies beside it within four times its
-// `gap` (from crack_sides) or `min_width`, whichever is wider, and within `width`, parallel
-// within `angle_deg`. Neighbours across a crack whose corners were rounded apart
+// side of a crack (`side`, per edge of `edges`, not None) lies beside it within `width`,
+// parallel within `angle_deg`. Neighbours across a crack whose corners were rounded apart
 // cross each other along it: no crease of the surface (a crease's stays as the side kept).
 // `cell` sizes the lookup grid.
 std::vector<uint8_t> crossings_along_cracks(const std::vector<Vec3>& points, const std::vector<FeatureEdge>& edges,
-                                            const std::vector<CrackSide>& side, const std::vector<double>& gap,
-                                            const std::vector<std::array<Vec3, 2>>& lines, double min_width,
-                                            double width, double cell, double angle_deg);
+                                            const std::vector<CrackSide>& side,
+                                            const std::vector<std::array<Vec3, 2>>& lines, double width, double cell,
+                                            double angle_deg);
 
 // The creases kept from one side (edges marked CrackSide::Crease) run on from triangle to
 // triangle of a soup, whose corners do not meet: ends within `width` of each other are made one

@@ -112,23 +112,34 @@ void drop_crack_sides(WrapRun& run) {
   std::vector<mesh::FeatureEdge>& edges = prepared.feature_edges;
   // A hairline crack's sides first, then the sides of wider gaps among the edges left (a
   // wider search alone finds other partners beside a hairline crack's: a face written twice).
-  std::vector<double> gap, wide_gap;
   std::vector<mesh::CrackSide> crack =
       mesh::crack_sides(prepared.mesh.points, prepared.mesh.triangles, prepared.normals, edges, sliver_width(run),
-                        run.base, kBundleAngle, run.params.feature_angle_deg, &gap);
+                        run.base, kBundleAngle, run.params.feature_angle_deg);
+  std::vector<std::array<uint32_t, 2>> across;
   const std::vector<mesh::CrackSide> wide =
       mesh::crack_sides(prepared.mesh.points, prepared.mesh.triangles, prepared.normals, edges, crack_width(run),
-                        run.base, kCrackAngle, run.params.feature_angle_deg, &wide_gap, true);
+                        run.base, kCrackAngle, run.params.feature_angle_deg, true, &across);
+  std::vector<std::pair<uint32_t, uint32_t>> gap_faces;  // the two faces across a gap, sorted
   for (size_t i = 0; i < edges.size(); ++i)
-    if (crack[i] == mesh::CrackSide::None) crack[i] = wide[i], gap[i] = wide_gap[i];
+    if (crack[i] == mesh::CrackSide::None && wide[i] != mesh::CrackSide::None) {
+      crack[i] = wide[i];
+      gap_faces.emplace_back(std::min(across[i][0], across[i][1]), std::max(across[i][0], across[i][1]));
+    }
+  std::sort(gap_faces.begin(), gap_faces.end());
   for (size_t i = 0; i < edges.size(); ++i)
     if (crack[i] == mesh::CrackSide::Crease) edges[i].kind = mesh::FeatureKind::Sharp;
+  // Where the faces across a crack cross (their corners rounded apart): beside a hairline
+  // crack's sides; where two faces across a gap cross, that pair (a search a gap wide would
+  // look at many sides per point of a soup of small faces).
   std::vector<std::array<Vec3, 2>> lines;
   for (const auto& s : prepared.intersections) lines.push_back({s.a, s.b});
-  const std::vector<uint8_t> along = mesh::crossings_along_cracks(
-      prepared.mesh.points, edges, crack, gap, lines, sliver_width(run), crack_width(run), run.base, kCrackAngle);
-  run.report.features.crack_intersection_segments =
-      drop_where(prepared.intersections, [&](size_t i) { return along[i]; });
+  const std::vector<uint8_t> along = mesh::crossings_along_cracks(prepared.mesh.points, edges, crack, lines,
+                                                                  sliver_width(run), run.base, kBundleAngle);
+  run.report.features.crack_intersection_segments = drop_where(prepared.intersections, [&](size_t i) {
+    const auto& s = prepared.intersections[i];
+    return along[i] || std::binary_search(gap_faces.begin(), gap_faces.end(),
+                                          std::make_pair(std::min(s.tri_a, s.tri_b), std::max(s.tri_a, s.tri_b)));
+  });
   mesh::join_crease_ends(prepared.mesh.points, crack, sliver_width(run), edges);
   // (a crease's edge shorter than the width has its two ends joined: it goes too)
   run.report.features.crack_edges =

@@ -45,8 +45,9 @@ inline constexpr double kBundleAngle = 10;
 // its own. No narrower gap lets the volume through, so the wrap passes over it either way;
 // as rims its sides would fold the wrap along every edge. The sides of so wide a gap are
 // parallel only within kCrackAngle (each end off by up to the width, on edges a cell or two
-// long). The creases kept from one side still join within the sliver width: within a cell,
-// both ends of a finely tessellated crease's short edges would join, and the edges go.
+// long; mesh/cracks.h narrows it to the edges). The creases kept from one side still join
+// within the sliver width: within a cell, both ends of a finely tessellated crease's short
+// edges would join, and the edges go.
 inline constexpr double kCrackWidth = 1.0;
 inline constexpr double kCrackAngle = 30;
 // Unresolved contacts listed in the report, one per base cell.
