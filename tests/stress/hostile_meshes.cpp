@@ -608,6 +608,44 @@ HostileMesh scaled(const std::string& kind, int scale, uint32_t seed, double fac
   return finish(kind, scale, seed, m, ext, add(mul(Vec3{0.25, 0.25, 0.5}, factor), offset));
 }
 
+// The dirty solid written as a soup whose corners miss each other by up to a thousandth of its
+// size: gaps of an exporter's tolerance along every edge, the faces tilted by as much.
+HostileMesh gapped_soup(int scale, uint32_t seed) {
+  Rng rng(seed);
+  const Mesh s = small_dirty_solid(scale);
+  Mesh m;
+  for (const Tri& t : s.triangles) {
+    const uint32_t first = uint32_t(m.points.size());
+    for (uint32_t v : t)
+      m.points.push_back(add(s.points[v], {rng.u(-2e-3, 2e-3), rng.u(-2e-3, 2e-3), rng.u(-2e-3, 2e-3)}));
+    m.triangles.push_back({first, first + 1, first + 2});
+  }
+  return finish("gapped_soup", scale, seed, m, "stl", {0.25, 0.25, 0.5});
+}
+
+// Three closed shells one inside the other (a hollow print's walls exported twice, a scan's
+// inner and outer surfaces).
+HostileMesh nested_shells(int scale, uint32_t seed) {
+  (void)seed;
+  Mesh m;
+  for (double r : {1.0, 0.8, 0.6}) append(m, vdbwrap::testing::icosphere_mesh(r, scale >= 4 ? 4 : 3), "shell");
+  return finish("nested_shells", scale, seed, m, "stl", {0.9, 0, 0});
+}
+
+// The dirty solid and one tiny triangle a thousand times its size away (a stray vertex of an
+// export): the box, and so the base size, is the outlier's.
+HostileMesh far_outlier(int scale, uint32_t seed) {
+  Rng rng(seed);
+  Mesh m = small_dirty_solid(scale);
+  const Vec3 far{rng.u(900, 1100), rng.u(-100, 100), rng.u(-100, 100)};
+  const uint32_t a = uint32_t(m.points.size());
+  m.points.push_back(far);
+  m.points.push_back(add(far, {1e-3, 0, 0}));
+  m.points.push_back(add(far, {0, 1e-3, 0}));
+  m.triangles.push_back({a, a + 1, a + 2});
+  return finish("far_outlier", scale, seed, m, "stl", {0.25, 0.25, 0.5});
+}
+
 HostileMesh unreferenced_vertices(int scale, uint32_t seed) {
   Rng rng(seed);
   Mesh m = grid_box({0, 0, 0}, {1, 1, 1}, 3 * scale);
@@ -704,6 +742,9 @@ const std::vector<std::pair<std::string, Maker>>& makers() {
       {"inf_coordinates", inf_coordinates},
       {"empty_file", empty_file},
       {"no_triangles", no_triangles},
+      {"gapped_soup", gapped_soup},
+      {"nested_shells", nested_shells},
+      {"far_outlier", far_outlier},
   };
   return list;
 }
