@@ -34,7 +34,8 @@ bool covered_along(const Vec3& a, const Vec3& b, double width, Beside&& beside) 
 std::vector<CrackSide> crack_sides(const std::vector<Vec3>& points, const std::vector<Tri>& triangles,
                                    const std::vector<Vec3>& normals, const std::vector<FeatureEdge>& edges,
                                    double width, double cell, double angle_deg, double feature_angle_deg,
-                                   bool nearest_partner, std::vector<std::array<uint32_t, 2>>* faces_across) {
+                                   bool nearest_partner, std::vector<std::array<uint32_t, 2>>* faces_across,
+                                   const std::vector<CrackSide>* decided) {
   std::vector<CrackSide> crack(edges.size(), CrackSide::None);
   if (faces_across) faces_across->assign(edges.size(), {UINT32_MAX, UINT32_MAX});
   if (!(width > 0) || !(cell > 0) || normals.size() != triangles.size()) return crack;
@@ -74,10 +75,11 @@ std::vector<CrackSide> crack_sides(const std::vector<Vec3>& points, const std::v
   }
   const double parallel = std::cos(angle_deg * M_PI / 180), crease = std::cos(feature_angle_deg * M_PI / 180);
   tbb::parallel_for(tbb::blocked_range<size_t>(0, rim.size(), 256), [&](const tbb::blocked_range<size_t>& r) {
+    std::vector<std::pair<double, uint32_t>> beside;  // (squared distance, edge) at an edge's middle
     for (size_t k = r.begin(); k != r.end(); ++k) {
       const uint32_t i = rim[k].second;
       const Vec3 &a = points[edges[i].a], &b = points[edges[i].b];
-      if (face[i] == UINT32_MAX || !(norm2(b - a) > 0)) continue;
+      if (face[i] == UINT32_MAX || !(norm2(b - a) > 0) || (decided && (*decided)[i] != CrackSide::None)) continue;
       const Vec3 dir = normalized(b - a);
       auto parallel_side = [&](uint32_t j) {
         const auto& s = grid.segment(j);
@@ -89,7 +91,7 @@ std::vector<CrackSide> crack_sides(const std::vector<Vec3>& points, const std::v
       const Vec3 middle = lerp(a, b, 0.5);
       uint32_t other = UINT32_MAX;
       double nearest = INFINITY;
-      std::vector<std::pair<double, uint32_t>> beside;  // (squared distance, edge) at the middle
+      beside.clear();
       grid.beside(middle, i, [&](uint32_t j, const Vec3& d) {
         if (!parallel_side(j)) return false;
         if (norm2(d) < nearest) nearest = norm2(d), other = j;

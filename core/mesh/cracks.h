@@ -32,13 +32,15 @@ enum class CrackSide : uint8_t {
 // faces of the two sides (`normals`, per triangle) turning more than `feature_angle_deg` from
 // each other make a crease, and the side whose normal leads in the largest component of the
 // normals' difference stays. `faces_across`, when given: per edge of a crack, its face and the
-// other side's (UINT32_MAX for others). `cell` sizes the lookup grid, as for SegmentGrid
+// other side's (UINT32_MAX for others). Edges `decided` already (not None) are not looked at
+// again; they stay the other side of others. `cell` sizes the lookup grid, as for SegmentGrid
 // (narrowed to twice the edges' mean length).
 std::vector<CrackSide> crack_sides(const std::vector<Vec3>& points, const std::vector<Tri>& triangles,
                                    const std::vector<Vec3>& normals, const std::vector<FeatureEdge>& edges,
                                    double width, double cell, double angle_deg, double feature_angle_deg,
                                    bool nearest_partner = false,
-                                   std::vector<std::array<uint32_t, 2>>* faces_across = nullptr);
+                                   std::vector<std::array<uint32_t, 2>>* faces_across = nullptr,
+                                   const std::vector<CrackSide>* decided = nullptr);
 
 // Per line (`lines`: where faces cross), whether it runs along a crack: at the same points, a
 // side of a crack (`side`, per edge of `edges`, not None) lies beside it within `width`,

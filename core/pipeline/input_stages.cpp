@@ -112,13 +112,14 @@ void drop_crack_sides(WrapRun& run) {
   std::vector<mesh::FeatureEdge>& edges = prepared.feature_edges;
   // A hairline crack's sides first, then the sides of wider gaps among the edges left (a
   // wider search alone finds other partners beside a hairline crack's: a face written twice).
-  std::vector<mesh::CrackSide> crack =
+  const std::vector<mesh::CrackSide> hairline =
       mesh::crack_sides(prepared.mesh.points, prepared.mesh.triangles, prepared.normals, edges, sliver_width(run),
                         run.base, kBundleAngle, run.params.feature_angle_deg);
   std::vector<std::array<uint32_t, 2>> across;
   const std::vector<mesh::CrackSide> wide =
       mesh::crack_sides(prepared.mesh.points, prepared.mesh.triangles, prepared.normals, edges, crack_width(run),
-                        run.base, kCrackAngle, run.params.feature_angle_deg, true, &across);
+                        run.base, kCrackAngle, run.params.feature_angle_deg, true, &across, &hairline);
+  std::vector<mesh::CrackSide> crack = hairline;
   std::vector<std::pair<uint32_t, uint32_t>> gap_faces;  // the two faces across a gap, sorted
   for (size_t i = 0; i < edges.size(); ++i)
     if (crack[i] == mesh::CrackSide::None && wide[i] != mesh::CrackSide::None) {
@@ -133,14 +134,15 @@ void drop_crack_sides(WrapRun& run) {
   // look at many sides per point of a soup of small faces).
   std::vector<std::array<Vec3, 2>> lines;
   for (const auto& s : prepared.intersections) lines.push_back({s.a, s.b});
-  const std::vector<uint8_t> along = mesh::crossings_along_cracks(prepared.mesh.points, edges, crack, lines,
+  const std::vector<uint8_t> along = mesh::crossings_along_cracks(prepared.mesh.points, edges, hairline, lines,
                                                                   sliver_width(run), run.base, kBundleAngle);
   run.report.features.crack_intersection_segments = drop_where(prepared.intersections, [&](size_t i) {
     const auto& s = prepared.intersections[i];
     return along[i] || std::binary_search(gap_faces.begin(), gap_faces.end(),
                                           std::make_pair(std::min(s.tri_a, s.tri_b), std::max(s.tri_a, s.tri_b)));
   });
-  mesh::join_crease_ends(prepared.mesh.points, crack, sliver_width(run), edges);
+  // A hairline crease's ends lie within the sliver width; a gap's, a gap apart, join no nearer.
+  mesh::join_crease_ends(prepared.mesh.points, hairline, sliver_width(run), edges);
   // (a crease's edge shorter than the width has its two ends joined: it goes too)
   run.report.features.crack_edges =
       drop_where(edges, [&](size_t i) { return crack[i] == mesh::CrackSide::Goes || edges[i].a == edges[i].b; });
