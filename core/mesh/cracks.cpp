@@ -15,7 +15,8 @@
 namespace vdbwrap::mesh {
 namespace {
 
-// Partners of a crack's side within this many times the nearest's distance are as near.
+// Partners of a gap's side within this many times the nearest's distance, or a sixteenth of the
+// width (the nearest may be a copy of the side itself), are as near.
 constexpr double kAsNear = 4;
 
 // Whether `beside(p)` holds at the middle of a-b, a quarter from each end and two widths from
@@ -86,8 +87,9 @@ std::vector<CrackSide> crack_sides(const std::vector<Vec3>& points, const std::v
         return (!nearest_partner || piece[face[j]] != piece[face[i]]) &&
                std::abs(dot(dir, normalized(s[1] - s[0]))) >= parallel;
       };
-      // The other side: the nearest parallel edge at the middle (a soup's neighbours of either
-      // side lie within a gap's width too: a row of a fine tessellation beside a crease)...
+      // The other side, at the middle: a hairline crack's first parallel edge found; a gap's
+      // nearest (a soup's neighbours of either side lie within a gap's width too: a row of a
+      // fine tessellation beside a crease)...
       const Vec3 middle = lerp(a, b, 0.5);
       uint32_t other = UINT32_MAX;
       double nearest = INFINITY;
