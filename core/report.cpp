@@ -257,6 +257,7 @@ std::string to_json(const WrapReport& r, int indent) {
            {"duplicate_intersection_segments", r.features.duplicate_intersection_segments},
            {"crack_edges", r.features.crack_edges},
            {"crack_intersection_segments", r.features.crack_intersection_segments},
+           {"crack_gap", r.features.crack_gap},
            {"inside_faces", r.features.inside_faces},
            {"intersection_segments", r.features.intersection_segments},
            {"curves", r.features.curves},

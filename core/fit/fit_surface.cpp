@@ -244,7 +244,10 @@ FittedSurface fit_to_input(const extract::LatticeSurface& surf, const grid::Adap
         for (uint32_t w : neighbours[i]) emit(i, w);
       for (const auto& q : quads) emit(q[0], q[2]), emit(q[2], q[0]), emit(q[1], q[3]), emit(q[3], q[1]);
     });
-    auto reachable = [&](const Vec3& from, const Vec3& to) { return input.in_view(from, to, offset); };
+    // Across a crack the faces stand a gap behind or beyond each other: one side's rim can hide
+    // a crease the other side's face makes.
+    const double view = std::max(offset, 4 * params.gap);
+    auto reachable = [&](const Vec3& from, const Vec3& to) { return input.in_view(from, to, view); };
     for (const auto& [a, b] : snap_to_curves(traced_curves, graph, lattice, target, snapped, trace_radius,
                                              std::max(8.0 * hf, 2.0 * trace_radius), offset, out.snap, reachable))
       traced.insert({std::min(a, b), std::max(a, b)});

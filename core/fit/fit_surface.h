@@ -46,6 +46,10 @@ struct FitParams {
   int validity_rounds = 400;       // rounds of the validity loop
   bool float_coordinates = false;  // validity as it will be stored: coordinates rounded to float
   bool two_sided_sheets = false;   // each side of an input wrapped from both sides projects to its own side
+  // How far faces meant to meet stand apart (a crack's gap, model units): the tracing takes a
+  // curve point as in reach when the way to it is clear up to two gaps short of it, or half the
+  // offset.
+  double gap = 0;
 };
 
 // `origin` turns the local frame of the grid and the index into output coordinates.

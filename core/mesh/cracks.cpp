@@ -19,6 +19,12 @@ namespace {
 // width (the nearest may be a copy of the side itself), are as near.
 constexpr double kAsNear = 4;
 
+// A crease kept from one side moves at most this many times the crack's width to where the
+// planes of its faces meet.
+constexpr double kMostMeetMove = 4;
+// ... and only between faces whose least height is this many times the crack's width.
+constexpr double kPlaneHeight = 10;
+
 // Whether `beside(p)` holds at the middle of a-b, a quarter from each end and two widths from
 // each end: a side overlapped but for its end (a panel's edge beside a window's, shorter) is
 // the rim of an opening there.
@@ -30,15 +36,23 @@ bool covered_along(const Vec3& a, const Vec3& b, double width, Beside&& beside) 
   return true;
 }
 
+// The index of the component largest in magnitude.
+int largest_component(const Vec3& v) {
+  int lead = 0;
+  for (int c = 1; c < 3; ++c)
+    if (std::abs(v[c]) > std::abs(v[lead])) lead = c;
+  return lead;
+}
+
 }  // namespace
 
 std::vector<CrackSide> crack_sides(const std::vector<Vec3>& points, const std::vector<Tri>& triangles,
                                    const std::vector<Vec3>& normals, const std::vector<FeatureEdge>& edges,
                                    double width, double cell, double angle_deg, double feature_angle_deg,
-                                   bool nearest_partner, std::vector<std::array<uint32_t, 2>>* faces_across,
+                                   bool nearest_partner, std::vector<CrackAcross>* across,
                                    const std::vector<CrackSide>* decided) {
   std::vector<CrackSide> crack(edges.size(), CrackSide::None);
-  if (faces_across) faces_across->assign(edges.size(), {UINT32_MAX, UINT32_MAX});
+  if (across) across->assign(edges.size(), CrackAcross{});
   if (!(width > 0) || !(cell > 0) || normals.size() != triangles.size()) return crack;
   // The one face of each boundary edge.
   std::vector<std::pair<uint64_t, uint32_t>> rim;  // (edge key, index into edges), sorted
@@ -55,12 +69,34 @@ std::vector<CrackSide> crack_sides(const std::vector<Vec3>& points, const std::v
   if (nearest_partner) width = std::min(width, total / double(rim.size()) / 4);
   std::sort(rim.begin(), rim.end());
   std::vector<uint32_t> face(edges.size(), UINT32_MAX);
+  std::vector<uint8_t> forward(edges.size(), 0);  // the face runs the edge from a to b
   for (size_t t = 0; t < triangles.size(); ++t)
     for (int e = 0; e < 3; ++e) {
       const uint64_t key = edge_key(triangles[t][e], triangles[t][(e + 1) % 3]);
       const auto it = std::lower_bound(rim.begin(), rim.end(), std::make_pair(key, uint32_t(0)));
-      if (it != rim.end() && it->first == key) face[it->second] = uint32_t(t);
+      if (it != rim.end() && it->first == key)
+        face[it->second] = uint32_t(t), forward[it->second] = triangles[t][e] == edges[it->second].a;
     }
+  // From edge i into its face, square to the edge.
+  auto into_face = [&](uint32_t i) {
+    const Tri& t = triangles[face[i]];
+    const uint32_t c = t[0] != edges[i].a && t[0] != edges[i].b   ? t[0]
+                       : t[1] != edges[i].a && t[1] != edges[i].b ? t[1]
+                                                                  : t[2];
+    const Vec3 &a = points[edges[i].a], dir = normalized(points[edges[i].b] - a), ac = points[c] - a;
+    return ac - dir * dot(ac, dir);
+  };
+  // The normal of the face of `j` as it would be were it turned like the face of `i`: two faces
+  // of one surface on either side of an edge run it opposite ways (on one side, one over the
+  // other, the same way). The pieces of a soup are each turned outward on their own (a single
+  // triangle by the side of its plane the origin is on), so two faces across a flat crack can
+  // face opposite ways: no crease.
+  auto facing_like = [&](uint32_t i, uint32_t j) {
+    const Vec3 di = points[edges[i].b] - points[edges[i].a], dj = points[edges[j].b] - points[edges[j].a];
+    const bool same_way = (dot(di, dj) > 0) == (forward[i] == forward[j]);
+    const bool either_side = dot(into_face(i), into_face(j)) < 0;
+    return same_way == either_side ? normals[face[j]] * -1.0 : normals[face[j]];
+  };
   // Cells about as long as the edges: a soup's are many to a base cell.
   SegmentGrid grid(std::min(cell, 2 * total / double(rim.size())), width, total, rim.size());
   for (const auto& [key, i] : rim)
@@ -89,42 +125,44 @@ std::vector<CrackSide> crack_sides(const std::vector<Vec3>& points, const std::v
       };
       // The other side, at the middle: a hairline crack's first parallel edge found; a gap's
       // nearest (a soup's neighbours of either side lie within a gap's width too: a row of a
-      // fine tessellation beside a crease)...
+      // fine tessellation beside a crease)... The crack's width is the nearest's distance.
       const Vec3 middle = lerp(a, b, 0.5);
       uint32_t other = UINT32_MAX;
       double nearest = INFINITY;
       beside.clear();
       grid.beside(middle, i, [&](uint32_t j, const Vec3& d) {
         if (!parallel_side(j)) return false;
-        if (norm2(d) < nearest) nearest = norm2(d), other = j;
+        if (other == UINT32_MAX || (nearest_partner && norm2(d) < nearest)) other = j;
+        nearest = std::min(nearest, norm2(d));
         if (nearest_partner) beside.emplace_back(norm2(d), j);
-        return !nearest_partner;
+        return false;
       });
       if (other == UINT32_MAX) continue;
       // ... or, as near, the face across a crease: a face written twice lies as near as that.
       const double near = std::max(kAsNear * std::sqrt(nearest), width / 16);
-      double across = INFINITY;
+      double gap2 = nearest, to_crease = INFINITY;
       for (const auto& [d2, j] : beside)
-        if (d2 <= near * near && d2 < across && dot(normals[face[i]], normals[face[j]]) < crease)
-          across = d2, other = j;
+        if (d2 <= near * near && d2 < to_crease && dot(normals[face[i]], facing_like(i, j)) < crease)
+          to_crease = gap2 = d2, other = j;
       const bool covered = covered_along(a, b, width, [&](const Vec3& p) {
         // In a soup one edge of the other side covers all of this one: asked first.
         return grid.passes_beside(other, p) ||
                grid.beside(p, i, [&](uint32_t j, const Vec3&) { return parallel_side(j); });
       });
       if (!covered) continue;
-      if (faces_across) (*faces_across)[i] = {face[i], face[other]};
-      if (dot(normals[face[i]], normals[face[other]]) >= crease) {
+      if (across) (*across)[i] = {face[i], face[other], std::sqrt(gap2)};
+      const Vec3 other_normal = facing_like(i, other);
+      if (dot(normals[face[i]], other_normal) >= crease) {
         crack[i] = CrackSide::Goes;
         continue;
       }
       // A crease: the side whose normal leads in the largest component of the two normals'
-      // difference stays; all along the crack the same side, however its edges pair up.
-      const Vec3 d = normals[face[i]] - normals[face[other]];
-      int lead = 0;
-      for (int c = 1; c < 3; ++c)
-        if (std::abs(d[c]) > std::abs(d[lead])) lead = c;
-      crack[i] = d[lead] < 0 ? CrackSide::Goes : CrackSide::Crease;
+      // difference stays; all along the crack the same side, however its edges pair up. The
+      // pair is turned so that the normals' sum leads positive: both sides then take the same
+      // turn whichever way each face was given.
+      const Vec3 sum = normals[face[i]] + other_normal;
+      const Vec3 d = (normals[face[i]] - other_normal) * (sum[largest_component(sum)] < 0 ? -1.0 : 1.0);
+      crack[i] = d[largest_component(d)] < 0 ? CrackSide::Goes : CrackSide::Crease;
     }
   });
   return crack;
@@ -159,6 +197,53 @@ std::vector<uint8_t> crossings_along_cracks(const std::vector<Vec3>& points, con
     }
   });
   return along;
+}
+
+bool crossing_at_shared_corner(const std::array<Vec3, 3>& a, const std::array<Vec3, 3>& b, const Vec3& from,
+                               const Vec3& to, double width) {
+  const double w2 = width * width;
+  for (const Vec3& p : a)
+    if (norm2(from - p) <= w2 && norm2(to - p) <= w2)
+      for (const Vec3& q : b)
+        if (norm2(q - p) <= w2 && q != p) return true;  // (at a corner they do share, a fold)
+  return false;
+}
+
+void move_creases_to_plane_meet(std::vector<Vec3>& points, const std::vector<Tri>& triangles,
+                                const std::vector<Vec3>& normals, const std::vector<CrackSide>& side,
+                                const std::vector<CrackAcross>& across, double width, std::vector<FeatureEdge>& edges) {
+  for (size_t i = 0; i < edges.size(); ++i) {
+    if (side[i] != CrackSide::Crease || i >= across.size()) continue;
+    const uint32_t f = across[i].face, g = across[i].other;
+    if (f >= triangles.size() || g >= triangles.size()) continue;
+    // A face whose corners may lie a gap off tells its plane only when it stands well clear
+    // of its longest edge (a CAD fan's needles do not).
+    auto plane_told = [&](uint32_t t) {
+      const Vec3 &p = points[triangles[t][0]], &q = points[triangles[t][1]], &r = points[triangles[t][2]];
+      const double longest = std::sqrt(std::max({norm2(q - p), norm2(r - q), norm2(p - r)}));
+      return norm(area_vector(p, q, r)) >= kPlaneHeight * across[i].width * longest;
+    };
+    if (!plane_told(f) || !plane_told(g)) continue;
+    const Vec3 &n = normals[f], &m = normals[g];
+    const double c = dot(n, m), det = 1 - c * c;
+    if (!(det > 1e-6)) continue;  // (parallel planes: no crease)
+    const Vec3 &on_n = points[triangles[f][0]], &on_m = points[triangles[g][0]];
+    // The point of both planes nearest p: p less a combination of the two normals.
+    auto meet = [&](const Vec3& p) {
+      const double rn = dot(n, p - on_n), rm = dot(m, p - on_m);
+      const double l = (rn - c * rm) / det, k = (rm - c * rn) / det;
+      return p - n * l - m * k;
+    };
+    // No farther than a few of the crack's widths: a gap across a crease of 30 degrees or more
+    // moves an end at most twice its width; more is a face too small to tell its plane.
+    const double most = std::min(width, kMostMeetMove * across[i].width);
+    const Vec3 a = meet(points[edges[i].a]), b = meet(points[edges[i].b]);
+    if (!(norm2(a - points[edges[i].a]) <= most * most && norm2(b - points[edges[i].b]) <= most * most)) continue;
+    edges[i].a = uint32_t(points.size());
+    points.push_back(a);
+    edges[i].b = uint32_t(points.size());
+    points.push_back(b);
+  }
 }
 
 void join_crease_ends(const std::vector<Vec3>& points, const std::vector<CrackSide>& side, double width,

@@ -14,6 +14,13 @@
 
 namespace vdbwrap::mesh {
 
+// Per side of a crack: its face, the other side's face, and the gap between the two sides at the
+// side's middle.
+struct CrackAcross {
+  uint32_t face = UINT32_MAX, other = UINT32_MAX;
+  double width = 0;
+};
+
 enum class CrackSide : uint8_t {
   None = 0,    // no side of a crack
   Goes = 1,    // a side of a crack across a smooth surface, or the other side of a crease
@@ -31,15 +38,14 @@ enum class CrackSide : uint8_t {
 // either side lie within the width too; a face written twice as near as the other side). The
 // faces of the two sides (`normals`, per triangle) turning more than `feature_angle_deg` from
 // each other make a crease, and the side whose normal leads in the largest component of the
-// normals' difference stays. `faces_across`, when given: per edge of a crack, its face and the
-// other side's (UINT32_MAX for others). Edges `decided` already (not None) are not looked at
+// normals' difference stays. `across`, when given: per edge of a crack, the faces across it and
+// its width (for other edges, UINT32_MAX faces). Edges `decided` already (not None) are not looked at
 // again; they stay the other side of others. `cell` sizes the lookup grid, as for SegmentGrid
 // (narrowed to twice the edges' mean length).
 std::vector<CrackSide> crack_sides(const std::vector<Vec3>& points, const std::vector<Tri>& triangles,
                                    const std::vector<Vec3>& normals, const std::vector<FeatureEdge>& edges,
                                    double width, double cell, double angle_deg, double feature_angle_deg,
-                                   bool nearest_partner = false,
-                                   std::vector<std::array<uint32_t, 2>>* faces_across = nullptr,
+                                   bool nearest_partner = false, std::vector<CrackAcross>* across = nullptr,
                                    const std::vector<CrackSide>* decided = nullptr);
 
 // Per line (`lines`: where faces cross), whether it runs along a crack: at the same points, a
@@ -51,6 +57,24 @@ std::vector<uint8_t> crossings_along_cracks(const std::vector<Vec3>& points, con
                                             const std::vector<CrackSide>& side,
                                             const std::vector<std::array<Vec3, 2>>& lines, double width, double cell,
                                             double angle_deg);
+
+// Whether two triangles that cross (`a`, `b`: corners) cross only at a corner they share up to
+// `width`, but not exactly, the crossing (`from`-`to`) within `width` of it: the faces around a
+// soup's corner, their corners rounded apart, overlap there by a hair; no line of the surface
+// (faces of one vertex crossing next to it are a fold).
+bool crossing_at_shared_corner(const std::array<Vec3, 3>& a, const std::array<Vec3, 3>& b, const Vec3& from,
+                               const Vec3& to, double width);
+
+// The creases kept from one side (edges marked CrackSide::Crease, `across`: its face and the
+// other side's, as crack_sides gives them) lie on one face's rim, which stands a gap off the
+// other face, behind it or beyond: the wrap could not reach a concave one, nor hug a convex
+// one, without touching the other face. Each such edge goes where the planes of the two faces
+// meet: its ends' nearest points on both planes, new points appended to `points` (no triangle
+// uses them), where they lie within `width` and four of the crack's widths of the ends, and
+// both faces stand ten widths clear of their longest edge (a needle's plane is a guess).
+void move_creases_to_plane_meet(std::vector<Vec3>& points, const std::vector<Tri>& triangles,
+                                const std::vector<Vec3>& normals, const std::vector<CrackSide>& side,
+                                const std::vector<CrackAcross>& across, double width, std::vector<FeatureEdge>& edges);
 
 // The creases kept from one side (edges marked CrackSide::Crease) run on from triangle to
 // triangle of a soup, whose corners do not meet: ends within `width` of each other are made one

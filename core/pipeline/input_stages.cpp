@@ -104,6 +104,18 @@ void drop_duplicate_lines(WrapRun& run) {
       drop_where(crossings, [&](size_t i) { return inner[first_crossing + i]; });
 }
 
+// Nine in ten sides of the hairline cracks lie at most this far from the other side (0: no
+// crack): the plates of a soup rounded apart stand about that far above and below each other.
+double crack_gap(const std::vector<mesh::CrackSide>& crack, const std::vector<mesh::CrackAcross>& across) {
+  std::vector<double> width;
+  for (size_t i = 0; i < crack.size(); ++i)
+    if (crack[i] != mesh::CrackSide::None) width.push_back(across[i].width);
+  if (width.empty()) return 0;
+  const auto at = width.begin() + std::ptrdiff_t(width.size() * 9 / 10);
+  std::nth_element(width.begin(), at, width.end());
+  return *at;
+}
+
 // The two sides of a crack are no rims: the surface goes on across it, or turns at a crease,
 // which one side keeps as a sharp edge; the lines where the faces across it cross go too
 // (mesh/cracks.h).
@@ -112,10 +124,10 @@ void drop_crack_sides(WrapRun& run) {
   std::vector<mesh::FeatureEdge>& edges = prepared.feature_edges;
   // A hairline crack's sides first, then the sides of wider gaps among the edges left (a
   // wider search alone finds other partners beside a hairline crack's: a face written twice).
+  std::vector<mesh::CrackAcross> across, hairline_across;
   const std::vector<mesh::CrackSide> hairline =
       mesh::crack_sides(prepared.mesh.points, prepared.mesh.triangles, prepared.normals, edges, sliver_width(run),
-                        run.base, kBundleAngle, run.params.feature_angle_deg);
-  std::vector<std::array<uint32_t, 2>> across;
+                        run.base, kBundleAngle, run.params.feature_angle_deg, false, &hairline_across);
   const std::vector<mesh::CrackSide> wide =
       mesh::crack_sides(prepared.mesh.points, prepared.mesh.triangles, prepared.normals, edges, crack_width(run),
                         run.base, kCrackAngle, run.params.feature_angle_deg, true, &across, &hairline);
@@ -124,8 +136,11 @@ void drop_crack_sides(WrapRun& run) {
   for (size_t i = 0; i < edges.size(); ++i)
     if (crack[i] == mesh::CrackSide::None && wide[i] != mesh::CrackSide::None) {
       crack[i] = wide[i];
-      gap_faces.emplace_back(std::min(across[i][0], across[i][1]), std::max(across[i][0], across[i][1]));
+      gap_faces.emplace_back(std::min(across[i].face, across[i].other), std::max(across[i].face, across[i].other));
+    } else if (hairline[i] != mesh::CrackSide::None) {
+      across[i] = hairline_across[i];
     }
+  run.crack_gap = run.report.features.crack_gap = crack_gap(hairline, hairline_across);
   std::sort(gap_faces.begin(), gap_faces.end());
   for (size_t i = 0; i < edges.size(); ++i)
     if (crack[i] == mesh::CrackSide::Crease) edges[i].kind = mesh::FeatureKind::Sharp;
@@ -136,11 +151,30 @@ void drop_crack_sides(WrapRun& run) {
   for (const auto& s : prepared.intersections) lines.push_back({s.a, s.b});
   const std::vector<uint8_t> along = mesh::crossings_along_cracks(prepared.mesh.points, edges, hairline, lines,
                                                                   sliver_width(run), run.base, kBundleAngle);
+  // Of the faces that cross, the corners on a crack: a soup's (a welded fold's corners near
+  // each other are no crack's).
+  std::vector<uint8_t> on_crack(prepared.mesh.points.size(), 0);
+  for (size_t i = 0; i < edges.size(); ++i)
+    if (crack[i] != mesh::CrackSide::None) on_crack[edges[i].a] = on_crack[edges[i].b] = 1;
+  const auto corners = [&](uint32_t t) {
+    std::array<Vec3, 3> at;
+    for (int k = 0; k < 3; ++k) {
+      const uint32_t v = prepared.mesh.triangles[t][k];
+      at[k] = on_crack[v] ? prepared.mesh.points[v] : Vec3{NAN, NAN, NAN};  // (within no width)
+    }
+    return at;
+  };
   run.report.features.crack_intersection_segments = drop_where(prepared.intersections, [&](size_t i) {
     const auto& s = prepared.intersections[i];
-    return along[i] || std::binary_search(gap_faces.begin(), gap_faces.end(),
-                                          std::make_pair(std::min(s.tri_a, s.tri_b), std::max(s.tri_a, s.tri_b)));
+    return along[i] ||
+           mesh::crossing_at_shared_corner(corners(s.tri_a), corners(s.tri_b), s.a, s.b, sliver_width(run)) ||
+           std::binary_search(gap_faces.begin(), gap_faces.end(),
+                              std::make_pair(std::min(s.tri_a, s.tri_b), std::max(s.tri_a, s.tri_b)));
   });
+  // A hairline crease kept from one side runs where the planes of its two faces meet (a gap's
+  // would part from the rims beside it).
+  mesh::move_creases_to_plane_meet(prepared.mesh.points, prepared.mesh.triangles, prepared.normals, hairline,
+                                   hairline_across, sliver_width(run), edges);
   // A hairline crease's ends lie within the sliver width; a gap's, a gap apart, join no nearer.
   mesh::join_crease_ends(prepared.mesh.points, hairline, sliver_width(run), edges);
   // (a crease's edge shorter than the width has its two ends joined: it goes too)

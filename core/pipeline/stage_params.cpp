@@ -21,9 +21,9 @@ grid::RefineCriteria refine_criteria(const WrapParams& params) {
   return c;
 }
 
-fit::FitParams fit_params(const WrapParams& params) {
-  return {params.presmooth_iterations, params.surface_offset, params.validity_rounds, params.float_coordinates,
-          params.two_sided_sheets};
+fit::FitParams fit_params(const WrapParams& params, double crack_gap) {
+  return {params.presmooth_iterations, params.surface_offset,   params.validity_rounds,
+          params.float_coordinates,    params.two_sided_sheets, crack_gap};
 }
 
 fit::FeatureInsertParams feature_insert_params(const WrapParams& params, double base, double fine) {

@@ -73,7 +73,7 @@ grid::SizeRequests size_requests(const WrapParams& params);
 grid::RefineCriteria refine_criteria(const WrapParams& params);
 // base: the base size, fine: the finest cell, both in model units.
 fit::FeatureInsertParams feature_insert_params(const WrapParams& params, double base, double fine);
-fit::FitParams fit_params(const WrapParams& params);
+fit::FitParams fit_params(const WrapParams& params, double crack_gap = 0);
 post::CoarsenParams coarsen_params(const WrapParams& params, double base, double fine);
 post::RemeshParams remesh_params(const WrapParams& params, double base, double fine);
 // The intersection repair of stage 4 moves nothing farther than this.

@@ -64,6 +64,9 @@ struct FeatureStats {
   // Of the intersection segments, those along a crack (neighbours across it, their corners
   // rounded apart, cross there): not used.
   size_t crack_intersection_segments = 0;
+  // The hairline cracks' width: nine in ten of their sides lie at most this far (model units)
+  // from the other side, at the middle (0: no crack).
+  double crack_gap = 0;
   size_t curves = 0, corners = 0, curves_captured = 0, corners_captured = 0, nodes_snapped = 0;
   // Curve points the traced chains missed (sampled every half finest cell), and what was done
   // about them: nodes inserted on the curve by edge splits, nodes moved onto it, points left
