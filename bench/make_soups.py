@@ -12,7 +12,9 @@ Writes, per MESH named NAME (binary STL):
 - NAME_all.stl: the holes, then the flips and the soup's cracks together;
 - NAME_gaps.stl: the soup with each coordinate moved by up to a thousandth of the diagonal
   (an exporter's tolerance: gaps up to a fifth of a base cell at --base-size 1%, the faces
-  tilted by as much).
+  tilted by as much);
+- NAME_tol.stl: the soup with each coordinate moved by up to a ten-thousandth of the diagonal
+  (a CAD exporter's tolerance: a hairline to the crack test, five times the surface offset).
 Pure Python, deterministic (seed 7).
 """
 import math
@@ -58,6 +60,7 @@ def main():
         write_soup(os.path.join(out, f"{name}_flip.stl"), flipped(tris))
         write_soup(os.path.join(out, f"{name}_all.stl"), cracked(flipped(holes)))
         write_soup(os.path.join(out, f"{name}_gaps.stl"), cracked(tris, 1e-3))
+        write_soup(os.path.join(out, f"{name}_tol.stl"), cracked(tris, 1e-4))
         print(f"{name}: {len(tris)} triangles, {len(holes)} with holes")
 
 
