@@ -262,6 +262,19 @@ PartAndSoup wrap_part_and_soup(const char* name, double jitter, const WithinTheP
   return r;
 }
 
+// The part's sharp edges' distances to the wraps of the part and of its soup, printed.
+struct SharpEdges {
+  DistanceStats whole, soup;
+};
+
+SharpEdges sharp_edges_of(const PartAndSoup& r, const char* name) {
+  const SharpEdges e{sharp_edge_distance(r.part, r.whole.surface), sharp_edge_distance(r.part, r.soup.surface)};
+  std::printf("[%s soup] sharp edges' mean %.4f, p95 %.4f (part %.4f, %.4f) %% of the diagonal\n", name,
+              100 * e.soup.mean / r.diagonal, 100 * e.soup.p95 / r.diagonal, 100 * e.whole.mean / r.diagonal,
+              100 * e.whole.p95 / r.diagonal);
+  return e;
+}
+
 }  // namespace
 
 class SoupOfARealPart : public ::testing::TestWithParam<const char*> {};
@@ -273,11 +286,8 @@ class SoupOfARealPart : public ::testing::TestWithParam<const char*> {};
 TEST_P(SoupOfARealPart, WrapsAsCleanlyAsThePart) {
   const PartAndSoup r = wrap_part_and_soup(GetParam(), 1e-6, {1.25, 1.25, 1.25});
   // The creases kept from one side of each crack.
-  const DistanceStats edges_whole = sharp_edge_distance(r.part, r.whole.surface);
-  const DistanceStats edges_soup = sharp_edge_distance(r.part, r.soup.surface);
-  std::printf("[%s soup] sharp edges' mean %.4f (part %.4f) %% of the diagonal\n", GetParam(),
-              100 * edges_soup.mean / r.diagonal, 100 * edges_whole.mean / r.diagonal);
-  EXPECT_LE(edges_soup.mean, 2 * edges_whole.mean + 1e-5 * r.diagonal);
+  const SharpEdges e = sharp_edges_of(r, GetParam());
+  EXPECT_LE(e.soup.mean, 2 * e.whole.mean + 1e-5 * r.diagonal);
 }
 
 INSTANTIATE_TEST_SUITE_P(RealMeshes, SoupOfARealPart, ::testing::Values("fandisk.obj", "thingi_65004.stl"),
@@ -309,13 +319,9 @@ class TolerancedSoupOfACadPart : public ::testing::TestWithParam<const char*> {}
 // the parts' sharp-edge mean (fandisk was 13x), p95 1.5x and 2.7x (was 15x).
 TEST_P(TolerancedSoupOfACadPart, KeepsItsSharpEdges) {
   const PartAndSoup r = wrap_part_and_soup(GetParam(), 1e-4, {1.5, 1.6, 1.6});
-  const DistanceStats edges_whole = sharp_edge_distance(r.part, r.whole.surface);
-  const DistanceStats edges_soup = sharp_edge_distance(r.part, r.soup.surface);
-  std::printf("[%s soup at 1e-4] sharp edges' mean %.4f, p95 %.4f (part %.4f, %.4f) %% of the diagonal\n", GetParam(),
-              100 * edges_soup.mean / r.diagonal, 100 * edges_soup.p95 / r.diagonal,
-              100 * edges_whole.mean / r.diagonal, 100 * edges_whole.p95 / r.diagonal);
-  EXPECT_LE(edges_soup.mean, 6 * edges_whole.mean);
-  EXPECT_LE(edges_soup.p95, 4 * edges_whole.p95);
+  const SharpEdges e = sharp_edges_of(r, GetParam());
+  EXPECT_LE(e.soup.mean, 6 * e.whole.mean);
+  EXPECT_LE(e.soup.p95, 4 * e.whole.p95);
 }
 
 INSTANTIATE_TEST_SUITE_P(RealMeshes, TolerancedSoupOfACadPart, ::testing::Values("fandisk.obj", "idler_riser.STL"),

@@ -231,6 +231,7 @@ std::string numbers_html(const json& r, bool has_wrap) {
           {"Intersection segments beside a copy's left out", "features.duplicate_intersection_segments"},
           {"Boundary edges of cracks left out", "features.crack_edges"},
           {"Intersection segments along cracks left out", "features.crack_intersection_segments"},
+          {"Width of the hairline cracks (nine in ten within)", "features.crack_gap"},
           {"Faces where solids touch left out", "features.inside_faces"},
           {"Curves", "features.curves"},
           {"Corners", "features.corners"},
