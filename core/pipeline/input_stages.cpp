@@ -137,8 +137,6 @@ void drop_crack_sides(WrapRun& run) {
     if (crack[i] == mesh::CrackSide::None && wide[i] != mesh::CrackSide::None) {
       crack[i] = wide[i];
       gap_faces.emplace_back(std::min(across[i].face, across[i].other), std::max(across[i].face, across[i].other));
-    } else if (hairline[i] != mesh::CrackSide::None) {
-      across[i] = hairline_across[i];
     }
   run.crack_gap = run.report.features.crack_gap = crack_gap(hairline, hairline_across);
   std::sort(gap_faces.begin(), gap_faces.end());
