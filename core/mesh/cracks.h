@@ -33,16 +33,17 @@ enum class CrackSide : uint8_t {
 // within `angle_deg`. The other side is the first such edge found at the middle (a hairline
 // crack's is plain). With `nearest_partner` (gaps up to a cell wide), the other side must lie in
 // another connected piece of the surface (within a piece, edges side by side are a jagged rim's
-// zigzag), `width` is at most a quarter of the boundary edges' mean length, and the other side is the
-// nearest such edge at the middle or, as near, one across a crease (a soup's neighbours of
-// either side lie within the width too; a face written twice as near as the other side). The
-// faces of the two sides (`normals`, per triangle; the other face turned like this one, as the
-// pieces of a soup are turned each on its own) turning more than `feature_angle_deg` from each
-// other make a crease, and the side whose normal leads in the largest component of the
-// normals' difference stays (the pair turned so that their sum leads positive). `across`, when given: per edge of a
-// crack, the faces across it and its width (for other edges, UINT32_MAX faces). Edges `decided` already (not None) are
-// not looked at again; they stay the other side of others. `cell` sizes the lookup grid, as for SegmentGrid (narrowed
-// to twice the edges' mean length).
+// zigzag), `width` is at most a quarter of the boundary edges' mean length, and the other side
+// is the nearest such edge at the middle or, as near, one across a crease (a soup's neighbours
+// of either side lie within the width too; a face written twice as near as the other side).
+// The faces of the two sides (`normals`, per triangle; the other face turned like this one, as
+// the pieces of a soup are turned each on its own) turning more than `feature_angle_deg` from
+// each other make a crease, and the side whose normal leads in the largest component of the
+// normals' difference stays (the pair turned so that their sum leads positive). `across`, when
+// given: per edge of a crack, the faces across it and its width (for other edges, UINT32_MAX
+// faces). Edges `decided` already (not None) are not looked at again; they stay the other side
+// of others. `cell` sizes the lookup grid, as for SegmentGrid (narrowed to twice the edges'
+// mean length).
 std::vector<CrackSide> crack_sides(const std::vector<Vec3>& points, const std::vector<Tri>& triangles,
                                    const std::vector<Vec3>& normals, const std::vector<FeatureEdge>& edges,
                                    double width, double cell, double angle_deg, double feature_angle_deg,

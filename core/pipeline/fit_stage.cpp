@@ -112,7 +112,7 @@ void project_lattice(WrapRun& run) {
       for (const Vec3& p : c.points) out.push_back(p + run.prepared.origin);
     }
   run.fitted = fit::fit_to_input(run.lattice, *run.refined.grid, index, curves, run.prepared.origin,
-                                 fit_params(run.params, run.crack_gap), run.progress);
+                                 fit_params(run.params, run.report.features.crack_gap), run.progress);
   report_snapping(report, run.fitted);
 }
 

@@ -138,7 +138,7 @@ void drop_crack_sides(WrapRun& run) {
       crack[i] = wide[i];
       gap_faces.emplace_back(std::min(across[i].face, across[i].other), std::max(across[i].face, across[i].other));
     }
-  run.crack_gap = run.report.features.crack_gap = crack_gap(hairline, hairline_across);
+  run.report.features.crack_gap = crack_gap(hairline, hairline_across);
   std::sort(gap_faces.begin(), gap_faces.end());
   for (size_t i = 0; i < edges.size(); ++i)
     if (crack[i] == mesh::CrackSide::Crease) edges[i].kind = mesh::FeatureKind::Sharp;

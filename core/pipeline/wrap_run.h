@@ -40,9 +40,6 @@ struct WrapRun {
   // Prepare.
   prep::PreparedInput prepared;
   double base = 0;  // the base size in model units
-  // How far apart the sides of the input's hairline cracks lie (mesh/cracks.h; 0: no crack):
-  // across a crack the faces stand that far behind or beyond each other.
-  double crack_gap = 0;
   // The volume: size controls, the refined grid, the chosen volume's label, its surface.
   grid::SizeControls controls;
   grid::RefineResult refined;
