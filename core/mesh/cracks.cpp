@@ -25,6 +25,11 @@ constexpr double kMostMeetMove = 4;
 // ... and only between faces whose least height is this many times the crack's width.
 constexpr double kPlaneHeight = 10;
 
+// A face's doubt about its turn (degrees) counts from this much: less would only tip the
+// creases that turn by the feature angle itself (a twelve-sided prism's edges) to one side, where
+// a welded surface's test leaves them to its normals' last bits.
+constexpr double kLeastDoubt = 1;
+
 // Whether `beside(p)` holds at the middle of a-b, a quarter from each end and two widths from
 // each end: a side overlapped but for its end (a panel's edge beside a window's, shorter) is
 // the rim of an opening there.
@@ -110,19 +115,66 @@ std::vector<CrackSide> crack_sides(const std::vector<Vec3>& points, const std::v
     for (const Tri& t : triangles) joined.unite(t[0], t[1]), joined.unite(t[1], t[2]);
     for (size_t t = 0; t < triangles.size(); ++t) piece[t] = joined.find(triangles[t][0]);
   }
-  const double parallel = std::cos(angle_deg * M_PI / 180), crease = std::cos(feature_angle_deg * M_PI / 180);
+  const double parallel = std::cos(angle_deg * M_PI / 180), feature = feature_angle_deg * M_PI / 180;
+  auto parallel_side_of = [&](uint32_t i, const Vec3& dir, uint32_t j) {
+    const auto& s = grid.segment(j);
+    return (!nearest_partner || piece[face[j]] != piece[face[i]]) &&
+           std::abs(dot(dir, normalized(s[1] - s[0]))) >= parallel;
+  };
+  auto open_side = [&](uint32_t i) {
+    return face[i] != UINT32_MAX && norm2(points[edges[i].b] - points[edges[i].a]) > 0 &&
+           !(decided && (*decided)[i] != CrackSide::None);
+  };
+  // How far the corners of a hairline crack's faces may lie off: what nine in ten sides'
+  // nearest parallel side at their middle stay within (a soup's rounding, an exporter's
+  // tolerance).
+  std::vector<double> nearest_at(nearest_partner ? 0 : rim.size(), INFINITY);
+  if (!nearest_partner)
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, rim.size(), 256), [&](const tbb::blocked_range<size_t>& r) {
+      for (size_t k = r.begin(); k != r.end(); ++k) {
+        const uint32_t i = rim[k].second;
+        if (!open_side(i)) continue;
+        const Vec3 dir = normalized(points[edges[i].b] - points[edges[i].a]);
+        grid.beside(lerp(points[edges[i].a], points[edges[i].b], 0.5), i, [&](uint32_t j, const Vec3& d) {
+          if (parallel_side_of(i, dir, j)) nearest_at[k] = std::min(nearest_at[k], norm2(d));
+          return false;
+        });
+      }
+    });
+  nearest_at.erase(std::remove(nearest_at.begin(), nearest_at.end(), INFINITY), nearest_at.end());
+  double rounding = 0;
+  if (!nearest_at.empty()) {
+    const auto at = nearest_at.begin() + std::ptrdiff_t(nearest_at.size() * 9 / 10);
+    std::nth_element(nearest_at.begin(), at, nearest_at.end());
+    rounding = std::sqrt(*at);
+  }
+  // How far a face may turn about its edge `e` when its corners lie that far off: its far
+  // corner and the edge each by the rounding, over its height above the edge (a needle's turn
+  // about its long side is anyone's guess). Across a wider gap, none: the faces there are
+  // tilted by the gap itself, and the sides kept hold the wrap to them (without them, a
+  // gapped soup's wrap lies farther from the part).
+  auto doubt = [&](uint32_t e) {
+    if (nearest_partner) return 0.0;
+    const Tri& t = triangles[face[e]];
+    const double length = norm(points[edges[e].b] - points[edges[e].a]);
+    const double height = norm(area_vector(points[t[0]], points[t[1]], points[t[2]])) / length;
+    const double angle = std::atan2(2 * rounding, height);
+    return angle >= kLeastDoubt * M_PI / 180 ? angle : 0.0;
+  };
+  // Whether the faces of `i` and of `j` turn from each other by more than the feature angle
+  // and both faces' doubt.
+  auto creased = [&](uint32_t i, uint32_t j) {
+    const double turn = std::acos(std::clamp(dot(normals[face[i]], facing_like(i, j)), -1.0, 1.0));
+    return turn > feature + doubt(i) + doubt(j);
+  };
   tbb::parallel_for(tbb::blocked_range<size_t>(0, rim.size(), 256), [&](const tbb::blocked_range<size_t>& r) {
     std::vector<std::pair<double, uint32_t>> beside;  // (squared distance, edge) at an edge's middle
     for (size_t k = r.begin(); k != r.end(); ++k) {
       const uint32_t i = rim[k].second;
       const Vec3 &a = points[edges[i].a], &b = points[edges[i].b];
-      if (face[i] == UINT32_MAX || !(norm2(b - a) > 0) || (decided && (*decided)[i] != CrackSide::None)) continue;
+      if (!open_side(i)) continue;
       const Vec3 dir = normalized(b - a);
-      auto parallel_side = [&](uint32_t j) {
-        const auto& s = grid.segment(j);
-        return (!nearest_partner || piece[face[j]] != piece[face[i]]) &&
-               std::abs(dot(dir, normalized(s[1] - s[0]))) >= parallel;
-      };
+      auto parallel_side = [&](uint32_t j) { return parallel_side_of(i, dir, j); };
       // The other side, at the middle: a hairline crack's first parallel edge found; a gap's
       // nearest (a soup's neighbours of either side lie within a gap's width too: a row of a
       // fine tessellation beside a crease)... The crack's width is the nearest's distance.
@@ -142,8 +194,7 @@ std::vector<CrackSide> crack_sides(const std::vector<Vec3>& points, const std::v
       const double near = std::max(kAsNear * std::sqrt(nearest), width / 16);
       double gap2 = nearest, to_crease = INFINITY;
       for (const auto& [d2, j] : beside)
-        if (d2 <= near * near && d2 < to_crease && dot(normals[face[i]], facing_like(i, j)) < crease)
-          to_crease = gap2 = d2, other = j;
+        if (d2 <= near * near && d2 < to_crease && creased(i, j)) to_crease = gap2 = d2, other = j;
       const bool covered = covered_along(a, b, width, [&](const Vec3& p) {
         // In a soup one edge of the other side covers all of this one: asked first.
         return grid.passes_beside(other, p) ||
@@ -152,7 +203,7 @@ std::vector<CrackSide> crack_sides(const std::vector<Vec3>& points, const std::v
       if (!covered) continue;
       if (across) (*across)[i] = {face[i], face[other], std::sqrt(gap2)};
       const Vec3 other_normal = facing_like(i, other);
-      if (dot(normals[face[i]], other_normal) >= crease) {
+      if (!creased(i, other)) {
         crack[i] = CrackSide::Goes;
         continue;
       }

@@ -37,9 +37,12 @@ enum class CrackSide : uint8_t {
 // is the nearest such edge at the middle or, as near, one across a crease (a soup's neighbours
 // of either side lie within the width too; a face written twice as near as the other side).
 // The faces of the two sides (`normals`, per triangle; the other face turned like this one, as
-// the pieces of a soup are turned each on its own) turning more than `feature_angle_deg` from
-// each other make a crease, and the side whose normal leads in the largest component of the
-// normals' difference stays (the pair turned so that their sum leads positive). `across`, when
+// the pieces of a soup are turned each on its own) make a crease when they turn from each other
+// by more than `feature_angle_deg` and, across a hairline crack, both faces' doubt: a face whose
+// corners lie off by the rounding (what nine in ten sides' nearest side at their middle stay
+// within) may turn about its edge by twice that over its height above the edge (a CAD fan's
+// needles, rounded, turn any way). Of a crease, the side whose normal leads in the largest component of the normals'
+// difference stays (the pair turned so that their sum leads positive). `across`, when
 // given: per edge of a crack, the faces across it and its width (for other edges, UINT32_MAX
 // faces). Edges `decided` already (not None) are not looked at again; they stay the other side
 // of others. `cell` sizes the lookup grid, as for SegmentGrid (narrowed to twice the edges'
