@@ -41,12 +41,12 @@ enum class CrackSide : uint8_t {
 // by more than `feature_angle_deg` and, across a hairline crack, both faces' doubt: a face whose
 // corners lie off by the rounding (what nine in ten sides' nearest side at their middle stay
 // within) may turn about its edge by twice that over its height above the edge (a CAD fan's
-// needles, rounded, turn any way). Of a crease, the side whose normal leads in the largest component of the normals'
-// difference stays (the pair turned so that their sum leads positive). `across`, when
-// given: per edge of a crack, the faces across it and its width (for other edges, UINT32_MAX
-// faces). Edges `decided` already (not None) are not looked at again; they stay the other side
-// of others. `cell` sizes the lookup grid, as for SegmentGrid (narrowed to twice the edges'
-// mean length).
+// needles, rounded, turn any way). Of a crease, the side whose normal leads in the largest
+// component of the normals' difference stays (the pair turned so that their sum leads
+// positive). `across`, when given: per edge of a crack, the faces across it and its width (for
+// other edges, UINT32_MAX faces). Edges `decided` already (not None) are not looked at again;
+// they stay the other side of others. `cell` sizes the lookup grid, as for SegmentGrid
+// (narrowed to twice the edges' mean length).
 std::vector<CrackSide> crack_sides(const std::vector<Vec3>& points, const std::vector<Tri>& triangles,
                                    const std::vector<Vec3>& normals, const std::vector<FeatureEdge>& edges,
                                    double width, double cell, double angle_deg, double feature_angle_deg,
