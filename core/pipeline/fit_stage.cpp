@@ -26,7 +26,8 @@ void report_snapping(WrapReport& report, const fit::FittedSurface& fitted) {
 void insert_feature_nodes(WrapRun& run, const std::vector<fit::FeatureCurve>& curves) {
   StageTimer timer("insert feature nodes", run.report.stages);
   if (run.progress) run.progress->progress("project", 0.97, "inserting nodes where the wrap misses a feature curve");
-  const fit::FeatureInsertParams fp = feature_insert_params(run.params, run.base, run.report.finest_size);
+  const fit::FeatureInsertParams fp =
+      feature_insert_params(run.params, run.base, run.report.finest_size, run.report.features.crack_gap);
   // The rims of sheets wrapped from both sides were left to the projection (the wrap passes
   // around them): nodes inserted there were mostly refused, at most of the stage's time on a
   // clump of hair cards or leaves.

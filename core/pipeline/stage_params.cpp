@@ -1,5 +1,7 @@
 #include "pipeline/stage_params.h"
 
+#include <algorithm>
+
 namespace vdbwrap::pipeline {
 
 prep::PrepareParams prepare_params(const WrapParams& params) {
@@ -26,13 +28,17 @@ fit::FitParams fit_params(const WrapParams& params, double crack_gap) {
           params.float_coordinates,    params.two_sided_sheets, crack_gap};
 }
 
-fit::FeatureInsertParams feature_insert_params(const WrapParams& params, double base, double fine) {
+fit::FeatureInsertParams feature_insert_params(const WrapParams& params, double base, double fine, double crack_gap) {
   fit::FeatureInsertParams p;
   p.spacing = 0.5 * fine;     // curve samples: twice per finest cell, so no cell's worth of curve is skipped
   p.tolerance = 0.02 * fine;  // a sample nearer than this is kept; looser tolerances leave CAD edges visibly off
   p.max_move = base;          // a node moves at most a base cell onto its curve,
   p.far_reach = 2 * base;     // or two where the wrap bridges the curve over half a cell off
-  p.offset = params.surface_offset * fine;
+  // Across a crack the faces at a crease stand a gap short of each other or cross by a few
+  // (a knife edge's by a gap over the sine of its half angle): a node nearer their curve than
+  // four gaps touches one of them (angle_block's soup: 1,651 insertions refused so, the part
+  // 58), as the tracing takes four gaps for clear.
+  p.offset = std::max(params.surface_offset * fine, 4 * crack_gap);
   p.min_area2 = 1e-6 * fine * fine;  // no triangle flatter than this from a split
   p.min_separation = 0.05 * fine;    // nor nodes crowded closer
   p.max_deviation = 0.1 * fine;      // nor a triangle farther off the input

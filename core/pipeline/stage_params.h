@@ -71,8 +71,10 @@ inline constexpr double kFeatureSampleSpacing = 1e-3;
 prep::PrepareParams prepare_params(const WrapParams& params);
 grid::SizeRequests size_requests(const WrapParams& params);
 grid::RefineCriteria refine_criteria(const WrapParams& params);
-// base: the base size, fine: the finest cell, both in model units.
-fit::FeatureInsertParams feature_insert_params(const WrapParams& params, double base, double fine);
+// base: the base size, fine: the finest cell, both in model units; crack_gap: what nine in ten
+// hairline cracks' sides stay within (features.crack_gap; 0 without cracks).
+fit::FeatureInsertParams feature_insert_params(const WrapParams& params, double base, double fine,
+                                               double crack_gap = 0);
 fit::FitParams fit_params(const WrapParams& params, double crack_gap = 0);
 post::CoarsenParams coarsen_params(const WrapParams& params, double base, double fine);
 post::RemeshParams remesh_params(const WrapParams& params, double base, double fine);
