@@ -364,16 +364,16 @@ INSTANTIATE_TEST_SUITE_P(RealMeshes, TolerancedSoupOfACadPart, ::testing::Values
 // with the same tolerance, which moves their corners by as much as they are wide: rounded, the
 // needles turn any way about their long sides. Taken for creases, those sides made 14k feature
 // curves, and the wrap 3x the part's triangles at 3.7x its mean distance and 6.7x its p95, 1.3 %
-// of them slivers; now 1.06x, 1.06x, 1.45x and 0.24 %.
+// of them slivers; now 1.09x, 1.05x, 1.48x and 0.25 %.
 TEST(RealMeshes, NeedleFanSoupOfACadPartWrapsAsThePart) {
   wrap_part_and_soup("thingi_1514499.stl", 1e-4, {1.2, 1.3, 1.8});
 }
 
 // angle_block's knife edges (faces meeting at 45 degrees) in the same soup: the faces at a
 // crease, rounded apart, cross there by a few gaps, and a node inserted on the crease an offset
-// off touched one of them (1,651 insertions refused, the part's own wrap 58): the wrap cut a
-// knife's edge by 1.48 base cells, its sharp edges' mean 0.0197 % of the diagonal. Nodes now
-// stand four gaps off such a crease: 0.97 cells, 0.0129 %.
+// off touched one of them (bench/make_soups.py's soup: 1,651 insertions refused so, the part
+// 58). Here the wrap cut a knife's edge by 1.48 base cells, its sharp edges' mean 0.0197 % of
+// the diagonal. Nodes now stand four gaps off such a crease: 0.97 cells, 0.0129 %.
 TEST(RealMeshes, KnifeEdgesOfASoupAreFollowed) {
   const PartAndSoup r = wrap_part_and_soup("angle_block.STL", 1e-4, {1.2, 1.3, 1.3});
   const SharpEdges e = sharp_edges_of(r, "angle_block.STL");
