@@ -202,7 +202,6 @@ std::vector<CrackSide> crack_sides(const std::vector<Vec3>& points, const std::v
       });
       if (!covered) continue;
       if (across) (*across)[i] = {face[i], face[other], std::sqrt(gap2)};
-      const Vec3 other_normal = facing_like(i, other);
       if (!creased(i, other)) {
         crack[i] = CrackSide::Goes;
         continue;
@@ -211,6 +210,7 @@ std::vector<CrackSide> crack_sides(const std::vector<Vec3>& points, const std::v
       // difference stays; all along the crack the same side, however its edges pair up. The
       // pair is turned so that the normals' sum leads positive: both sides then take the same
       // turn whichever way each face was given.
+      const Vec3 other_normal = facing_like(i, other);
       const Vec3 sum = normals[face[i]] + other_normal;
       const Vec3 d = (normals[face[i]] - other_normal) * (sum[largest_component(sum)] < 0 ? -1.0 : 1.0);
       crack[i] = d[largest_component(d)] < 0 ? CrackSide::Goes : CrackSide::Crease;
