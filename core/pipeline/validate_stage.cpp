@@ -46,6 +46,13 @@ std::string why_invalid(const WrapRun& run, const check::CgalVerdict& verdict) {
   if (verdict.valid_polygon_mesh && verdict.self_intersects && report.quality.repair_runs > 0)
     why += " (" + std::to_string(report.output.intersecting_triangles) +
            " intersecting triangles left after the intersection repair: " + report.quality.repair_summary + ")";
+  // The validity loop is what keeps a projection from crossing itself; the repair after it
+  // mends a few regions only.
+  if (verdict.valid_polygon_mesh && verdict.self_intersects &&
+      run.params.validity_rounds < WrapParams{}.validity_rounds)
+    why += "; the projection's validity loop ran " + std::to_string(run.params.validity_rounds) +
+           " rounds only: more (--validity-rounds, default " + std::to_string(WrapParams{}.validity_rounds) +
+           ") hold back the nodes whose moves cross the wrap";
   return why;
 }
 
