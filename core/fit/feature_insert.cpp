@@ -56,7 +56,8 @@ struct Plan {
 struct Change {
   Tri tri;
   Corners at;
-  Vec3 was;
+  Vec3 was;     // the area vector of the face it replaces
+  Corners old;  // that face's corners
 };
 
 // One thread's buffers.
@@ -483,7 +484,7 @@ class Inserter {
     for (uint32_t f : faces) {
       const Corners old = corners(t_[f]);
       read.add(box_of(old));
-      changes.push_back({t_[f], at(t_[f]), area_vector(old[0], old[1], old[2])});
+      changes.push_back({t_[f], at(t_[f]), area_vector(old[0], old[1], old[2]), old});
     }
     if (crowded(v, to, read, scratch)) return false;
     if (!acceptable(
@@ -513,8 +514,8 @@ class Inserter {
       read.add(box_of(old));
       const Vec3 was = area_vector(old[0], old[1], old[2]);
       const auto [h0, h1] = halves(t_[f], a, b, m);
-      changes.push_back({h0, place(h0), was});
-      changes.push_back({h1, place(h1), was});
+      changes.push_back({h0, place(h0), was, old});
+      changes.push_back({h1, place(h1), was, old});
     }
     if (crowded(m, at, read, scratch)) return false;
     if (!acceptable(
@@ -562,8 +563,10 @@ class Inserter {
   }
 
   // Changed triangles: none degenerate, flipped against the face it came from, or touching the
-  // input, and none crossing another triangle (of the change, or of the wrap outside it:
-  // `replaced(g)` tells the wrap's faces the change replaces).
+  // input where that face did not, and none crossing another triangle (of the change, or of the
+  // wrap outside it: `replaced(g)` tells the wrap's faces the change replaces). A face that cuts
+  // through the input already (a chamfer across a crease the snapping missed) may be split, or
+  // its corner moved onto the crease: the new faces cut less of the corner off.
   template <typename Replaced>
   bool acceptable(const std::vector<Change>& changes, Replaced&& replaced, Box3& read, Scratch& scratch) const {
     // One triangle at a time, cheapest test first: most refusals come early.
@@ -571,7 +574,7 @@ class Inserter {
       const Change& ch = changes[i];
       const Vec3 n = area_vector(ch.at[0], ch.at[1], ch.at[2]);
       if (norm(n) < prm_.min_area2 || check::triangle_is_degenerate(ch.at, ch.tri) || dot(n, ch.was) <= 0) return false;
-      if (touches_input(ch.at)) return false;
+      if (touches_input(ch.at) && !touches_input(ch.old)) return false;
       for (size_t j = 0; j < i; ++j)
         if (check::triangle_pair_intersects(ch.at, ch.tri, changes[j].at, changes[j].tri)) return false;
       const Box3 box = box_of(ch.at);
