@@ -203,6 +203,7 @@ std::vector<FeatureCurve> build_feature_curves(const prep::PreparedInput& in, do
     FeatureCurve c;
     c.start_corner = is_corner(start);
     c.boundary = first_seg < in.feature_edges.size() && in.feature_edges[first_seg].kind == prep::FeatureKind::Boundary;
+    c.crease = first_seg < in.feature_edges.size() && in.feature_edges[first_seg].kind == prep::FeatureKind::Sharp;
     c.points.push_back(node_pos[start]);
     uint32_t v = start, s = first_seg;
     while (true) {

@@ -19,6 +19,7 @@ struct FeatureCurve {
   bool closed = false;
   bool start_corner = false, end_corner = false;
   bool boundary = false;  // along boundary edges (a hole's rim, a sheet's border)
+  bool crease = false;    // along sharp edges (not a rim, not where parts cross)
 };
 
 // Builds the curves from the prepared input's feature edges and intersection segments.
