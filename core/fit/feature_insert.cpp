@@ -424,8 +424,8 @@ class Inserter {
       Plan::Kind kind = Plan::kKeep;
       // A face through the input may be split where a crease lies deeper behind it than two
       // stand-offs: a chamfer across the crease. Shallower, the face only grazes a soup's
-      // faces rounded out by a gap (a gapped soup had 3.6k such splits for a 4 % gain); along
-      // rims and where parts cross, no crease is cut off (hair cards' rims had 1.7k).
+      // faces rounded out by a gap; along rims and where parts cross, no corner is cut off
+      // (docs/pipeline.md, "A face that cuts a crease may be split").
       const bool may_cut = crease && c.distance > kCutDepth * prm_.offset;
       if (near_end && !s_.snapped[end] && can_move(end, target, pl.read, scratch, may_cut))
         kind = Plan::kMove;
