@@ -61,8 +61,7 @@ struct Plan {
 struct Change {
   Tri tri;
   Corners at;
-  Vec3 was;     // the area vector of the face it replaces
-  Corners old;  // that face's corners
+  Corners old;  // the corners of the face it replaces
 };
 
 // One thread's buffers.
@@ -495,7 +494,7 @@ class Inserter {
     for (uint32_t f : faces) {
       const Corners old = corners(t_[f]);
       read.add(box_of(old));
-      changes.push_back({t_[f], at(t_[f]), area_vector(old[0], old[1], old[2]), old});
+      changes.push_back({t_[f], at(t_[f]), old});
     }
     if (crowded(v, to, read, scratch)) return false;
     if (!acceptable(
@@ -523,10 +522,9 @@ class Inserter {
     for (uint32_t f : faces) {
       const Corners old = corners(t_[f]);
       read.add(box_of(old));
-      const Vec3 was = area_vector(old[0], old[1], old[2]);
       const auto [h0, h1] = halves(t_[f], a, b, m);
-      changes.push_back({h0, place(h0), was, old});
-      changes.push_back({h1, place(h1), was, old});
+      changes.push_back({h0, place(h0), old});
+      changes.push_back({h1, place(h1), old});
     }
     if (crowded(m, at, read, scratch)) return false;
     if (!acceptable(
@@ -585,7 +583,9 @@ class Inserter {
     for (size_t i = 0; i < changes.size(); ++i) {
       const Change& ch = changes[i];
       const Vec3 n = area_vector(ch.at[0], ch.at[1], ch.at[2]);
-      if (norm(n) < prm_.min_area2 || check::triangle_is_degenerate(ch.at, ch.tri) || dot(n, ch.was) <= 0) return false;
+      if (norm(n) < prm_.min_area2 || check::triangle_is_degenerate(ch.at, ch.tri) ||
+          dot(n, area_vector(ch.old[0], ch.old[1], ch.old[2])) <= 0)
+        return false;
       if (touches_input(ch.at) && !(may_cut && touches_input(ch.old))) return false;
       for (size_t j = 0; j < i; ++j)
         if (check::triangle_pair_intersects(ch.at, ch.tri, changes[j].at, changes[j].tri)) return false;

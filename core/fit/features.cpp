@@ -202,8 +202,10 @@ std::vector<FeatureCurve> build_feature_curves(const prep::PreparedInput& in, do
   auto walk = [&](uint32_t start, uint32_t first_seg) {
     FeatureCurve c;
     c.start_corner = is_corner(start);
-    c.boundary = first_seg < in.feature_edges.size() && in.feature_edges[first_seg].kind == prep::FeatureKind::Boundary;
-    c.crease = first_seg < in.feature_edges.size() && in.feature_edges[first_seg].kind == prep::FeatureKind::Sharp;
+    if (first_seg < in.feature_edges.size()) {  // else an intersection line
+      c.boundary = in.feature_edges[first_seg].kind == prep::FeatureKind::Boundary;
+      c.crease = in.feature_edges[first_seg].kind == prep::FeatureKind::Sharp;
+    }
     c.points.push_back(node_pos[start]);
     uint32_t v = start, s = first_seg;
     while (true) {

@@ -36,8 +36,8 @@ fit::FeatureInsertParams feature_insert_params(const WrapParams& params, double 
   p.far_reach = 2 * base;     // or two where the wrap bridges the curve over half a cell off
   // Across a crack the faces at a crease stand a gap short of each other or cross by a few
   // (a knife edge's by a gap over the sine of its half angle): a node nearer their curve than
-  // four gaps touches one of them (angle_block's soup: 1,651 insertions refused so, the part
-  // 58), as the tracing takes four gaps for clear.
+  // four gaps touches one of them, as the tracing takes four gaps for clear
+  // (docs/pipeline.md, "Nodes stand four gaps off a crease across a crack").
   p.offset = std::max(params.surface_offset * fine, 4 * crack_gap);
   p.min_area2 = 1e-6 * fine * fine;  // no triangle flatter than this from a split
   p.min_separation = 0.05 * fine;    // nor nodes crowded closer

@@ -48,10 +48,10 @@ std::string why_invalid(const WrapRun& run, const check::CgalVerdict& verdict) {
            " intersecting triangles left after the intersection repair: " + report.quality.repair_summary + ")";
   // The validity loop is what keeps a projection from crossing itself; the repair after it
   // mends a few regions only.
-  if (verdict.valid_polygon_mesh && verdict.self_intersects &&
-      run.params.validity_rounds < WrapParams{}.validity_rounds)
+  const int default_rounds = WrapParams{}.validity_rounds;
+  if (verdict.valid_polygon_mesh && verdict.self_intersects && run.params.validity_rounds < default_rounds)
     why += "; the projection's validity loop ran " + std::to_string(run.params.validity_rounds) +
-           " rounds only: more (--validity-rounds, default " + std::to_string(WrapParams{}.validity_rounds) +
+           " rounds only: more (--validity-rounds, default " + std::to_string(default_rounds) +
            ") hold back the nodes whose moves cross the wrap";
   return why;
 }
